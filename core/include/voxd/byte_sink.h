@@ -1,0 +1,46 @@
+#pragma once
+// Where encoders write: a file, a memory buffer, or (in the server) an HTTP
+// chunked stream. Encoders call write() once per slab or so, never with the
+// whole volume, so a sink can forward data as it is produced.
+#include <cstdint>
+#include <cstdio>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace voxd {
+
+class ByteSink {
+ public:
+  virtual ~ByteSink() = default;
+  virtual void write(std::span<const std::uint8_t> bytes) = 0;
+  void write(const void* data, std::size_t size) {
+    write(std::span<const std::uint8_t>(static_cast<const std::uint8_t*>(data), size));
+  }
+};
+
+class VectorSink final : public ByteSink {
+ public:
+  using ByteSink::write;
+  void write(std::span<const std::uint8_t> bytes) override { data.insert(data.end(), bytes.begin(), bytes.end()); }
+  std::vector<std::uint8_t> data;
+};
+
+// Writes to a file; throws Error(io_error) on failure. close() reports a
+// failed flush; the destructor closes silently.
+class FileSink final : public ByteSink {
+ public:
+  explicit FileSink(const std::string& path);
+  ~FileSink() override;
+  FileSink(const FileSink&) = delete;
+  FileSink& operator=(const FileSink&) = delete;
+  using ByteSink::write;
+  void write(std::span<const std::uint8_t> bytes) override;
+  void close();
+
+ private:
+  std::string path_;
+  std::FILE* file_ = nullptr;
+};
+
+}  // namespace voxd

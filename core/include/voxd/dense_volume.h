@@ -1,0 +1,40 @@
+#pragma once
+// Dense volume of one value per voxel (grey levels, distances, palette
+// indices, colours), x fastest, then y, then z, no row padding.
+#include <cstdint>
+#include <vector>
+
+#include "voxd/grid.h"
+
+namespace voxd {
+
+struct Rgba8 {
+  std::uint8_t r = 0, g = 0, b = 0, a = 0;
+  friend bool operator==(const Rgba8&, const Rgba8&) = default;
+};
+
+template <typename T>
+class DenseVolume {
+ public:
+  DenseVolume() = default;
+  explicit DenseVolume(const Grid& grid, T fill = T{})
+      : grid_(grid), values_(grid.voxel_count(), fill) {}
+
+  const Grid& grid() const { return grid_; }
+  std::size_t index(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return static_cast<std::size_t>(i + grid_.dims.x * (j + grid_.dims.y * k));
+  }
+  T& at(std::int64_t i, std::int64_t j, std::int64_t k) { return values_[index(i, j, k)]; }
+  const T& at(std::int64_t i, std::int64_t j, std::int64_t k) const { return values_[index(i, j, k)]; }
+  std::size_t slab_size() const { return static_cast<std::size_t>(grid_.dims.x * grid_.dims.y); }
+  const T* slab(std::int64_t k) const { return values_.data() + static_cast<std::size_t>(k) * slab_size(); }
+  T* slab(std::int64_t k) { return values_.data() + static_cast<std::size_t>(k) * slab_size(); }
+  std::vector<T>& values() { return values_; }
+  const std::vector<T>& values() const { return values_; }
+
+ private:
+  Grid grid_;
+  std::vector<T> values_;
+};
+
+}  // namespace voxd

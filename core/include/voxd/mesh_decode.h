@@ -1,0 +1,35 @@
+#pragma once
+// Decoding meshes from memory. The format is detected from the content; the
+// file name is only a hint used when content is ambiguous.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+#include "voxd/mesh.h"
+
+namespace voxd {
+
+enum class MeshFormat { unknown, stl_binary, stl_ascii, obj, ply, draco };
+
+const char* to_string(MeshFormat format) noexcept;
+
+struct DecodeLimits {
+  std::size_t max_bytes = std::size_t{2} << 30;  // 2 GiB
+  std::size_t max_triangles = 50'000'000;
+};
+
+// Detection only; never throws. Returns MeshFormat::unknown when nothing fits.
+MeshFormat detect_mesh_format(std::span<const std::uint8_t> data, std::string_view name_hint = {});
+
+// Decodes, validates (finite coordinates, indices in range, limits) and drops
+// triangles whose indices repeat. Throws voxd::Error with a user-actionable
+// message; never crashes or hangs on hostile input.
+Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint = {},
+                 const DecodeLimits& limits = {});
+
+// Decodes with an already known format (used by tests and by decode_mesh).
+Mesh decode_mesh_as(MeshFormat format, std::span<const std::uint8_t> data,
+                    const DecodeLimits& limits = {});
+
+}  // namespace voxd

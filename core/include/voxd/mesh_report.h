@@ -1,0 +1,29 @@
+#pragma once
+// Topology and geometry report of a mesh: what a user needs to know before
+// trusting a voxelization (is it closed? oriented? how big?).
+#include <cstdint>
+
+#include "voxd/mesh.h"
+
+namespace voxd {
+
+struct MeshReport {
+  std::uint64_t triangles = 0;            // as decoded
+  std::uint64_t vertices = 0;             // after welding identical positions
+  Aabb bbox;
+  std::uint64_t degenerate_triangles = 0; // zero area (repeated or collinear corners)
+  std::uint64_t boundary_edges = 0;       // edges used by exactly one triangle
+  std::uint64_t nonmanifold_edges = 0;    // edges used by more than two triangles
+  std::uint64_t inconsistent_edges = 0;   // manifold edges traversed in the same direction twice
+  bool watertight = false;                // no boundary and no non-manifold edge
+  double surface_area = 0.0;
+  double volume = 0.0;                    // signed, by the divergence theorem; meaningful when watertight
+};
+
+// Merges vertices with bit-identical positions; triangles keep their order.
+Mesh weld_vertices(const Mesh& mesh);
+
+// Welds internally, so a triangle soup gives the same report as its indexed twin.
+MeshReport make_mesh_report(const Mesh& mesh);
+
+}  // namespace voxd

@@ -1,0 +1,50 @@
+#pragma once
+// Volume encoders and decoders. Encoders stream slab by slab into a ByteSink
+// and never copy the whole volume. Formats:
+//  - rle:    voxd's run-length stream (proto-schemas/rle-format.md)
+//  - binvox: Patrick Min's binvox (cubic; non-cubic grids padded with empty voxels)
+//  - raw:    headerless, x fastest then y then z; one byte per voxel (0/1) or
+//            packed bits (LSB first, no row padding)
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string_view>
+
+#include "voxd/bit_volume.h"
+#include "voxd/byte_sink.h"
+#include "voxd/dense_volume.h"
+
+namespace voxd {
+
+enum class VolumeFormat { rle, binvox, raw };
+enum class RawPacking { bytes, bits };
+
+const char* to_string(VolumeFormat format) noexcept;
+std::optional<VolumeFormat> volume_format_from_string(std::string_view name);
+// From a path's extension (.rle, .binvox, .raw); nullopt if unrecognised.
+std::optional<VolumeFormat> volume_format_from_path(std::string_view path);
+// MIME type used when serving the format.
+const char* media_type(VolumeFormat format) noexcept;
+
+struct EncodeOptions {
+  RawPacking raw_packing = RawPacking::bytes;
+};
+
+void encode_volume(const BitVolume& volume, VolumeFormat format, ByteSink& sink,
+                   const EncodeOptions& options = {});
+
+void write_rle(const BitVolume& volume, ByteSink& sink);
+void write_rle(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
+void write_binvox(const BitVolume& volume, ByteSink& sink);
+void write_raw(const BitVolume& volume, RawPacking packing, ByteSink& sink);
+
+// Readers (round trips, tests, CLI conversions). Throw Error(malformed_input /
+// truncated_input) on bad data.
+BitVolume read_rle_bits(std::span<const std::uint8_t> data);
+DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data);
+// binvox has no voxel size/origin beyond translate/scale; the returned grid is
+// the cubic D^3 grid with origin = translate and voxel_size = scale / D.
+BitVolume read_binvox(std::span<const std::uint8_t> data);
+BitVolume read_raw(std::span<const std::uint8_t> data, const Grid& grid, RawPacking packing);
+
+}  // namespace voxd

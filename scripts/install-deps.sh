@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package voxd needs to build, test and benchmark.
+# Idempotent: only calls apt-get when something is missing. Run as root.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config git ca-certificates curl
+  libembree-dev libglm-dev libcpp-httplib-dev nlohmann-json3-dev
+  libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3 python3-numpy python3-jsonschema
+)
+if [[ "${VOXD_INSTALL_PEERS:-0}" == 1 ]]; then
+  packages+=(libopenvdb-dev libvtk9-dev libtbb-dev)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "install-deps: installing ${missing[*]}"
+  SUDO=""
+  [[ $(id -u) -eq 0 ]] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "install-deps: all packages present"
+fi
