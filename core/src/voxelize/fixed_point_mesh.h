@@ -1,0 +1,40 @@
+#pragma once
+// Mesh vertices in grid-aligned fixed point, the coordinate system in which the
+// parity scan conversion is exact.
+//
+// A coordinate q represents (p - origin) / voxel_size - 1/2 in units of
+// 2^-kFixedBits voxel, so voxel centres sit on integer multiples of kFixedOne.
+// Quantizing moves a vertex by at most 2^-21 voxel (far below float32 input
+// precision at any useful resolution), identically wherever the vertex appears,
+// and snaps CAD coordinates that lie on voxel-centre planes up to rounding
+// (e.g. 0.35 / 0.1) onto the exact plane, where the tie rule then applies.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "voxd/grid.h"
+#include "voxd/mesh.h"
+
+namespace voxd::detail {
+
+inline constexpr int kFixedBits = 20;
+inline constexpr std::int64_t kFixedOne = std::int64_t{1} << kFixedBits;
+// Keeps every product in the scan converter inside __int128 with margin.
+inline constexpr std::int64_t kFixedLimit = std::int64_t{1} << 60;
+
+using FixedPoint = std::array<std::int64_t, 3>;
+
+struct FixedMesh {
+  std::vector<FixedPoint> vertices;
+  const std::vector<std::array<std::uint32_t, 3>>* triangles = nullptr;
+};
+
+// Throws Error(invalid_argument) if a vertex lies absurdly far (2^40 voxels)
+// from the grid.
+FixedMesh quantize_mesh(const Mesh& mesh, const Grid& grid, int threads);
+
+// floor(q / kFixedOne) and ceil(q / kFixedOne) (C++20 >> is arithmetic).
+inline std::int64_t floor_fixed(std::int64_t q) { return q >> kFixedBits; }
+inline std::int64_t ceil_fixed(std::int64_t q) { return -((-q) >> kFixedBits); }
+
+}  // namespace voxd::detail

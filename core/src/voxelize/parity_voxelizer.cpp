@@ -1,0 +1,146 @@
+#include "voxelize/parity_voxelizer.h"
+
+#include <algorithm>
+#include <atomic>
+
+#include "voxd/parallel.h"
+#include "voxd/voxelize.h"
+
+namespace voxd::detail {
+namespace {
+
+ScanAxes axes_for_ray(int ray) {
+  // The partition (row) axis is never x, so chunks own whole 64-bit words.
+  switch (ray) {
+    case 0: return {0, 1, 2};
+    case 1: return {1, 0, 2};
+    default: return {2, 0, 1};
+  }
+}
+
+// In-place inclusive prefix XOR of a row of bits: bit i becomes the XOR of
+// bits 0..i, turning crossing toggles into filled runs.
+inline void prefix_xor_row(std::uint64_t* row, std::int64_t words, std::uint64_t last_word_mask) {
+  std::uint64_t carry = 0;
+  for (std::int64_t w = 0; w < words; ++w) {
+    std::uint64_t x = row[w];
+    x ^= x << 1;
+    x ^= x << 2;
+    x ^= x << 4;
+    x ^= x << 8;
+    x ^= x << 16;
+    x ^= x << 32;
+    x ^= carry;
+    carry = std::uint64_t{0} - (x >> 63);
+    row[w] = x;
+  }
+  row[words - 1] &= last_word_mask;  // bits past dims.x stay zero
+}
+
+}  // namespace
+
+ParityVoxelizer::ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads)
+    : grid_(grid), axes_(axes_for_ray(ray_axis)), threads_(threads > 0 ? threads : default_thread_count()) {
+  fixed_ = quantize_mesh(mesh, grid, threads_);
+  const std::int64_t rows = grid.dims[axes_.v];
+  // Enough chunks to balance threads, few enough that triangles rarely straddle.
+  const std::int64_t per_chunk = std::clamp<std::int64_t>(rows / (8 * threads_), 1, 16);
+  bins_ = bin_triangles(fixed_, axes_.v, rows, per_chunk, 0, threads_);
+}
+
+void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
+  const std::int64_t row0 = chunk * bins_.rows_per_chunk;
+  const std::int64_t row1 = std::min(row0 + bins_.rows_per_chunk, grid_.dims[axes_.v]);
+  const std::int64_t nx = grid_.dims.x, ny = grid_.dims.y, nz = grid_.dims.z;
+  const std::int64_t rw = volume.row_words();
+  const std::int64_t ray_len = grid_.dims[axes_.ray];
+  const std::int64_t columns_u = grid_.dims[axes_.u];
+  std::uint64_t* words = volume.data();
+  const auto& tris = *fixed_.triangles;
+
+  auto toggle = [words](std::int64_t word, std::int64_t bit) { words[word] ^= std::uint64_t{1} << bit; };
+  auto for_each_triangle = [&](auto&& emit) {
+    for (std::uint32_t n = bins_.offsets[chunk]; n < bins_.offsets[chunk + 1]; ++n) {
+      const auto& t = tris[bins_.triangles[n]];
+      scan_triangle(fixed_.vertices[t[0]], fixed_.vertices[t[1]], fixed_.vertices[t[2]], axes_, row0, row1, columns_u,
+                    emit);
+    }
+  };
+  // A crossing before the grid toggles voxel 0; one past it affects nothing.
+  switch (axes_.ray) {
+    case 0:
+      for_each_triangle([&](std::int64_t j, std::int64_t k, std::int64_t c) {
+        if (c >= ray_len) return;
+        c = std::max<std::int64_t>(c, 0);
+        toggle((k * ny + j) * rw + (c >> 6), c & 63);
+      });
+      break;
+    case 1:
+      for_each_triangle([&](std::int64_t i, std::int64_t k, std::int64_t c) {
+        if (c >= ray_len) return;
+        c = std::max<std::int64_t>(c, 0);
+        toggle((k * ny + c) * rw + (i >> 6), i & 63);
+      });
+      break;
+    default:
+      for_each_triangle([&](std::int64_t i, std::int64_t j, std::int64_t c) {
+        if (c >= ray_len) return;
+        c = std::max<std::int64_t>(c, 0);
+        toggle((c * ny + j) * rw + (i >> 6), i & 63);
+      });
+      break;
+  }
+
+  // Prefix XOR along the ray turns toggles into runs.
+  switch (axes_.ray) {
+    case 0: {
+      const std::uint64_t mask = (nx & 63) ? (std::uint64_t{1} << (nx & 63)) - 1 : ~std::uint64_t{0};
+      for (std::int64_t k = row0; k < row1; ++k)
+        for (std::int64_t j = 0; j < ny; ++j) prefix_xor_row(volume.row(j, k), rw, mask);
+      break;
+    }
+    case 1:
+      for (std::int64_t k = row0; k < row1; ++k)
+        for (std::int64_t j = 1; j < ny; ++j) {
+          std::uint64_t* cur = volume.row(j, k);
+          const std::uint64_t* prev = volume.row(j - 1, k);
+          for (std::int64_t w = 0; w < rw; ++w) cur[w] ^= prev[w];
+        }
+      break;
+    default:
+      for (std::int64_t k = 1; k < nz; ++k)
+        for (std::int64_t j = row0; j < row1; ++j) {
+          std::uint64_t* cur = volume.row(j, k);
+          const std::uint64_t* prev = volume.row(j, k - 1);
+          for (std::int64_t w = 0; w < rw; ++w) cur[w] ^= prev[w];
+        }
+      break;
+  }
+}
+
+void ParityVoxelizer::fill(BitVolume& volume, JobControl* control, double progress_from, double progress_to) const {
+  std::atomic<std::int64_t> done{0};
+  const std::int64_t total = chunk_count();
+  parallel_for(0, total, 1, threads_, [&](std::int64_t c0, std::int64_t c1) {
+    for (std::int64_t c = c0; c < c1; ++c) {
+      if (control) control->check_cancelled();
+      fill_chunk(c, volume);
+      const std::int64_t d = done.fetch_add(1) + 1;
+      if (control)
+        control->set_progress(progress_from + (progress_to - progress_from) * static_cast<double>(d) /
+                                                  static_cast<double>(total));
+    }
+  });
+}
+
+}  // namespace voxd::detail
+
+namespace voxd {
+
+BitVolume voxelize_parity(const Mesh& mesh, const Grid& grid, int axis, int threads, JobControl* control) {
+  BitVolume volume(grid);
+  detail::ParityVoxelizer(mesh, grid, axis, threads).fill(volume, control);
+  return volume;
+}
+
+}  // namespace voxd

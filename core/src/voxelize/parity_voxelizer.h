@@ -1,0 +1,47 @@
+#pragma once
+// Solid voxelization by ray parity (Thon, Gesquiere, Raffin 2004; Patil & Ravi
+// 2005): one ray per voxel column along `ray_axis`; a voxel is inside iff an
+// odd number of surface crossings lie before its centre.
+//
+// Instead of sorting crossings per column, each crossing toggles one bit (the
+// first voxel it affects) in the output, and a prefix XOR along the ray turns
+// toggles into filled runs. Work is split into chunks of rows on a partition
+// axis; a chunk's output is final as soon as the chunk is done, so volumes can
+// be produced slab by slab.
+#include <cstdint>
+
+#include "voxd/bit_volume.h"
+#include "voxd/mesh.h"
+#include "voxd/progress.h"
+#include "voxelize/column_scan.h"
+#include "voxelize/fixed_point_mesh.h"
+#include "voxelize/triangle_bins.h"
+
+namespace voxd::detail {
+
+class ParityVoxelizer {
+ public:
+  ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads);
+
+  std::int64_t chunk_count() const { return bins_.chunk_count; }
+  // Rows [chunk * rows_per_chunk, ...) of the partition axis.
+  std::int64_t rows_per_chunk() const { return bins_.rows_per_chunk; }
+  int partition_axis() const { return axes_.v; }
+
+  // Writes the final voxels of one chunk into `volume` (which must be zero
+  // there). Chunks may run concurrently: they touch disjoint words.
+  void fill_chunk(std::int64_t chunk, BitVolume& volume) const;
+
+  // All chunks, in parallel, honouring cancellation and reporting progress
+  // in [progress_from, progress_to].
+  void fill(BitVolume& volume, JobControl* control, double progress_from = 0.0, double progress_to = 1.0) const;
+
+ private:
+  Grid grid_;
+  ScanAxes axes_;
+  int threads_;
+  FixedMesh fixed_;
+  TriangleBins bins_;
+};
+
+}  // namespace voxd::detail
