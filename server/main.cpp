@@ -1,2 +1,3 @@
-#include <cstdio>
-int main() { std::puts("voxd"); return 0; }
+#include "server/cli/cli.h"
+
+int main(int argc, char** argv) { return voxd::cli::run(argc, argv); }

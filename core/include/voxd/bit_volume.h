@@ -5,7 +5,6 @@
 // every encoder reads slab by slab. Bits past dims.x in a row are always zero.
 // Memory: dims.y * dims.z * ceil(dims.x / 64) * 8 bytes (N^3/8 for N % 64 == 0).
 #include <cstdint>
-#include <cstdlib>
 #include <memory>
 #include <span>
 
@@ -16,9 +15,9 @@ namespace voxd {
 class BitVolume {
  public:
   BitVolume() = default;
-  // Zero-filled. Memory comes from calloc so untouched pages cost nothing until
-  // the (parallel) voxelizer writes them. Throws Error(limit_exceeded) if the
-  // allocation fails.
+  // Zero-filled. Memory comes straight from the OS (lazily zeroed pages, huge
+  // pages where allowed) so untouched memory costs nothing until the parallel
+  // voxelizer writes it. Throws Error(limit_exceeded) if the allocation fails.
   explicit BitVolume(const Grid& grid);
 
   const Grid& grid() const { return grid_; }
@@ -49,12 +48,13 @@ class BitVolume {
   void merge_or(const BitVolume& other);
 
  private:
-  struct FreeDeleter {
-    void operator()(std::uint64_t* p) const { std::free(p); }
+  struct Unmap {
+    std::size_t bytes;  // no initializer: keeps Unmap default-constructible inside BitVolume
+    void operator()(std::uint64_t* p) const;
   };
   Grid grid_;
   std::int64_t row_words_ = 0;
-  std::unique_ptr<std::uint64_t[], FreeDeleter> words_;
+  std::unique_ptr<std::uint64_t[], Unmap> words_;
 };
 
 }  // namespace voxd

@@ -63,6 +63,62 @@ inline void scan_triangle(const FixedPoint& A, const FixedPoint& B, const FixedP
   const std::int64_t jbox1 = std::min<std::int64_t>(columns_u - 1, floor_fixed(std::max({au, bu, cu})));
   if (jbox0 > jbox1) return;
 
+  // Plane of the triangle: x(u, v) = ax + gu * (u - au) + gv * (v - av),
+  // from the normal (nx, nu, nv) in (ray, u, v) coordinates; nx == det.
+  const double ax = static_cast<double>(A[axes.ray]);
+  const double e1x = static_cast<double>(B[axes.ray] - A[axes.ray]), e1u = static_cast<double>(bu - au),
+               e1v = static_cast<double>(bv - av);
+  const double e2x = static_cast<double>(C[axes.ray] - A[axes.ray]), e2u = static_cast<double>(cu - au),
+               e2v = static_cast<double>(cv - av);
+  const double nx = static_cast<double>(det);
+  const double gu = -(e1v * e2x - e1x * e2v) / nx;  // dx/du
+  const double gv = -(e1x * e2u - e1u * e2x) / nx;  // dx/dv
+  constexpr double kInvOne = 1.0 / static_cast<double>(kFixedOne);
+  const bool flat = gu == 0.0 && gv == 0.0;
+  auto crossing_index = [&](std::int64_t j, std::int64_t k) {
+    const double x = flat ? ax
+                          : ax + gu * (static_cast<double>(j * kFixedOne) - static_cast<double>(au)) +
+                                gv * (static_cast<double>(k * kFixedOne) - static_cast<double>(av));
+    return static_cast<std::int64_t>(std::floor(x * kInvOne)) + 1;
+  };
+
+  // Fast path for the common small triangle: test every column of the
+  // bounding box with incrementally updated edge functions. Exact in int64:
+  // edge extents and offsets within the box stay below 2^30 fixed units, so
+  // products stay below 2^61.
+  constexpr std::int64_t kSmallSpan = std::int64_t{1} << 30;
+  const std::int64_t cols = jbox1 - jbox0 + 1, rows = k1 - k0 + 1;
+  if (cols * rows <= 64 && std::max({au, bu, cu}) - std::min({au, bu, cu}) < kSmallSpan &&
+      std::max({av, bv, cv}) - std::min({av, bv, cv}) < kSmallSpan) {
+    const FixedPoint* tri[3] = {&A, &B, &C};
+    std::int64_t f[3], step_j[3], step_k[3];
+    for (int e = 0; e < 3; ++e) {
+      const std::int64_t pu = (*tri[e])[axes.u], pv = (*tri[e])[axes.v];
+      const std::int64_t du = (*tri[(e + 1) % 3])[axes.u] - pu, dv = (*tri[(e + 1) % 3])[axes.v] - pv;
+      // E = du*(v - pv) - dv*(u - pu), flipped by sigma so "inside" is E > 0.
+      // On a tie (E == 0) the displaced centre is inside iff
+      // sigma * (dv != 0 ? -dv : du) > 0: folded in as a +1 bias.
+      const std::int64_t tie = dv != 0 ? -dv : du;
+      const std::int64_t e0 = du * (k0 * kFixedOne - pv) - dv * (jbox0 * kFixedOne - pu);
+      f[e] = sigma * e0 + ((sigma > 0) == (tie > 0) ? 1 : 0);
+      step_j[e] = -sigma * dv * kFixedOne;
+      step_k[e] = sigma * du * kFixedOne;
+    }
+    for (std::int64_t k = k0; k <= k1; ++k) {
+      std::int64_t g0 = f[0], g1 = f[1], g2 = f[2];
+      for (std::int64_t j = jbox0; j <= jbox1; ++j) {
+        if (((g0 - 1) | (g1 - 1) | (g2 - 1)) >= 0) emit(j, k, crossing_index(j, k));
+        g0 += step_j[0];
+        g1 += step_j[1];
+        g2 += step_j[2];
+      }
+      f[0] += step_k[0];
+      f[1] += step_k[1];
+      f[2] += step_k[2];
+    }
+    return;
+  }
+
   // Edge functions E(p) = du * (pv - pv0) - dv * (pu - pu0) for edges a->b,
   // b->c, c->a. Along a row pv = k*S: E(j) = (du*S*k + base) - dv*S*j.
   struct Edge {
@@ -74,19 +130,6 @@ inline void scan_triangle(const FixedPoint& A, const FixedPoint& B, const FixedP
       {cu - bu, cv - bv, static_cast<i128>(cv - bv) * bu - static_cast<i128>(cu - bu) * bv},
       {au - cu, av - cv, static_cast<i128>(av - cv) * cu - static_cast<i128>(au - cu) * cv},
   };
-
-  // Plane of the triangle: x(u, v) = ax - (nu * (u - au) + nv * (v - av)) / nx,
-  // with (nx, nu, nv) the normal in (ray, u, v) coordinates; nx == det.
-  const double ax = static_cast<double>(A[axes.ray]);
-  const double e1x = static_cast<double>(B[axes.ray] - A[axes.ray]), e1u = static_cast<double>(bu - au),
-               e1v = static_cast<double>(bv - av);
-  const double e2x = static_cast<double>(C[axes.ray] - A[axes.ray]), e2u = static_cast<double>(cu - au),
-               e2v = static_cast<double>(cv - av);
-  const double nx = static_cast<double>(det);
-  const double gu = -(e1v * e2x - e1x * e2v) / nx;  // dx/du
-  const double gv = -(e1x * e2u - e1u * e2x) / nx;  // dx/dv
-  constexpr double kInvOne = 1.0 / static_cast<double>(kFixedOne);
-  const bool flat = gu == 0.0 && gv == 0.0;
 
   for (std::int64_t k = k0; k <= k1; ++k) {
     std::int64_t jlo = jbox0, jhi = jbox1;
@@ -116,11 +159,7 @@ inline void scan_triangle(const FixedPoint& A, const FixedPoint& B, const FixedP
       if (jlo > jhi) break;
     }
     if (jlo > jhi) continue;
-    const double row_x = ax + gv * (static_cast<double>(kS) - static_cast<double>(av));
-    for (std::int64_t j = jlo; j <= jhi; ++j) {
-      const double x = flat ? ax : row_x + gu * (static_cast<double>(j * kFixedOne) - static_cast<double>(au));
-      emit(j, k, static_cast<std::int64_t>(std::floor(x * kInvOne)) + 1);
-    }
+    for (std::int64_t j = jlo; j <= jhi; ++j) emit(j, k, crossing_index(j, k));
   }
 }
 

@@ -24,6 +24,10 @@ inline void prefix_xor_row(std::uint64_t* row, std::int64_t words, std::uint64_t
   std::uint64_t carry = 0;
   for (std::int64_t w = 0; w < words; ++w) {
     std::uint64_t x = row[w];
+    if (x == 0) {  // most words hold no crossing: inside or outside throughout
+      row[w] = carry;
+      continue;
+    }
     x ^= x << 1;
     x ^= x << 2;
     x ^= x << 4;

@@ -1,0 +1,36 @@
+#include "api/result_json.h"
+
+namespace voxd::api {
+namespace {
+
+nlohmann::json vec(const glm::dvec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+
+}  // namespace
+
+nlohmann::json to_json(const MeshReport& r) {
+  return {
+      {"triangles", r.triangles},
+      {"vertices", r.vertices},
+      {"bbox_min", vec(r.bbox.min)},
+      {"bbox_max", vec(r.bbox.max)},
+      {"degenerate_triangles", r.degenerate_triangles},
+      {"boundary_edges", r.boundary_edges},
+      {"nonmanifold_edges", r.nonmanifold_edges},
+      {"inconsistent_edges", r.inconsistent_edges},
+      {"watertight", r.watertight},
+      {"surface_area", r.surface_area},
+      // A signed volume of an open mesh means nothing; say so with null.
+      {"volume", r.watertight ? nlohmann::json(r.volume) : nlohmann::json(nullptr)},
+  };
+}
+
+nlohmann::json to_json(const Grid& g) {
+  return {
+      {"origin", vec(g.origin)},
+      {"voxel_size", g.voxel_size},
+      {"dims", nlohmann::json::array({g.dims.x, g.dims.y, g.dims.z})},
+      {"voxel_count", g.voxel_count()},
+  };
+}
+
+}  // namespace voxd::api

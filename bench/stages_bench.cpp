@@ -1,0 +1,92 @@
+// Per-stage benchmarks of the engine on the 1.1M-triangle benchmark mesh:
+// parse (binary STL from memory), voxelize (parity) at 256^3..2048^3, encode.
+#include <benchmark/benchmark.h>
+
+#include "bench_mesh.h"
+#include "voxd/grid.h"
+#include "voxd/mesh_decode.h"
+#include "voxd/volume_format.h"
+#include "voxd/voxelize.h"
+
+namespace voxd::bench {
+namespace {
+
+const Mesh& mesh() {
+  static const Mesh m = make_benchmark_mesh();
+  return m;
+}
+
+Grid grid_at(std::int64_t resolution) {
+  GridRequest r;
+  r.resolution = resolution;
+  r.padding = 1;
+  return resolve_grid(r, bounds(mesh()));
+}
+
+void BM_ParseBinaryStl(benchmark::State& state) {
+  const std::vector<std::uint8_t> stl = test::to_binary_stl(mesh());
+  for (auto _ : state) {
+    Mesh m = decode_mesh(stl, "bench.stl");
+    benchmark::DoNotOptimize(m.triangles.data());
+  }
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * stl.size()));
+  state.counters["triangles"] = static_cast<double>(mesh().triangle_count());
+}
+BENCHMARK(BM_ParseBinaryStl)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_VoxelizeParity(benchmark::State& state) {
+  const Grid g = grid_at(state.range(0));
+  for (auto _ : state) {
+    BitVolume v = voxelize_parity(mesh(), g, 0, 0, nullptr);
+    benchmark::DoNotOptimize(v.data());
+  }
+  state.counters["voxels"] = static_cast<double>(g.voxel_count());
+}
+BENCHMARK(BM_VoxelizeParity)->Arg(256)->Arg(512)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_VoxelizeSurface(benchmark::State& state) {
+  const Grid g = grid_at(state.range(0));
+  for (auto _ : state) {
+    BitVolume v = voxelize_surface(mesh(), g, 0, nullptr);
+    benchmark::DoNotOptimize(v.data());
+  }
+}
+BENCHMARK(BM_VoxelizeSurface)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_VoxelizeVote(benchmark::State& state) {
+  const Grid g = grid_at(state.range(0));
+  for (auto _ : state) {
+    BitVolume v = voxelize_vote(mesh(), g, 0, nullptr);
+    benchmark::DoNotOptimize(v.data());
+  }
+}
+BENCHMARK(BM_VoxelizeVote)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Encode(benchmark::State& state) {
+  const Grid g = grid_at(state.range(0));
+  const BitVolume v = voxelize_parity(mesh(), g, 0, 0, nullptr);
+  const auto format = static_cast<VolumeFormat>(state.range(1));
+  struct CountingSink final : ByteSink {
+    using ByteSink::write;
+    std::uint64_t n = 0;
+    void write(std::span<const std::uint8_t> b) override { n += b.size(); }
+  };
+  for (auto _ : state) {
+    CountingSink sink;
+    encode_volume(v, format, sink);
+    benchmark::DoNotOptimize(sink.n);
+    state.counters["bytes"] = static_cast<double>(sink.n);
+  }
+  state.SetLabel(to_string(format));
+}
+BENCHMARK(BM_Encode)
+    ->Args({1024, static_cast<int>(VolumeFormat::rle)})
+    ->Args({512, static_cast<int>(VolumeFormat::binvox)})
+    ->Args({1024, static_cast<int>(VolumeFormat::raw)})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace voxd::bench
+
+BENCHMARK_MAIN();

@@ -1,0 +1,55 @@
+#include "server/cli/cli.h"
+
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "api/param_error.h"
+#include "server/cli/cli_args.h"
+#include "voxd/error.h"
+
+namespace voxd::cli {
+namespace {
+
+constexpr const char* kUsage = R"(voxd: voxelization engine and service
+
+usage:
+  voxd inspect MESH                    mesh report as JSON
+  voxd voxelize MESH -o OUT [options]  voxelize to rle / binvox / raw
+  voxd --version
+
+Run 'voxd COMMAND --help' for a command's options.
+)";
+
+}  // namespace
+
+int run(int argc, char** argv) {
+  try {
+    if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+      std::cout << kUsage;
+      return argc < 2 ? 2 : 0;
+    }
+    const std::string command = argv[1];
+    if (command == "--version") {
+      std::cout << "voxd " << VOXD_VERSION << '\n';
+      return 0;
+    }
+    if (command == "inspect") return inspect_command(argc, argv);
+    if (command == "voxelize") return voxelize_command(argc, argv);
+    throw UsageError("unknown command '" + command + "' (try voxd --help)");
+  } catch (const UsageError& e) {
+    std::cerr << "voxd: " << e.what() << '\n';
+    return 2;
+  } catch (const api::InvalidParams& e) {
+    std::cerr << "voxd: " << e.what() << '\n';
+    return 2;
+  } catch (const Error& e) {
+    std::cerr << "voxd: " << to_string(e.code()) << ": " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "voxd: internal error: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace voxd::cli

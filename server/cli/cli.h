@@ -1,0 +1,9 @@
+#pragma once
+// The `voxd` command line: inspect, voxelize (and serve, in the service).
+namespace voxd::cli {
+
+int run(int argc, char** argv);
+int inspect_command(int argc, char** argv);
+int voxelize_command(int argc, char** argv);
+
+}  // namespace voxd::cli

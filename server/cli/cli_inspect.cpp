@@ -1,0 +1,31 @@
+#include <cstdio>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "api/result_json.h"
+#include "server/cli/cli.h"
+#include "server/cli/cli_args.h"
+#include "server/cli/mapped_file.h"
+#include "voxd/mesh_decode.h"
+#include "voxd/mesh_report.h"
+
+namespace voxd::cli {
+
+int inspect_command(int argc, char** argv) {
+  Args args(argc, argv, 2, {}, {"help"});
+  if (args.has("help")) {
+    std::cout << "usage: voxd inspect MESH\n\nPrints the mesh report (topology, bounds, area, volume) as JSON.\n";
+    return 0;
+  }
+  if (args.positional().size() != 1) throw UsageError("inspect takes exactly one mesh file");
+  const std::string& path = args.positional()[0];
+  MappedFile file(path);
+  const Mesh mesh = decode_mesh(file.bytes(), path);
+  nlohmann::json out = api::to_json(make_mesh_report(mesh));
+  out["format"] = to_string(detect_mesh_format(file.bytes(), path));
+  std::cout << out.dump(2) << '\n';
+  return 0;
+}
+
+}  // namespace voxd::cli

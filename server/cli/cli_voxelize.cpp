@@ -1,0 +1,235 @@
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "api/job_params.h"
+#include "api/result_json.h"
+#include "server/cli/cli.h"
+#include "server/cli/cli_args.h"
+#include "server/cli/mapped_file.h"
+#include "server/job_pipeline.h"
+#include "voxd/byte_sink.h"
+#include "voxd/error.h"
+#include "voxd/volume_format.h"
+
+namespace voxd::cli {
+namespace {
+
+using nlohmann::json;
+
+constexpr const char* kUsage = R"(usage: voxd voxelize MESH -o OUT [options]
+
+Voxelizes MESH (STL, Draco, OBJ, PLY; detected from content) and writes the
+volume to OUT ("-" for standard output).
+
+  --params JSON|@FILE    job parameters, the same JSON the HTTP API takes
+                         (proto-schemas/job-params.schema.json)
+  --resolution N         voxels along the longest bounding-box axis
+  --voxel-size H         voxel edge in model units
+  --origin X,Y,Z         minimum corner of voxel (0,0,0) (with --voxel-size, --dims)
+  --dims NX,NY,NZ        grid size in voxels (with --voxel-size, --origin)
+  --padding P            empty voxels added on every side
+  --mode M               solid | surface | solid+surface
+  --inside T             parity | vote | winding
+  --format F             rle | binvox | raw (default: from OUT's extension)
+  --raw-packing P        bytes (default) | bits, for --format raw
+  --threads N            worker threads (default: all cores)
+  --report               include the mesh report (topology, area, volume)
+  --json                 print the summary as JSON on standard output
+
+Flags override the matching fields of --params. A summary (grid, filled
+voxels, volume, time per stage) is printed on standard error.
+)";
+
+json load_params(const Args& args) {
+  auto text = args.value("params");
+  if (!text) return json::object();
+  std::string body = *text;
+  if (!body.empty() && body[0] == '@') body = read_text_file(body.substr(1));
+  try {
+    return json::parse(body);
+  } catch (const json::parse_error& e) {
+    throw UsageError(std::string("--params is not valid JSON: ") + e.what());
+  }
+}
+
+// Flags are applied onto the JSON document so one validator reports errors
+// for both, with JSON paths.
+void apply_flags(const Args& args, json& params) {
+  if (!params.is_object()) return;  // the validator reports it
+  auto grid_flag = [&](const char* flag) { return args.value(flag); };
+  const bool any_grid = grid_flag("resolution") || grid_flag("voxel-size") || grid_flag("origin") ||
+                        grid_flag("dims") || grid_flag("padding");
+  if (any_grid) {
+    json& grid = params["grid"];
+    if (!grid.is_object()) grid = json::object();
+    auto integer = [](const std::string& flag, const std::string& v) {
+      try {
+        std::size_t pos = 0;
+        const long long n = std::stoll(v, &pos);
+        if (pos != v.size()) throw std::invalid_argument(v);
+        return n;
+      } catch (const std::exception&) {
+        throw UsageError("--" + flag + " expects an integer, got '" + v + "'");
+      }
+    };
+    if (auto v = grid_flag("resolution")) {
+      grid.erase("voxel_size");
+      grid.erase("origin");
+      grid.erase("dims");
+      grid["resolution"] = integer("resolution", *v);
+    }
+    if (auto v = grid_flag("voxel-size")) {
+      grid.erase("resolution");
+      grid["voxel_size"] = parse_number_list(*v, 1, "voxel-size")[0];
+    }
+    if (auto v = grid_flag("origin")) {
+      grid.erase("resolution");
+      grid.erase("padding");
+      grid["origin"] = parse_number_list(*v, 3, "origin");
+    }
+    if (auto v = grid_flag("dims")) {
+      grid.erase("resolution");
+      grid.erase("padding");
+      const auto d = parse_number_list(*v, 3, "dims");
+      grid["dims"] = json::array();
+      for (double x : d) {
+        if (x != static_cast<double>(static_cast<long long>(x))) throw UsageError("--dims expects integers");
+        grid["dims"].push_back(static_cast<long long>(x));
+      }
+    }
+    if (auto v = grid_flag("padding")) grid["padding"] = integer("padding", *v);
+  }
+  if (auto v = args.value("mode")) params["mode"] = *v;
+  if (auto v = args.value("inside")) params["inside"] = *v;
+}
+
+std::string format_seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f s", s);
+  return buf;
+}
+
+}  // namespace
+
+int voxelize_command(int argc, char** argv) {
+  Args args(argc, argv, 2,
+            {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "format",
+             "raw-packing", "threads", "output"},
+            {"json", "report", "help"});
+  if (args.has("help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  if (args.positional().size() != 1) throw UsageError("voxelize takes exactly one mesh file (see voxd voxelize --help)");
+  const auto out_path = args.value("output");
+  if (!out_path || out_path->empty()) throw UsageError("voxelize needs -o OUT (see voxd voxelize --help)");
+
+  json params_json = load_params(args);
+  apply_flags(args, params_json);
+  const api::JobParams params = api::parse_job_params(params_json);
+
+  std::optional<VolumeFormat> format;
+  if (auto f = args.value("format")) {
+    format = volume_format_from_string(*f);
+    if (!format) throw UsageError("--format must be rle, binvox or raw, got '" + *f + "'");
+  } else {
+    format = volume_format_from_path(*out_path);
+    if (!format)
+      throw UsageError("cannot tell the output format from '" + *out_path + "'; use --format rle|binvox|raw");
+  }
+  EncodeOptions encode_options;
+  if (auto p = args.value("raw-packing")) {
+    if (*p == "bits") encode_options.raw_packing = RawPacking::bits;
+    else if (*p != "bytes") throw UsageError("--raw-packing must be bytes or bits, got '" + *p + "'");
+  }
+  int threads = 0;
+  if (auto t = args.value("threads")) {
+    try {
+      threads = std::stoi(*t);
+    } catch (const std::exception&) {
+      threads = -1;
+    }
+    if (threads < 1 || threads > 1024) throw UsageError("--threads must be between 1 and 1024");
+  }
+
+  const std::string& mesh_path = args.positional()[0];
+  MappedFile file(mesh_path);
+  JobLimits limits;
+  VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, args.has("report"), nullptr, threads);
+
+  // Encode to a temporary file renamed into place, so OUT is never half written.
+  const auto start = std::chrono::steady_clock::now();
+  std::uint64_t bytes_written = 0;
+  if (*out_path == "-") {
+    struct StdoutSink final : ByteSink {
+      using ByteSink::write;
+      std::uint64_t n = 0;
+      void write(std::span<const std::uint8_t> b) override {
+        if (std::fwrite(b.data(), 1, b.size(), stdout) != b.size()) throw Error(ErrorCode::io_error, "cannot write to standard output");
+        n += b.size();
+      }
+    } sink;
+    encode_volume(result.volume, *format, sink, encode_options);
+    std::fflush(stdout);
+    bytes_written = sink.n;
+  } else {
+    const std::string tmp = *out_path + ".partial";
+    try {
+      FileSink sink(tmp);
+      encode_volume(result.volume, *format, sink, encode_options);
+      sink.close();
+      std::filesystem::rename(tmp, *out_path);
+    } catch (...) {
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);
+      throw;
+    }
+    bytes_written = std::filesystem::file_size(*out_path);
+  }
+  result.timings.add("encode", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+
+  const Grid& g = result.grid;
+  const double filled_volume = static_cast<double>(result.filled) * g.voxel_volume();
+  if (args.has("json")) {
+    json summary = {
+        {"mesh", {{"path", mesh_path}, {"format", to_string(result.format)}, {"triangles", result.triangles}}},
+        {"grid", api::to_json(g)},
+        {"mode", to_string(params.mode)},
+        {"inside", to_string(params.inside)},
+        {"filled_voxels", result.filled},
+        {"filled_volume", filled_volume},
+        {"output", {{"path", *out_path}, {"format", to_string(*format)}, {"bytes", bytes_written}}},
+    };
+    if (result.report) summary["report"] = api::to_json(*result.report);
+    json rot = json::array();
+    for (int r = 0; r < 3; ++r) rot.push_back({result.rotation[0][r], result.rotation[1][r], result.rotation[2][r]});
+    summary["rotation"] = rot;
+    json timings = json::object();
+    for (const auto& [name, s] : result.timings.stages) timings[name] = s;
+    timings["total"] = result.timings.total();
+    summary["timings"] = timings;
+    std::cout << summary.dump(2) << '\n';
+  } else {
+    std::ostringstream s;
+    s << "mesh:    " << mesh_path << " (" << to_string(result.format) << ", " << result.triangles << " triangles)\n";
+    s << "grid:    " << g.dims.x << " x " << g.dims.y << " x " << g.dims.z << " voxels of " << g.voxel_size
+      << " (model units), origin [" << g.origin.x << ", " << g.origin.y << ", " << g.origin.z << "]\n";
+    s << "filled:  " << result.filled << " voxels ("
+      << 100.0 * static_cast<double>(result.filled) / static_cast<double>(g.voxel_count()) << "%), volume "
+      << filled_volume << " (model units^3)\n";
+    if (result.report)
+      s << "mesh report: " << api::to_json(*result.report).dump() << '\n';
+    s << "timings:";
+    for (const auto& [name, sec] : result.timings.stages) s << ' ' << name << ' ' << format_seconds(sec) << ',';
+    s << " total " << format_seconds(result.timings.total()) << '\n';
+    s << "output:  " << *out_path << " (" << to_string(*format) << ", " << bytes_written << " bytes)\n";
+    std::cerr << s.str();
+  }
+  return 0;
+}
+
+}  // namespace voxd::cli

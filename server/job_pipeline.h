@@ -1,0 +1,52 @@
+#pragma once
+// One voxelization job from uploaded bytes to a volume: decode, (report),
+// rotate/orient, resolve the grid, check limits, voxelize. Shared by the CLI
+// and the service's workers so both produce byte-identical results.
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <glm/mat3x3.hpp>
+
+#include "api/job_params.h"
+#include "voxd/bit_volume.h"
+#include "voxd/mesh_decode.h"
+#include "voxd/mesh_report.h"
+#include "voxd/progress.h"
+
+namespace voxd {
+
+struct JobLimits {
+  DecodeLimits decode;
+  std::uint64_t max_voxels = std::uint64_t{1} << 33;  // 8 Gi voxels = 1 GiB of bits
+};
+
+struct StageTimings {
+  std::vector<std::pair<std::string, double>> stages;  // in order, seconds
+  void add(std::string name, double seconds) { stages.emplace_back(std::move(name), seconds); }
+  double total() const;
+};
+
+struct VoxelJobResult {
+  MeshFormat format = MeshFormat::unknown;
+  std::uint64_t triangles = 0;
+  std::optional<MeshReport> report;  // when requested: it costs a weld
+  glm::dmat3 rotation{1.0};          // applied before voxelization (rotation, then orient)
+  Grid grid;
+  BitVolume volume;
+  std::uint64_t filled = 0;
+  StageTimings timings;
+};
+
+// Bytes the job's volumes will take at peak, for admission control.
+std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params);
+
+VoxelJobResult run_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
+                             const api::JobParams& params, const JobLimits& limits, bool with_report,
+                             JobControl* control, int threads = 0);
+
+}  // namespace voxd

@@ -1,0 +1,183 @@
+// The `voxd` command line, run as a real process.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "support/run_process.h"
+#include "support/test_meshes.h"
+#include "voxd/volume_format.h"
+#include "voxd/voxelize.h"
+
+namespace voxd {
+namespace {
+
+using nlohmann::json;
+using test::run_process;
+
+const std::string kVoxd = VOXD_BINARY;
+const std::string kMeshes = VOXD_SHARED_MESHES;
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = test::make_temp_dir("voxd-cli"); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string path(const std::string& name) const { return dir_ + "/" + name; }
+  std::string write_mesh(const std::string& name, const Mesh& mesh) {
+    test::write_file(path(name), test::to_binary_stl(mesh));
+    return path(name);
+  }
+  std::string dir_;
+};
+
+std::string shared_mesh(const std::string& name) {
+  const std::string p = kMeshes + "/" + name;
+  if (!std::filesystem::exists(p)) throw std::runtime_error("shared test mesh missing (expected at ../shared/meshes next to the repo): " + p);
+  return p;
+}
+
+TEST_F(CliTest, InspectPrintsTheMeshReportAsJson) {
+  const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {2, 3, 4}));
+  const auto r = run_process(kVoxd + " inspect " + mesh);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json report = json::parse(r.out);
+  EXPECT_EQ(report.at("triangles"), 12);
+  EXPECT_EQ(report.at("vertices"), 8);
+  EXPECT_EQ(report.at("watertight"), true);
+  EXPECT_EQ(report.at("boundary_edges"), 0);
+  EXPECT_EQ(report.at("nonmanifold_edges"), 0);
+  EXPECT_EQ(report.at("degenerate_triangles"), 0);
+  EXPECT_DOUBLE_EQ(report.at("volume").get<double>(), 24.0);
+  EXPECT_DOUBLE_EQ(report.at("surface_area").get<double>(), 52.0);
+  EXPECT_EQ(report.at("bbox_max"), json::array({2.0, 3.0, 4.0}));
+  EXPECT_EQ(report.at("format"), "stl_binary");
+}
+
+TEST_F(CliTest, InspectReportsTheOpenSharedPelvis) {
+  const auto r = run_process(kVoxd + " inspect " + shared_mesh("pelvis.stl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json report = json::parse(r.out);
+  EXPECT_EQ(report.at("boundary_edges"), 291);
+  EXPECT_EQ(report.at("watertight"), false);
+  EXPECT_TRUE(report.at("volume").is_null());
+}
+
+TEST_F(CliTest, VoxelizeJsonSummaryMatchesTheEngineAndTheFile) {
+  const Mesh sphere = test::make_icosphere({1, 2, 3}, 5.0, 4);
+  const std::string mesh = write_mesh("sphere.stl", sphere);
+  const auto r = run_process(kVoxd + " voxelize " + mesh + " --resolution 40 --padding 1 -o " + path("s.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({42, 42, 42}));
+  EXPECT_EQ(s.at("mode"), "solid");
+  EXPECT_EQ(s.at("inside"), "parity");
+  for (const char* stage : {"parse", "voxelize", "encode", "total"}) EXPECT_TRUE(s.at("timings").contains(stage)) << stage;
+
+  const BitVolume from_file = read_rle_bits(test::read_file(path("s.rle")));
+  EXPECT_EQ(from_file.count(), s.at("filled_voxels").get<std::uint64_t>());
+  const double h = s.at("grid").at("voxel_size").get<double>();
+  EXPECT_NEAR(s.at("filled_volume").get<double>(), static_cast<double>(from_file.count()) * h * h * h, 1e-9);
+  EXPECT_NEAR(from_file.grid().voxel_size, h, 1e-15);
+
+  // The CLI result equals the library's on the same mesh and grid.
+  const BitVolume direct = voxelize(sphere, from_file.grid(), {});
+  EXPECT_EQ(direct.count(), from_file.count());
+}
+
+TEST_F(CliTest, AllFormatsHoldTheSameVoxels) {
+  const std::string mesh = write_mesh("torus.stl", test::make_torus({0, 0, 0}, 3, 1, 48, 24));
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 -o " + path("t.rle")).exit_code, 0);
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 -o " + path("t.binvox")).exit_code, 0);
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 -o " + path("t.raw")).exit_code, 0);
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 --format raw --raw-packing bits -o " + path("t.bits")).exit_code, 0);
+  const BitVolume rle = read_rle_bits(test::read_file(path("t.rle")));
+  const BitVolume binvox = read_binvox(test::read_file(path("t.binvox")));
+  const BitVolume raw = read_raw(test::read_file(path("t.raw")), rle.grid(), RawPacking::bytes);
+  const BitVolume bits = read_raw(test::read_file(path("t.bits")), rle.grid(), RawPacking::bits);
+  ASSERT_GT(rle.count(), 100u);
+  const auto& d = rle.grid().dims;
+  for (std::int64_t k = 0; k < d.z; ++k)
+    for (std::int64_t j = 0; j < d.y; ++j)
+      for (std::int64_t i = 0; i < d.x; ++i) {
+        ASSERT_EQ(rle.get(i, j, k), binvox.get(i, j, k));
+        ASSERT_EQ(rle.get(i, j, k), raw.get(i, j, k));
+        ASSERT_EQ(rle.get(i, j, k), bits.get(i, j, k));
+      }
+  EXPECT_EQ(binvox.count(), rle.count());  // the binvox cube padding is empty
+}
+
+TEST_F(CliTest, ParamsFileAndFlagsCombineFlagsWinning) {
+  const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {10, 10, 10}));
+  {
+    std::ofstream f(path("job.json"));
+    f << R"({"grid": {"voxel_size": 2.0, "origin": [0, 0, 0], "dims": [5, 5, 5]}, "mode": "surface"})";
+  }
+  auto r = run_process(kVoxd + " voxelize " + mesh + " --params @" + path("job.json") + " -o " + path("a.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({5, 5, 5}));
+  EXPECT_EQ(s.at("mode"), "surface");
+  r = run_process(kVoxd + " voxelize " + mesh + " --params @" + path("job.json") + " --mode solid --dims 6,5,5 -o " + path("b.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({6, 5, 5}));
+  EXPECT_EQ(s.at("mode"), "solid");
+  EXPECT_EQ(s.at("filled_voxels"), 125);  // centres 1,3,5,7,9 per axis inside [0,10]
+}
+
+TEST_F(CliTest, OrientAutoPutsTheSmallestExtentOnX) {
+  const std::string mesh = write_mesh("plate.stl", test::make_box({0, 0, 0}, {10, 8, 1}));
+  const auto r = run_process(kVoxd + " voxelize " + mesh + " --params '{\"orient\": \"auto\", \"grid\": {\"voxel_size\": 0.5}}' -o " + path("p.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({2, 20, 16}));
+  EXPECT_EQ(s.at("filled_voxels"), 2 * 20 * 16);
+}
+
+TEST_F(CliTest, ErrorsExitNonZeroWithOneLineMessages) {
+  const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {1, 1, 1}));
+  struct Case {
+    std::string args;
+    int code;
+    std::string fragment;
+  };
+  const Case cases[] = {
+      {"voxelize " + path("missing.stl") + " -o " + path("x.rle"), 1, "cannot open"},
+      {"voxelize " + mesh + " -o " + path("x.vox3"), 2, "--format"},
+      {"voxelize " + mesh, 2, "needs -o"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --resolution 0", 2, "/grid/resolution"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --mode fluffy", 2, "/mode"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --params '{\"grid\": '", 2, "not valid JSON"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --params '{\"colour\": 1}'", 2, "/colour: unknown field"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --frobnicate 3", 2, "unknown option --frobnicate"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --origin 1,2", 2, "--origin expects 3"},
+      {"frobnicate", 2, "unknown command"},
+      {"inspect " + path("empty.stl"), 1, "empty"},
+  };
+  test::write_file(path("empty.stl"), {});
+  for (const auto& c : cases) {
+    const auto r = run_process(kVoxd + " " + c.args);
+    EXPECT_EQ(r.exit_code, c.code) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.fragment), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("x.rle")));
+  EXPECT_FALSE(std::filesystem::exists(path("x.rle.partial")));
+}
+
+TEST_F(CliTest, SharedClosedMeshesVoxelizeToTheirMeshVolume) {
+  for (const char* name : {"bunny.stl", "torus.stl", "M3_hex_nut.stl", "helper_disk.stl"}) {
+    const auto inspect = run_process(kVoxd + " inspect " + shared_mesh(name));
+    ASSERT_EQ(inspect.exit_code, 0) << inspect.err;
+    const double volume = json::parse(inspect.out).at("volume").get<double>();
+    const auto r = run_process(kVoxd + " voxelize " + shared_mesh(name) + " --resolution 160 -o " + path("m.rle") + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const double filled = json::parse(r.out).at("filled_volume").get<double>();
+    EXPECT_NEAR(filled / volume, 1.0, 0.02) << name;
+  }
+}
+
+}  // namespace
+}  // namespace voxd

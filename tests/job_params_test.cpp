@@ -1,0 +1,129 @@
+// The job parameters contract: what parse_job_params accepts, and the JSON
+// path and message of everything it refuses.
+#include <fstream>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "api/job_params.h"
+#include "api/param_error.h"
+
+namespace voxd::api {
+namespace {
+
+using nlohmann::json;
+
+std::vector<FieldError> errors_of(const json& j) {
+  try {
+    parse_job_params(j);
+  } catch (const InvalidParams& e) {
+    return e.errors();
+  }
+  return {};
+}
+
+bool has_error(const std::vector<FieldError>& errors, const std::string& path, const std::string& fragment) {
+  for (const auto& e : errors)
+    if (e.path == path && e.message.find(fragment) != std::string::npos) return true;
+  return false;
+}
+
+TEST(JobParams, DefaultsAreSolidParityAt128) {
+  const JobParams p = parse_job_params(json::object());
+  EXPECT_EQ(p.grid.kind, GridRequest::Kind::resolution);
+  EXPECT_EQ(p.grid.resolution, 128);
+  EXPECT_EQ(p.mode, VoxelMode::solid);
+  EXPECT_EQ(p.inside, InsideTest::parity);
+  EXPECT_FALSE(p.rotation.has_value());
+  EXPECT_FALSE(p.orient_auto);
+}
+
+TEST(JobParams, ParsesTheThreeGridForms) {
+  JobParams p = parse_job_params(json::parse(R"({"grid": {"resolution": 256, "padding": 1}})"));
+  EXPECT_EQ(p.grid.kind, GridRequest::Kind::resolution);
+  EXPECT_EQ(p.grid.resolution, 256);
+  EXPECT_EQ(p.grid.padding, 1);
+  p = parse_job_params(json::parse(R"({"grid": {"voxel_size": 0.25, "padding": 2}})"));
+  EXPECT_EQ(p.grid.kind, GridRequest::Kind::voxel_size);
+  EXPECT_DOUBLE_EQ(p.grid.voxel_size, 0.25);
+  EXPECT_EQ(p.grid.padding, 2);
+  p = parse_job_params(json::parse(R"({"grid": {"voxel_size": 0.1, "origin": [-1, 2, 3.5], "dims": [10, 20, 30]}})"));
+  EXPECT_EQ(p.grid.kind, GridRequest::Kind::explicit_grid);
+  EXPECT_EQ(p.grid.origin, glm::dvec3(-1, 2, 3.5));
+  EXPECT_EQ(p.grid.dims, glm::i64vec3(10, 20, 30));
+}
+
+TEST(JobParams, ParsesModesInsideTestsAndRotations) {
+  JobParams p = parse_job_params(json::parse(
+      R"({"mode": "solid+surface", "inside": "winding", "orient": "auto", "rotation": {"axis": [0, 0, 2], "angle_deg": 90}})"));
+  EXPECT_EQ(p.mode, VoxelMode::solid_and_surface);
+  EXPECT_EQ(p.inside, InsideTest::winding);
+  EXPECT_TRUE(p.orient_auto);
+  ASSERT_TRUE(p.rotation.has_value());
+  const glm::dvec3 x = *p.rotation * glm::dvec3(1, 0, 0);
+  EXPECT_NEAR(x.x, 0.0, 1e-12);
+  EXPECT_NEAR(x.y, 1.0, 1e-12);
+  p = parse_job_params(json::parse(R"({"rotation": {"quaternion": [2, 0, 0, 0]}})"));
+  ASSERT_TRUE(p.rotation.has_value());
+  EXPECT_NEAR(glm::length((*p.rotation)[0] - glm::dvec3(1, 0, 0)), 0.0, 1e-12);
+}
+
+TEST(JobParams, ReportsEveryOffendingFieldWithItsPath) {
+  const auto errors = errors_of(json::parse(
+      R"({"grid": {"resolution": 0, "padding": -1}, "mode": "solidd", "inside": 3, "colour": "red"})"));
+  EXPECT_TRUE(has_error(errors, "/grid/resolution", "between 1 and 65536")) << errors.size();
+  EXPECT_TRUE(has_error(errors, "/grid/padding", "between 0 and 4096"));
+  EXPECT_TRUE(has_error(errors, "/mode", "\"solid\", \"surface\", \"solid+surface\""));
+  EXPECT_TRUE(has_error(errors, "/inside", "got number"));
+  EXPECT_TRUE(has_error(errors, "/colour", "unknown field"));
+  EXPECT_EQ(errors.size(), 5u);
+}
+
+TEST(JobParams, RejectsWrongTypesAndRanges) {
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"resolution": 12.5}})")), "/grid/resolution", "integer"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"resolution": "256"}})")), "/grid/resolution", "integer"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"resolution": 18446744073709551615}})")), "/grid/resolution", "between"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"voxel_size": 0}})")), "/grid/voxel_size", "> 0"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"voxel_size": -2}})")), "/grid/voxel_size", "> 0"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": 5})")), "/grid", "object"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"([1, 2])")), "", "object"));
+}
+
+TEST(JobParams, RejectsInconsistentGridForms) {
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"resolution": 64, "voxel_size": 1}})")), "/grid", "either"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"voxel_size": 1, "origin": [0, 0, 0]}})")), "/grid", "together"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"origin": [0, 0, 0], "dims": [1, 1, 1]}})")), "/grid/voxel_size", "required"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"voxel_size": 1, "origin": [0, 0], "dims": [1, 1, 1]}})")), "/grid/origin", "3 numbers"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"voxel_size": 1, "origin": [0, 0, 0], "dims": [1, 0, 1]}})")), "/grid/dims/1", "between 1"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"voxel_size": 1, "origin": [0, 0, 0], "dims": [1, 1, 1], "padding": 1}})")), "/grid/padding", "unknown field"));
+}
+
+TEST(JobParams, RejectsBadRotations) {
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"rotation": {"axis": [0, 0, 0], "angle_deg": 10}})")), "/rotation/axis", "zero"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"rotation": {"axis": [0, 0, 1]}})")), "/rotation/angle_deg", "required"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"rotation": {"quaternion": [0, 0, 0, 0]}})")), "/rotation/quaternion", "zeros"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"rotation": {"quaternion": [1, 0, 0]}})")), "/rotation/quaternion", "4 numbers"));
+  EXPECT_TRUE(has_error(errors_of(json::parse(R"({"orient": "sideways"})")), "/orient", "\"auto\""));
+}
+
+TEST(JobParams, MalformedJsonTextIsAnInvalidParamsError) {
+  try {
+    parse_job_params_text("{\"grid\": ");
+    FAIL();
+  } catch (const InvalidParams& e) {
+    ASSERT_EQ(e.errors().size(), 1u);
+    EXPECT_NE(e.errors()[0].message.find("malformed JSON"), std::string::npos);
+  }
+}
+
+TEST(JobParams, EveryExampleOfThePublishedSchemaIsAccepted) {
+  std::ifstream in(std::string(VOXD_SOURCE_DIR) + "/proto-schemas/job-params.schema.json");
+  ASSERT_TRUE(in) << "proto-schemas/job-params.schema.json missing";
+  const json schema = json::parse(in);
+  ASSERT_GE(schema.at("examples").size(), 3u);
+  for (const auto& example : schema.at("examples")) EXPECT_NO_THROW(parse_job_params(example)) << example.dump();
+}
+
+}  // namespace
+}  // namespace voxd::api
