@@ -268,6 +268,100 @@ TEST(ParityVoxelizer, ReportsProgressUpToOne) {
   EXPECT_DOUBLE_EQ(control.progress(), 1.0);
 }
 
+TEST(ParityVoxelizer, IcosphereLevelsConvergeToTheirPolyhedronVolume) {
+  // Each subdivision level is a different polyhedron with its own exact
+  // volume; at a fixed voxel size the error stays within a thin shell.
+  for (int level = 1; level <= 5; ++level) {
+    const Mesh sphere = make_icosphere({0.0, 0.0, 0.0}, 1.0, level);
+    const double exact = test::mesh_volume(sphere);
+    const Grid g = resolve_grid({GridRequest::Kind::resolution, 200, 0, 1, {}, {}}, bounds(sphere));
+    const double vol = static_cast<double>(voxelize_parity(sphere, g, 0, 0, nullptr).count()) * g.voxel_volume();
+    EXPECT_NEAR(vol / exact, 1.0, 4e-3) << "level " << level;
+  }
+}
+
+TEST(ParityVoxelizer, NestedShellsAlternateInsideAndOutside) {
+  // Parity counts crossings, so a shell inside a shell (same orientation)
+  // bounds a cavity: filled between the shells, empty inside the inner one.
+  // (The winding test keeps nested and overlapping shells filled.)
+  const Mesh nested = test::concat({make_icosphere({0, 0, 0}, 1.0, 3), make_icosphere({0, 0, 0}, 0.5, 3)});
+  const Grid g = resolve_grid({GridRequest::Kind::resolution, 40, 0, 1, {}, {}}, bounds(nested));
+  const BitVolume v = voxelize_parity(nested, g, 0, 0, nullptr);
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; ++i) {
+        const double r = glm::length(g.center(i, j, k));
+        if (r < 0.45 || r > 1.0) {
+          ASSERT_FALSE(v.get(i, j, k)) << r;
+        } else if (r > 0.52 && r < 0.94) {
+          ASSERT_TRUE(v.get(i, j, k)) << r;
+        }
+      }
+}
+
+TEST(ParityVoxelizer, OverlappingClosedCubesCancelInTheOverlap) {
+  // Two overlapping closed shells: parity sees two crossings around the
+  // overlap and leaves it empty; this is why `winding` exists.
+  const Mesh two = test::concat({make_box({0.25, 0.25, 0.25}, {6.25, 6.25, 6.25}), make_box({3.25, 3.25, 3.25}, {9.25, 9.25, 9.25})});
+  const Grid g = cube_grid({0, 0, 0}, 1.0, 10);
+  const BitVolume v = voxelize_parity(two, g, 0, 0, nullptr);
+  EXPECT_FALSE(v.get(4, 4, 4));  // overlap
+  EXPECT_TRUE(v.get(1, 1, 1));
+  EXPECT_TRUE(v.get(8, 8, 8));
+  EXPECT_EQ(v.count(), 2u * 216u - 2u * 27u);
+}
+
+TEST(VoteVoxelizer, CubeWithOneFaceRemovedIsRecovered) {
+  // Without its +z face, parity along z streaks out of the top; along x and
+  // y every column still crosses two walls, and they outvote it.
+  const Mesh open = test::remove_face(make_box({1.25, 1.25, 1.25}, {7.75, 7.75, 7.75}), 2, 7.75);
+  ASSERT_EQ(open.triangles.size(), 10u);
+  const Grid g = cube_grid({0, 0, 0}, 1.0, 10);
+  const BitVolume vote = voxelize_vote(open, g, 0, nullptr);
+  EXPECT_EQ(vote.count(), 7u * 7u * 7u);  // centres 1.5 .. 7.5 on each axis
+  for (std::int64_t k = 0; k < 10; ++k)
+    for (std::int64_t j = 0; j < 10; ++j)
+      for (std::int64_t i = 0; i < 10; ++i)
+        ASSERT_EQ(vote.get(i, j, k), i >= 1 && i <= 7 && j >= 1 && j <= 7 && k >= 1 && k <= 7);
+}
+
+TEST(Grid, ResolutionFitsTheLongestAxisAndCentresTheMesh) {
+  const Aabb b{{0, 0, 0}, {10, 5, 2.5}};
+  const Grid g = resolve_grid({GridRequest::Kind::resolution, 20, 0, 2, {}, {}}, b);
+  EXPECT_DOUBLE_EQ(g.voxel_size, 0.5);
+  EXPECT_EQ(g.dims, glm::i64vec3(24, 14, 9));
+  // Padding of 2 voxels on each side; the mesh is centred in its voxels.
+  EXPECT_DOUBLE_EQ(g.origin.x, -1.0);
+  EXPECT_DOUBLE_EQ(g.origin.y, -1.0);
+  EXPECT_DOUBLE_EQ(g.origin.z, 1.25 - 0.5 * 5 * 0.5 - 1.0);
+  // 10 / 0.1 must give 100 voxels, not 101 from rounding.
+  const Grid h = resolve_grid({GridRequest::Kind::voxel_size, 0, 0.1, 0, {}, {}}, Aabb{{0, 0, 0}, {10, 1, 0}});
+  EXPECT_EQ(h.dims, glm::i64vec3(100, 10, 1));
+}
+
+TEST(Grid, RejectsImpossibleRequestsWithActionableMessages) {
+  const Aabb b{{0, 0, 0}, {1, 1, 1}};
+  auto message = [&](GridRequest r) -> std::string {
+    try {
+      resolve_grid(r, b);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(message({GridRequest::Kind::resolution, 0, 0, 0, {}, {}}).find("resolution must be"), std::string::npos);
+  EXPECT_NE(message({GridRequest::Kind::voxel_size, 0, -1, 0, {}, {}}).find("voxel_size must be"), std::string::npos);
+  EXPECT_NE(message({GridRequest::Kind::voxel_size, 0, 1e-6, 0, {}, {}}).find("use a larger voxel_size"), std::string::npos);
+  EXPECT_NE(message({GridRequest::Kind::explicit_grid, 0, 1, 0, {}, {0, 1, 1}}).find("dims along x"), std::string::npos);
+  try {
+    resolve_grid({GridRequest::Kind::resolution, 10, 0, 0, {}, {}}, Aabb{{1, 1, 1}, {1, 1, 1}});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("zero extent"), std::string::npos);
+  }
+}
+
 TEST(VoteVoxelizer, EqualsParityOnClosedMeshesAndRepairsACrack) {
   const Mesh sphere = make_icosphere({0.01, 0.02, 0.03}, 1.0, 4);
   const Grid g = resolve_grid({GridRequest::Kind::resolution, 48, 0, 1, {}, {}}, bounds(sphere));
