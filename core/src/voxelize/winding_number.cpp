@@ -1,0 +1,385 @@
+#include "voxd/winding_number.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <glm/geometric.hpp>
+
+namespace voxd {
+namespace {
+
+constexpr double kFourPi = 4.0 * std::numbers::pi;
+// Triangles per BVH leaf: small enough that near-field exact sums stay short,
+// large enough that the tree (and its expansion coefficients) stays small.
+constexpr std::uint32_t kLeafSize = 8;
+// Median splits halve the range, so depth <= log2(2^32 / kLeafSize) + 1 < 64.
+constexpr int kStackSize = 128;
+
+// Signed solid angle of triangle (a, b, c) seen from the origin, by Van
+// Oosterom and Strackee: tan(Omega/2) = det[a b c] / (|a||b||c| + (a.b)|c| +
+// (b.c)|a| + (c.a)|b|). atan2 keeps it finite everywhere: at a vertex both
+// arguments are 0 and atan2 gives 0; on the triangle's plane det is 0 and the
+// result is 0 outside the triangle and +-2pi inside (half a turn of winding,
+// the average of the two sides); a degenerate triangle has det 0 and
+// contributes 0 (or +-2pi on its own segment, still finite).
+double solid_angle(glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
+  const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+  const double det = glm::dot(a, glm::cross(b, c));
+  const double den = la * lb * lc + glm::dot(a, b) * lc + glm::dot(b, c) * la + glm::dot(c, a) * lb;
+  return 2.0 * std::atan2(det, den);
+}
+
+double squared_distance_to_segment(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b) {
+  const glm::dvec3 ab = b - a, ap = p - a;
+  const double len2 = glm::dot(ab, ab);
+  const double t = len2 > 0.0 ? std::clamp(glm::dot(ap, ab) / len2, 0.0, 1.0) : 0.0;
+  const glm::dvec3 d = ap - t * ab;
+  return glm::dot(d, d);
+}
+
+// Distance to the infinite line through a and b (0 for a zero-length edge,
+// which makes the caller fall back to its other bound).
+double distance_to_line(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b) {
+  const glm::dvec3 ab = b - a, ap = p - a;
+  const double len2 = glm::dot(ab, ab);
+  if (len2 <= 0.0) return 0.0;
+  const double along = glm::dot(ap, ab);
+  return std::sqrt(std::max(0.0, glm::dot(ap, ap) - along * along / len2));
+}
+
+// Squared distance from p to the closed triangle. Written as "nearest edge,
+// or the plane when p projects inside" rather than with barycentric region
+// tests, so that degenerate (zero-area) triangles need no special division.
+double squared_distance_to_triangle(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
+  double best = std::min({squared_distance_to_segment(p, a, b), squared_distance_to_segment(p, b, c),
+                          squared_distance_to_segment(p, c, a)});
+  const glm::dvec3 n = glm::cross(b - a, c - a);
+  const double nn = glm::dot(n, n);
+  if (nn > 0.0) {
+    const double s = glm::dot(p - a, n);
+    const glm::dvec3 q = p - n * (s / nn);
+    if (glm::dot(glm::cross(b - a, q - a), n) >= 0.0 && glm::dot(glm::cross(c - b, q - b), n) >= 0.0 &&
+        glm::dot(glm::cross(a - c, q - c), n) >= 0.0)
+      best = std::min(best, s * s / nn);
+  }
+  return best;
+}
+
+double squared_distance_to_box(glm::dvec3 p, glm::dvec3 lo, glm::dvec3 hi) {
+  const glm::dvec3 d = glm::max(glm::max(lo - p, p - hi), glm::dvec3(0.0));
+  return glm::dot(d, d);
+}
+
+// For every triangle corner e (edge from corner e to corner e+1), how many
+// times that edge belongs to the boundary curve of the soup. Vertices are
+// matched by position, not index, so an unwelded soup (STL) whose triangles
+// meet exactly is recognised as closed. Each undirected edge gets the net
+// count of its directed occurrences (+1 one way, -1 the other); a nonzero net
+// is booked, in absolute value, on the first triangle corner that has it.
+std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& mesh) {
+  // Position ids: equal coordinates (as floats) share an id.
+  std::vector<std::uint32_t> by_position(mesh.vertices.size());
+  for (std::uint32_t i = 0; i < by_position.size(); ++i) by_position[i] = i;
+  auto less = [&](std::uint32_t l, std::uint32_t r) {
+    const glm::vec3 a = mesh.vertices[l], b = mesh.vertices[r];
+    if (a.x != b.x) return a.x < b.x;
+    if (a.y != b.y) return a.y < b.y;
+    return a.z < b.z;
+  };
+  std::sort(by_position.begin(), by_position.end(), less);
+  std::vector<std::uint32_t> position_id(mesh.vertices.size());
+  std::uint32_t next_id = 0;
+  for (std::size_t i = 0; i < by_position.size(); ++i) {
+    if (i > 0 && less(by_position[i - 1], by_position[i])) ++next_id;
+    position_id[by_position[i]] = next_id;
+  }
+
+  struct DirectedEdge {
+    std::uint64_t key;  // (smaller id << 32) | larger id
+    int direction;      // +1 from smaller to larger id, -1 the other way
+    std::uint32_t triangle;
+    std::uint32_t corner;
+  };
+  std::vector<DirectedEdge> edges;
+  edges.reserve(mesh.triangles.size() * 3);
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (std::uint32_t e = 0; e < 3; ++e) {
+      const std::uint32_t p = position_id[mesh.triangles[t][e]];
+      const std::uint32_t q = position_id[mesh.triangles[t][(e + 1) % 3]];
+      if (p == q) continue;  // zero length: no contribution to any line integral
+      const std::uint64_t key = (std::uint64_t{std::min(p, q)} << 32) | std::max(p, q);
+      edges.push_back({key, p < q ? 1 : -1, t, e});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const DirectedEdge& l, const DirectedEdge& r) {
+    return l.key != r.key ? l.key < r.key : l.triangle != r.triangle ? l.triangle < r.triangle : l.corner < r.corner;
+  });
+
+  std::vector<std::array<std::uint32_t, 3>> multiplicity(mesh.triangles.size(), {0, 0, 0});
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    long net = 0;
+    for (; j < edges.size() && edges[j].key == edges[i].key; ++j) net += edges[j].direction;
+    if (net != 0) multiplicity[edges[i].triangle][edges[i].corner] = static_cast<std::uint32_t>(std::labs(net));
+    i = j;
+  }
+  return multiplicity;
+}
+
+}  // namespace
+
+WindingNumberField::WindingNumberField(const Mesh& mesh, double beta) : beta_(beta) {
+  const std::size_t n = mesh.triangles.size();
+  if (n == 0) return;
+  const auto multiplicity = boundary_multiplicities(mesh);
+
+  std::vector<glm::dvec3> centroids(n);
+  for (std::size_t t = 0; t < n; ++t)
+    centroids[t] = (glm::dvec3(mesh.corner(t, 0)) + glm::dvec3(mesh.corner(t, 1)) + glm::dvec3(mesh.corner(t, 2))) / 3.0;
+  std::vector<std::uint32_t> order(n);
+  for (std::uint32_t t = 0; t < n; ++t) order[t] = t;
+  nodes_.reserve(2 * (n / kLeafSize + 1));
+  build(order, 0, static_cast<std::uint32_t>(n), centroids);
+
+  triangles_.reserve(n);
+  for (std::uint32_t t : order) {
+    Triangle tri{glm::dvec3(mesh.corner(t, 0)), glm::dvec3(mesh.corner(t, 1)), glm::dvec3(mesh.corner(t, 2)),
+                 {multiplicity[t][0], multiplicity[t][1], multiplicity[t][2]}};
+    triangles_.push_back(tri);
+  }
+  for (Node& node : nodes_) compute_expansion(node);
+}
+
+// Top-down median split along the longest axis of the centroids' box. Only the
+// topology and triangle ranges are decided here; the geometry per node is
+// filled by compute_expansion once triangles_ is in leaf order.
+std::uint32_t WindingNumberField::build(std::vector<std::uint32_t>& order, std::uint32_t begin, std::uint32_t end,
+                                        const std::vector<glm::dvec3>& centroids) {
+  const auto index = static_cast<std::uint32_t>(nodes_.size());
+  nodes_.emplace_back();
+  nodes_[index].begin = begin;
+  nodes_[index].end = end;
+  if (end - begin <= kLeafSize) return index;
+
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (std::uint32_t i = begin; i < end; ++i) {
+    lo = glm::min(lo, centroids[order[i]]);
+    hi = glm::max(hi, centroids[order[i]]);
+  }
+  const glm::dvec3 extent = hi - lo;
+  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+  const std::uint32_t mid = begin + (end - begin) / 2;
+  std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                   [&](std::uint32_t l, std::uint32_t r) { return centroids[l][axis] < centroids[r][axis]; });
+  build(order, begin, mid, centroids);
+  const std::uint32_t right = build(order, mid, end, centroids);
+  nodes_[index].right = right;
+  return index;
+}
+
+void WindingNumberField::compute_expansion(Node& node) const {
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  glm::dvec3 weighted_centroid(0.0);
+  double area = 0.0;
+  node.dipole = glm::dvec3(0.0);
+  node.boundary_length = 0.0;
+  for (std::uint32_t i = node.begin; i < node.end; ++i) {
+    const Triangle& t = triangles_[i];
+    lo = glm::min(glm::min(lo, t.a), glm::min(t.b, t.c));
+    hi = glm::max(glm::max(hi, t.a), glm::max(t.b, t.c));
+    const glm::dvec3 vector_area = 0.5 * glm::cross(t.b - t.a, t.c - t.a);
+    const double a = glm::length(vector_area);
+    area += a;
+    weighted_centroid += a * (t.a + t.b + t.c) / 3.0;
+    node.dipole += vector_area;
+    node.boundary_length += t.boundary_multiplicity[0] * glm::distance(t.a, t.b) +
+                            t.boundary_multiplicity[1] * glm::distance(t.b, t.c) +
+                            t.boundary_multiplicity[2] * glm::distance(t.c, t.a);
+  }
+  node.box_min = lo;
+  node.box_max = hi;
+  // All-degenerate nodes have no area to weight by; any point inside works.
+  node.center = area > 0.0 ? weighted_centroid / area : (lo + hi) * 0.5;
+
+  double radius2 = 0.0;
+  double c[3][3] = {};
+  for (std::uint32_t i = node.begin; i < node.end; ++i) {
+    const Triangle& t = triangles_[i];
+    const glm::dvec3 e[3] = {t.a - node.center, t.b - node.center, t.c - node.center};
+    radius2 = std::max({radius2, glm::dot(e[0], e[0]), glm::dot(e[1], e[1]), glm::dot(e[2], e[2])});
+    const glm::dvec3 vector_area = 0.5 * glm::cross(t.b - t.a, t.c - t.a);
+    const glm::dvec3 sum = e[0] + e[1] + e[2];
+    const glm::dvec3 offset = sum / 3.0;  // centroid - center
+    for (int r = 0; r < 3; ++r)
+      for (int s = 0; s < 3; ++s) c[r][s] += vector_area[r] * offset[s];
+    // Second moment of a triangle with corners e0, e1, e2 (relative to the
+    // expansion centre): integral of x x^T = area/12 * (sum e e^T + s s^T), s = e0 + e1 + e2.
+    auto moment = [&](int j, int k) {
+      return (e[0][j] * e[0][k] + e[1][j] * e[1][k] + e[2][j] * e[2][k] + sum[j] * sum[k]) / 12.0;
+    };
+    const double m[6] = {moment(0, 0), moment(1, 1), moment(2, 2), moment(0, 1), moment(0, 2), moment(1, 2)};
+    for (int r = 0; r < 3; ++r)
+      for (int s = 0; s < 6; ++s) node.second_order[r][s] += vector_area[r] * m[s];
+  }
+  node.radius = std::sqrt(radius2);
+  node.first_order[0] = c[0][0];
+  node.first_order[1] = c[1][1];
+  node.first_order[2] = c[2][2];
+  node.first_order[3] = 0.5 * (c[0][1] + c[1][0]);
+  node.first_order[4] = 0.5 * (c[0][2] + c[2][0]);
+  node.first_order[5] = 0.5 * (c[1][2] + c[2][1]);
+  // With T_ijk = second_order[i][jk]: 2 * sum_i T_iik + sum_j T_kjj, per k.
+  const auto& t = node.second_order;
+  for (int k = 0; k < 3; ++k) node.second_order_traces[k] = t[k][0] + t[k][1] + t[k][2];
+  node.second_order_traces.x += 2.0 * (t[0][0] + t[1][3] + t[2][4]);
+  node.second_order_traces.y += 2.0 * (t[0][3] + t[1][1] + t[2][5]);
+  node.second_order_traces.z += 2.0 * (t[0][4] + t[1][5] + t[2][2]);
+}
+
+namespace {
+
+// y^T S y for a symmetric matrix stored as xx, yy, zz, xy, xz, yz.
+double quadratic_form(const double* s, glm::dvec3 y) {
+  return s[0] * y.x * y.x + s[1] * y.y * y.y + s[2] * y.z * y.z +
+         2.0 * (s[3] * y.x * y.y + s[4] * y.x * y.z + s[5] * y.y * y.z);
+}
+
+}  // namespace
+
+// Far field: each triangle contributes the integral over t of
+// n.(x - q)/|x - q|^3. With y = center - q and x = center + d, expand
+// f(y + d) = (y + d)/|y + d|^3 to second order in d:
+//   f(y) + J d + 1/2 H[d, d],  J_ij = d_j f_i = delta_ij/r^3 - 3 y_i y_j/r^5,
+//   H_ijk = d_j d_k f_i = -3 (delta_ij y_k + delta_ik y_j + delta_jk y_i)/r^5 + 15 y_i y_j y_k/r^7.
+// Integrated over the node's triangles (area * n_i times the moments of d):
+//   order 0: dipole.y / r^3
+//   order 1: sum_ij J_ij C_ij = trace(C)/r^3 - 3 y^T C y/r^5
+//   order 2: 1/2 sum_ijk H_ijk T_ijk = -3/2 (2 sum T_iik y_k + sum T_ijj y_i)/r^5
+//                                     + 15/2 sum y_i y_j y_k T_ijk / r^7.
+// The truncation error falls as (node radius / distance)^3 relative to the
+// node's dipole term; beta bounds that ratio.
+double WindingNumberField::operator()(glm::dvec3 p) const {
+  if (nodes_.empty()) return 0.0;
+  const double beta2 = beta_ * beta_;
+  double total = 0.0;  // sum of solid angles
+  std::array<std::uint32_t, kStackSize> stack;
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    const glm::dvec3 y = node.center - p;
+    const double r2 = glm::dot(y, y);
+    if (r2 > beta2 * node.radius * node.radius) {
+      const double inv_r2 = 1.0 / r2;
+      const double inv_r3 = inv_r2 / std::sqrt(r2);
+      const double inv_r5 = inv_r3 * inv_r2;
+      const double* c = node.first_order;
+      const double order0 = glm::dot(node.dipole, y) * inv_r3;
+      const double order1 = (c[0] + c[1] + c[2]) * inv_r3 - 3.0 * quadratic_form(c, y) * inv_r5;
+      const double cubic = y.x * quadratic_form(node.second_order[0], y) +
+                           y.y * quadratic_form(node.second_order[1], y) +
+                           y.z * quadratic_form(node.second_order[2], y);
+      const double order2 = -1.5 * glm::dot(node.second_order_traces, y) * inv_r5 + 7.5 * cubic * inv_r5 * inv_r2;
+      total += order0 + order1 + order2;
+    } else if (node.leaf()) {
+      for (std::uint32_t i = node.begin; i < node.end; ++i) {
+        const Triangle& t = triangles_[i];
+        total += solid_angle(t.a - p, t.b - p, t.c - p);
+      }
+    } else {
+      stack[top++] = node.right;
+      stack[top++] = static_cast<std::uint32_t>(&node - nodes_.data()) + 1;
+    }
+  }
+  return total / kFourPi;
+}
+
+bool WindingNumberField::surface_within(glm::dvec3 center, double radius) const {
+  if (nodes_.empty()) return false;
+  // Err towards "yes": a false yes only costs the caller a finer look.
+  const double r2 = radius * radius * (1.0 + 1e-9);
+  std::array<std::uint32_t, kStackSize> stack;
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const std::uint32_t index = stack[--top];
+    const Node& node = nodes_[index];
+    if (squared_distance_to_box(center, node.box_min, node.box_max) > r2) continue;
+    if (node.leaf()) {
+      for (std::uint32_t i = node.begin; i < node.end; ++i) {
+        const Triangle& t = triangles_[i];
+        if (squared_distance_to_triangle(center, t.a, t.b, t.c) <= r2) return true;
+      }
+    } else {
+      stack[top++] = node.right;
+      stack[top++] = index + 1;
+    }
+  }
+  return false;
+}
+
+// Why this bounds the variation: off the surface, the gradient of a
+// triangle's solid angle is the Biot-Savart integral over its boundary loop,
+// grad Omega(x) = +-(loop integral of (y - x) x dy / |y - x|^3). Summed over
+// the soup, an edge traversed once each way cancels, so only the boundary
+// curve (edges with nonzero net multiplicity) remains, and
+//   |grad w(x)| <= 1/(4 pi) * sum_e m_e * integral_e |dy| / |y - x|^2.
+// For x in a triangle-free ball B(center, radius), w is smooth in B and, B
+// being convex, |w(x) - w(center)| <= radius * sup_B |grad w|. Each edge term
+// at any x in B is at most len / (dist(center, e) - radius)^2, and also at
+// most pi / (dist(center, line of e) - radius) (the integral over the whole
+// line). A node's edges are all at least its box distance away, so a far
+// node contributes at most boundary_length / (box distance - radius)^2.
+double WindingNumberField::variation_bound(glm::dvec3 center, double radius, double limit) const {
+  if (closed() || radius <= 0.0) return 0.0;
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  const double scale = radius / kFourPi;
+  const double budget = limit / scale;  // stop once the integral sum passes this
+  double sum = 0.0;
+  std::array<std::uint32_t, kStackSize> stack;
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const std::uint32_t index = stack[--top];
+    const Node& node = nodes_[index];
+    if (node.boundary_length == 0.0) continue;
+    const double gap = std::sqrt(squared_distance_to_box(center, node.box_min, node.box_max)) - radius;
+    if (node.leaf()) {
+      for (std::uint32_t i = node.begin; i < node.end; ++i) {
+        const Triangle& t = triangles_[i];
+        const glm::dvec3 corners[3] = {t.a, t.b, t.c};
+        for (int e = 0; e < 3; ++e) {
+          if (t.boundary_multiplicity[e] == 0) continue;
+          const glm::dvec3 a = corners[e], b = corners[(e + 1) % 3];
+          const double edge_gap = std::sqrt(squared_distance_to_segment(center, a, b)) - radius;
+          if (edge_gap <= 0.0) return inf;
+          double term = glm::distance(a, b) / (edge_gap * edge_gap);
+          const double line_gap = distance_to_line(center, a, b) - radius;
+          if (line_gap > 0.0) term = std::min(term, std::numbers::pi / line_gap);
+          sum += t.boundary_multiplicity[e] * term;
+        }
+      }
+    } else if (gap > glm::distance(node.box_min, node.box_max)) {
+      sum += node.boundary_length / (gap * gap);
+    } else {
+      // Too close for the aggregate bound to be tight: look at the children.
+      stack[top++] = node.right;
+      stack[top++] = index + 1;
+    }
+    if (sum > budget) return scale * sum;
+  }
+  return scale * sum;
+}
+
+double winding_number_exact(const Mesh& mesh, glm::dvec3 p) {
+  double total = 0.0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    total += solid_angle(glm::dvec3(mesh.corner(t, 0)) - p, glm::dvec3(mesh.corner(t, 1)) - p,
+                         glm::dvec3(mesh.corner(t, 2)) - p);
+  return total / kFourPi;
+}
+
+}  // namespace voxd
