@@ -24,9 +24,11 @@ namespace voxd {
 
 class WindingNumberField {
  public:
-  // Barill et al.'s accuracy parameter: a node is expanded when the query is
-  // farther than beta times the node radius from its expansion centre. With
-  // beta = 2 the error is ~1e-3 at worst in practice (tests measure it).
+  // Barill et al.'s accuracy parameter: a node's expansion is used when the
+  // query is farther than beta times the node radius from its expansion
+  // centre. With beta = 2 the error is typically ~1e-3 and at worst a few
+  // 1e-2 where many shells are nested concentrically (their truncation errors
+  // add up); the tests measure it. The cost grows roughly as beta^2.
   static constexpr double kDefaultBeta = 2.0;
 
   // Builds the hierarchy once (O(n log n)). The mesh may be a soup: no
@@ -34,8 +36,8 @@ class WindingNumberField {
   // geometry; `mesh` need not outlive it.
   explicit WindingNumberField(const Mesh& mesh, double beta = kDefaultBeta);
 
-  // Fast winding number at p. Finite everywhere, including on the surface
-  // (where it takes some value between those of the two sides).
+  // Fast winding number at p. Finite everywhere; on a face it is the mean of
+  // the values on either side (1/2 on a closed mesh).
   double operator()(glm::dvec3 p) const;
 
   // True if some triangle comes within `radius` of `center` (closed ball).
@@ -56,7 +58,9 @@ class WindingNumberField {
 
  private:
   struct Triangle {
-    glm::dvec3 a, b, c;
+    // Kept as the mesh's floats (exactly), widened to double when used: half
+    // the memory, which dominates for meshes of millions of triangles.
+    glm::vec3 a, b, c;
     // How many times each edge (a->b, b->c, c->a) counts in the boundary
     // curve of the soup: 0 when cancelled by opposite twins.
     std::uint32_t boundary_multiplicity[3];
@@ -93,7 +97,8 @@ class WindingNumberField {
 
 // Brute-force winding number: the sum over all triangles of their solid angle
 // (Van Oosterom and Strackee 1983) over 4pi. O(n) per point; for tests and as
-// the reference of the fast field. Finite everywhere.
+// the reference of the fast field. Finite everywhere; on a face, the mean of
+// the two sides.
 double winding_number_exact(const Mesh& mesh, glm::dvec3 p);
 
 }  // namespace voxd

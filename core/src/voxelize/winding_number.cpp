@@ -20,14 +20,17 @@ constexpr int kStackSize = 128;
 
 // Signed solid angle of triangle (a, b, c) seen from the origin, by Van
 // Oosterom and Strackee: tan(Omega/2) = det[a b c] / (|a||b||c| + (a.b)|c| +
-// (b.c)|a| + (c.a)|b|). atan2 keeps it finite everywhere: at a vertex both
-// arguments are 0 and atan2 gives 0; on the triangle's plane det is 0 and the
-// result is 0 outside the triangle and +-2pi inside (half a turn of winding,
-// the average of the two sides); a degenerate triangle has det 0 and
-// contributes 0 (or +-2pi on its own segment, still finite).
+// (b.c)|a| + (c.a)|b|). When det is 0 the origin is in the triangle's plane
+// (or the triangle is degenerate): the solid angle is 0 outside the triangle
+// and jumps between +2pi and -2pi across it, so 0, the average of the two
+// sides, is returned in every case. This avoids atan2 turning the arbitrary
+// sign of a zero determinant into +-pi, makes w on a face exactly the mean of
+// the values on either side (1/2 on a closed mesh), and never yields NaN: at a
+// vertex det is 0 too.
 double solid_angle(glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
-  const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
   const double det = glm::dot(a, glm::cross(b, c));
+  if (det == 0.0) return 0.0;
+  const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
   const double den = la * lb * lc + glm::dot(a, b) * lc + glm::dot(b, c) * la + glm::dot(c, a) * lb;
   return 2.0 * std::atan2(det, den);
 }
@@ -146,7 +149,7 @@ WindingNumberField::WindingNumberField(const Mesh& mesh, double beta) : beta_(be
 
   triangles_.reserve(n);
   for (std::uint32_t t : order) {
-    Triangle tri{glm::dvec3(mesh.corner(t, 0)), glm::dvec3(mesh.corner(t, 1)), glm::dvec3(mesh.corner(t, 2)),
+    Triangle tri{mesh.corner(t, 0), mesh.corner(t, 1), mesh.corner(t, 2),
                  {multiplicity[t][0], multiplicity[t][1], multiplicity[t][2]}};
     triangles_.push_back(tri);
   }
@@ -188,16 +191,17 @@ void WindingNumberField::compute_expansion(Node& node) const {
   node.boundary_length = 0.0;
   for (std::uint32_t i = node.begin; i < node.end; ++i) {
     const Triangle& t = triangles_[i];
-    lo = glm::min(glm::min(lo, t.a), glm::min(t.b, t.c));
-    hi = glm::max(glm::max(hi, t.a), glm::max(t.b, t.c));
-    const glm::dvec3 vector_area = 0.5 * glm::cross(t.b - t.a, t.c - t.a);
+    const glm::dvec3 p0(t.a), p1(t.b), p2(t.c);
+    lo = glm::min(glm::min(lo, p0), glm::min(p1, p2));
+    hi = glm::max(glm::max(hi, p0), glm::max(p1, p2));
+    const glm::dvec3 vector_area = 0.5 * glm::cross(p1 - p0, p2 - p0);
     const double a = glm::length(vector_area);
     area += a;
-    weighted_centroid += a * (t.a + t.b + t.c) / 3.0;
+    weighted_centroid += a * (p0 + p1 + p2) / 3.0;
     node.dipole += vector_area;
-    node.boundary_length += t.boundary_multiplicity[0] * glm::distance(t.a, t.b) +
-                            t.boundary_multiplicity[1] * glm::distance(t.b, t.c) +
-                            t.boundary_multiplicity[2] * glm::distance(t.c, t.a);
+    node.boundary_length += t.boundary_multiplicity[0] * glm::distance(p0, p1) +
+                            t.boundary_multiplicity[1] * glm::distance(p1, p2) +
+                            t.boundary_multiplicity[2] * glm::distance(p2, p0);
   }
   node.box_min = lo;
   node.box_max = hi;
@@ -208,9 +212,10 @@ void WindingNumberField::compute_expansion(Node& node) const {
   double c[3][3] = {};
   for (std::uint32_t i = node.begin; i < node.end; ++i) {
     const Triangle& t = triangles_[i];
-    const glm::dvec3 e[3] = {t.a - node.center, t.b - node.center, t.c - node.center};
+    const glm::dvec3 p0(t.a), p1(t.b), p2(t.c);
+    const glm::dvec3 e[3] = {p0 - node.center, p1 - node.center, p2 - node.center};
     radius2 = std::max({radius2, glm::dot(e[0], e[0]), glm::dot(e[1], e[1]), glm::dot(e[2], e[2])});
-    const glm::dvec3 vector_area = 0.5 * glm::cross(t.b - t.a, t.c - t.a);
+    const glm::dvec3 vector_area = 0.5 * glm::cross(p1 - p0, p2 - p0);
     const glm::dvec3 sum = e[0] + e[1] + e[2];
     const glm::dvec3 offset = sum / 3.0;  // centroid - center
     for (int r = 0; r < 3; ++r)
@@ -287,7 +292,7 @@ double WindingNumberField::operator()(glm::dvec3 p) const {
     } else if (node.leaf()) {
       for (std::uint32_t i = node.begin; i < node.end; ++i) {
         const Triangle& t = triangles_[i];
-        total += solid_angle(t.a - p, t.b - p, t.c - p);
+        total += solid_angle(glm::dvec3(t.a) - p, glm::dvec3(t.b) - p, glm::dvec3(t.c) - p);
       }
     } else {
       stack[top++] = node.right;
@@ -311,7 +316,7 @@ bool WindingNumberField::surface_within(glm::dvec3 center, double radius) const 
     if (node.leaf()) {
       for (std::uint32_t i = node.begin; i < node.end; ++i) {
         const Triangle& t = triangles_[i];
-        if (squared_distance_to_triangle(center, t.a, t.b, t.c) <= r2) return true;
+        if (squared_distance_to_triangle(center, glm::dvec3(t.a), glm::dvec3(t.b), glm::dvec3(t.c)) <= r2) return true;
       }
     } else {
       stack[top++] = node.right;
@@ -350,7 +355,7 @@ double WindingNumberField::variation_bound(glm::dvec3 center, double radius, dou
     if (node.leaf()) {
       for (std::uint32_t i = node.begin; i < node.end; ++i) {
         const Triangle& t = triangles_[i];
-        const glm::dvec3 corners[3] = {t.a, t.b, t.c};
+        const glm::dvec3 corners[3] = {glm::dvec3(t.a), glm::dvec3(t.b), glm::dvec3(t.c)};
         for (int e = 0; e < 3; ++e) {
           if (t.boundary_multiplicity[e] == 0) continue;
           const glm::dvec3 a = corners[e], b = corners[(e + 1) % 3];
