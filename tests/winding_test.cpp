@@ -524,6 +524,14 @@ TEST(WindingVoxelizer, CancelledBeforeTheCallThrowsCancelled) {
             ErrorCode::cancelled);
 }
 
+TEST(WindingNumberField, ConstructionHonoursCancellation) {
+  JobControl control;
+  control.request_cancel();
+  const Mesh sphere = make_icosphere({0, 0, 0}, 1.0, 2);
+  EXPECT_EQ(error_code_of([&] { WindingNumberField field(sphere, WindingNumberField::kDefaultBeta, &control); }),
+            ErrorCode::cancelled);
+}
+
 TEST(WindingVoxelizer, CancelDuringTheRunStopsItPromptly) {
   // A job of several seconds (512^3 voxels); cancelled shortly after it starts.
   const Mesh sphere = make_icosphere({0, 0, 0}, 1.0, 4);

@@ -22,6 +22,8 @@
 
 namespace voxd {
 
+class JobControl;
+
 class WindingNumberField {
  public:
   // Barill et al.'s accuracy parameter: a node's expansion is used when the
@@ -33,8 +35,9 @@ class WindingNumberField {
 
   // Builds the hierarchy once (O(n log n)). The mesh may be a soup: no
   // welding, degenerate triangles allowed. The field keeps its own copy of the
-  // geometry; `mesh` need not outlive it.
-  explicit WindingNumberField(const Mesh& mesh, double beta = kDefaultBeta);
+  // geometry; `mesh` need not outlive it. With a `control`, construction
+  // throws Error(cancelled) soon after cancellation is requested.
+  explicit WindingNumberField(const Mesh& mesh, double beta = kDefaultBeta, const JobControl* control = nullptr);
 
   // Fast winding number at p. Finite everywhere; on a face it is the mean of
   // the values on either side (1/2 on a closed mesh).
@@ -87,8 +90,8 @@ class WindingNumberField {
   };
 
   std::uint32_t build(std::vector<std::uint32_t>& order, std::uint32_t begin, std::uint32_t end,
-                      const std::vector<glm::dvec3>& centroids);
-  void compute_expansion(Node& node) const;
+                      const std::vector<glm::dvec3>& centroids, const JobControl* control);
+  void compute_expansions(const JobControl* control);
 
   double beta_;
   std::vector<Triangle> triangles_;  // in BVH leaf order

@@ -8,6 +8,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "voxd/progress.h"
+
 namespace voxd {
 namespace {
 
@@ -15,6 +17,10 @@ constexpr double kFourPi = 4.0 * std::numbers::pi;
 // Triangles per BVH leaf: small enough that near-field exact sums stay short,
 // large enough that the tree (and its expansion coefficients) stays small.
 constexpr std::uint32_t kLeafSize = 8;
+// Construction checks for cancellation about every this many triangles
+// (well under a millisecond of work each). Only the two sorts of the
+// boundary detection run unchecked: ~0.2 s per million triangles.
+constexpr std::uint32_t kCancelCheckInterval = 1 << 15;
 // Median splits halve the range, so depth <= log2(2^32 / kLeafSize) + 1 < 64.
 constexpr int kStackSize = 128;
 
@@ -33,6 +39,10 @@ double solid_angle(glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
   const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
   const double den = la * lb * lc + glm::dot(a, b) * lc + glm::dot(b, c) * la + glm::dot(c, a) * lb;
   return 2.0 * std::atan2(det, den);
+}
+
+void checkpoint(const JobControl* control) {
+  if (control) control->check_cancelled();
 }
 
 double squared_distance_to_segment(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b) {
@@ -82,7 +92,7 @@ double squared_distance_to_box(glm::dvec3 p, glm::dvec3 lo, glm::dvec3 hi) {
 // meet exactly is recognised as closed. Each undirected edge gets the net
 // count of its directed occurrences (+1 one way, -1 the other); a nonzero net
 // is booked, in absolute value, on the first triangle corner that has it.
-std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& mesh) {
+std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& mesh, const JobControl* control) {
   // Position ids: equal coordinates (as floats) share an id.
   std::vector<std::uint32_t> by_position(mesh.vertices.size());
   for (std::uint32_t i = 0; i < by_position.size(); ++i) by_position[i] = i;
@@ -93,6 +103,7 @@ std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& me
     return a.z < b.z;
   };
   std::sort(by_position.begin(), by_position.end(), less);
+  checkpoint(control);
   std::vector<std::uint32_t> position_id(mesh.vertices.size());
   std::uint32_t next_id = 0;
   for (std::size_t i = 0; i < by_position.size(); ++i) {
@@ -100,33 +111,33 @@ std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& me
     position_id[by_position[i]] = next_id;
   }
 
-  struct DirectedEdge {
-    std::uint64_t key;  // (smaller id << 32) | larger id
-    int direction;      // +1 from smaller to larger id, -1 the other way
-    std::uint32_t triangle;
-    std::uint32_t corner;
-  };
-  std::vector<DirectedEdge> edges;
+  // One entry per directed edge: (undirected key, corner * 2 + direction),
+  // key = (smaller id << 32) | larger id, corner = 3 * triangle + e,
+  // direction 1 from the smaller id to the larger, 0 the other way.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> edges;
   edges.reserve(mesh.triangles.size() * 3);
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (t % kCancelCheckInterval == 0) checkpoint(control);
     for (std::uint32_t e = 0; e < 3; ++e) {
       const std::uint32_t p = position_id[mesh.triangles[t][e]];
       const std::uint32_t q = position_id[mesh.triangles[t][(e + 1) % 3]];
       if (p == q) continue;  // zero length: no contribution to any line integral
       const std::uint64_t key = (std::uint64_t{std::min(p, q)} << 32) | std::max(p, q);
-      edges.push_back({key, p < q ? 1 : -1, t, e});
+      edges.emplace_back(key, (std::uint64_t{3} * t + e) * 2 + (p < q ? 1 : 0));
     }
   }
-  std::sort(edges.begin(), edges.end(), [](const DirectedEdge& l, const DirectedEdge& r) {
-    return l.key != r.key ? l.key < r.key : l.triangle != r.triangle ? l.triangle < r.triangle : l.corner < r.corner;
-  });
+  std::sort(edges.begin(), edges.end());
+  checkpoint(control);
 
   std::vector<std::array<std::uint32_t, 3>> multiplicity(mesh.triangles.size(), {0, 0, 0});
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;
     long net = 0;
-    for (; j < edges.size() && edges[j].key == edges[i].key; ++j) net += edges[j].direction;
-    if (net != 0) multiplicity[edges[i].triangle][edges[i].corner] = static_cast<std::uint32_t>(std::labs(net));
+    for (; j < edges.size() && edges[j].first == edges[i].first; ++j) net += (edges[j].second & 1) ? 1 : -1;
+    if (net != 0) {
+      const std::uint64_t corner = edges[i].second / 2;
+      multiplicity[corner / 3][corner % 3] = static_cast<std::uint32_t>(std::labs(net));
+    }
     i = j;
   }
   return multiplicity;
@@ -134,10 +145,10 @@ std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& me
 
 }  // namespace
 
-WindingNumberField::WindingNumberField(const Mesh& mesh, double beta) : beta_(beta) {
+WindingNumberField::WindingNumberField(const Mesh& mesh, double beta, const JobControl* control) : beta_(beta) {
   const std::size_t n = mesh.triangles.size();
   if (n == 0) return;
-  const auto multiplicity = boundary_multiplicities(mesh);
+  const auto multiplicity = boundary_multiplicities(mesh, control);
 
   std::vector<glm::dvec3> centroids(n);
   for (std::size_t t = 0; t < n; ++t)
@@ -145,22 +156,24 @@ WindingNumberField::WindingNumberField(const Mesh& mesh, double beta) : beta_(be
   std::vector<std::uint32_t> order(n);
   for (std::uint32_t t = 0; t < n; ++t) order[t] = t;
   nodes_.reserve(2 * (n / kLeafSize + 1));
-  build(order, 0, static_cast<std::uint32_t>(n), centroids);
+  build(order, 0, static_cast<std::uint32_t>(n), centroids, control);
 
   triangles_.reserve(n);
   for (std::uint32_t t : order) {
+    if (triangles_.size() % kCancelCheckInterval == 0) checkpoint(control);
     Triangle tri{mesh.corner(t, 0), mesh.corner(t, 1), mesh.corner(t, 2),
                  {multiplicity[t][0], multiplicity[t][1], multiplicity[t][2]}};
     triangles_.push_back(tri);
   }
-  for (Node& node : nodes_) compute_expansion(node);
+  compute_expansions(control);
 }
 
 // Top-down median split along the longest axis of the centroids' box. Only the
 // topology and triangle ranges are decided here; the geometry per node is
-// filled by compute_expansion once triangles_ is in leaf order.
+// filled by compute_expansions once triangles_ is in leaf order.
 std::uint32_t WindingNumberField::build(std::vector<std::uint32_t>& order, std::uint32_t begin, std::uint32_t end,
-                                        const std::vector<glm::dvec3>& centroids) {
+                                        const std::vector<glm::dvec3>& centroids, const JobControl* control) {
+  if (end - begin >= kCancelCheckInterval) checkpoint(control);
   const auto index = static_cast<std::uint32_t>(nodes_.size());
   nodes_.emplace_back();
   nodes_[index].begin = begin;
@@ -177,71 +190,130 @@ std::uint32_t WindingNumberField::build(std::vector<std::uint32_t>& order, std::
   const std::uint32_t mid = begin + (end - begin) / 2;
   std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
                    [&](std::uint32_t l, std::uint32_t r) { return centroids[l][axis] < centroids[r][axis]; });
-  build(order, begin, mid, centroids);
-  const std::uint32_t right = build(order, mid, end, centroids);
+  build(order, begin, mid, centroids, control);
+  const std::uint32_t right = build(order, mid, end, centroids, control);
   nodes_[index].right = right;
   return index;
 }
 
-void WindingNumberField::compute_expansion(Node& node) const {
-  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-  glm::dvec3 weighted_centroid(0.0);
-  double area = 0.0;
-  node.dipole = glm::dvec3(0.0);
-  node.boundary_length = 0.0;
-  for (std::uint32_t i = node.begin; i < node.end; ++i) {
-    const Triangle& t = triangles_[i];
-    const glm::dvec3 p0(t.a), p1(t.b), p2(t.c);
-    lo = glm::min(glm::min(lo, p0), glm::min(p1, p2));
-    hi = glm::max(glm::max(hi, p0), glm::max(p1, p2));
-    const glm::dvec3 vector_area = 0.5 * glm::cross(p1 - p0, p2 - p0);
-    const double a = glm::length(vector_area);
-    area += a;
-    weighted_centroid += a * (p0 + p1 + p2) / 3.0;
-    node.dipole += vector_area;
-    node.boundary_length += t.boundary_multiplicity[0] * glm::distance(p0, p1) +
-                            t.boundary_multiplicity[1] * glm::distance(p1, p2) +
-                            t.boundary_multiplicity[2] * glm::distance(p2, p0);
-  }
-  node.box_min = lo;
-  node.box_max = hi;
-  // All-degenerate nodes have no area to weight by; any point inside works.
-  node.center = area > 0.0 ? weighted_centroid / area : (lo + hi) * 0.5;
+namespace {
 
-  double radius2 = 0.0;
-  double c[3][3] = {};
-  for (std::uint32_t i = node.begin; i < node.end; ++i) {
-    const Triangle& t = triangles_[i];
-    const glm::dvec3 p0(t.a), p1(t.b), p2(t.c);
-    const glm::dvec3 e[3] = {p0 - node.center, p1 - node.center, p2 - node.center};
-    radius2 = std::max({radius2, glm::dot(e[0], e[0]), glm::dot(e[1], e[1]), glm::dot(e[2], e[2])});
-    const glm::dvec3 vector_area = 0.5 * glm::cross(p1 - p0, p2 - p0);
-    const glm::dvec3 sum = e[0] + e[1] + e[2];
-    const glm::dvec3 offset = sum / 3.0;  // centroid - center
-    for (int r = 0; r < 3; ++r)
-      for (int s = 0; s < 3; ++s) c[r][s] += vector_area[r] * offset[s];
-    // Second moment of a triangle with corners e0, e1, e2 (relative to the
-    // expansion centre): integral of x x^T = area/12 * (sum e e^T + s s^T), s = e0 + e1 + e2.
-    auto moment = [&](int j, int k) {
-      return (e[0][j] * e[0][k] + e[1][j] * e[1][k] + e[2][j] * e[2][k] + sum[j] * sum[k]) / 12.0;
-    };
-    const double m[6] = {moment(0, 0), moment(1, 1), moment(2, 2), moment(0, 1), moment(0, 2), moment(1, 2)};
-    for (int r = 0; r < 3; ++r)
-      for (int s = 0; s < 6; ++s) node.second_order[r][s] += vector_area[r] * m[s];
+// A node's expansion coefficients about its own centre, kept unsymmetrised
+// so that a parent can translate its children's to its centre instead of
+// revisiting every triangle (O(n) for the tree instead of O(n log n)).
+struct Moments {
+  double area = 0.0;
+  glm::dvec3 centroid_sum{0.0};  // sum of area * centroid
+  glm::dvec3 dipole{0.0};        // N_i = sum of area * n_i
+  double first[3][3] = {};       // C_ij = sum of area * n_i * (centroid - center)_j
+  double second[3][6] = {};      // T_i,jk = sum of area * n_i * M_jk, jk as xx, yy, zz, xy, xz, yz
+};
+
+constexpr int kPairJ[6] = {0, 1, 2, 0, 0, 1};
+constexpr int kPairK[6] = {0, 1, 2, 1, 2, 2};
+
+}  // namespace
+
+// Children first: nodes are in depth-first order, so every child has a
+// larger index than its parent and a reverse sweep sees children first.
+void WindingNumberField::compute_expansions(const JobControl* control) {
+  std::vector<Moments> moments(nodes_.size());
+  for (std::size_t index = nodes_.size(); index-- > 0;) {
+    if (index % (kCancelCheckInterval / kLeafSize) == 0) checkpoint(control);
+    Node& node = nodes_[index];
+    Moments& m = moments[index];
+    if (node.leaf()) {
+      glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+      for (std::uint32_t i = node.begin; i < node.end; ++i) {
+        const Triangle& t = triangles_[i];
+        const glm::dvec3 p0(t.a), p1(t.b), p2(t.c);
+        lo = glm::min(glm::min(lo, p0), glm::min(p1, p2));
+        hi = glm::max(glm::max(hi, p0), glm::max(p1, p2));
+        const glm::dvec3 vector_area = 0.5 * glm::cross(p1 - p0, p2 - p0);
+        const double a = glm::length(vector_area);
+        m.area += a;
+        m.centroid_sum += a * (p0 + p1 + p2) / 3.0;
+        m.dipole += vector_area;
+        node.boundary_length += t.boundary_multiplicity[0] * glm::distance(p0, p1) +
+                                t.boundary_multiplicity[1] * glm::distance(p1, p2) +
+                                t.boundary_multiplicity[2] * glm::distance(p2, p0);
+      }
+      node.box_min = lo;
+      node.box_max = hi;
+      // All-degenerate nodes have no area to weight by; any point inside works.
+      node.center = m.area > 0.0 ? m.centroid_sum / m.area : (lo + hi) * 0.5;
+      for (std::uint32_t i = node.begin; i < node.end; ++i) {
+        const Triangle& t = triangles_[i];
+        const glm::dvec3 p0(t.a), p1(t.b), p2(t.c);
+        const glm::dvec3 e[3] = {p0 - node.center, p1 - node.center, p2 - node.center};
+        const glm::dvec3 vector_area = 0.5 * glm::cross(p1 - p0, p2 - p0);
+        const glm::dvec3 sum = e[0] + e[1] + e[2];
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) m.first[r][c] += vector_area[r] * sum[c] / 3.0;
+        // Second moment of a triangle with corners e0, e1, e2 relative to the
+        // centre: integral of x x^T = area/12 * (sum of e e^T + s s^T), s = e0 + e1 + e2.
+        for (int jk = 0; jk < 6; ++jk) {
+          const int j = kPairJ[jk], k = kPairK[jk];
+          const double moment = (e[0][j] * e[0][k] + e[1][j] * e[1][k] + e[2][j] * e[2][k] + sum[j] * sum[k]) / 12.0;
+          for (int r = 0; r < 3; ++r) m.second[r][jk] += vector_area[r] * moment;
+        }
+      }
+    } else {
+      const Node& left = nodes_[index + 1];
+      const Node& right = nodes_[node.right];
+      const Moments& ml = moments[index + 1];
+      const Moments& mr = moments[node.right];
+      node.box_min = glm::min(left.box_min, right.box_min);
+      node.box_max = glm::max(left.box_max, right.box_max);
+      node.boundary_length = left.boundary_length + right.boundary_length;
+      m.area = ml.area + mr.area;
+      m.centroid_sum = ml.centroid_sum + mr.centroid_sum;
+      m.dipole = ml.dipole + mr.dipole;
+      node.center = m.area > 0.0 ? m.centroid_sum / m.area : (node.box_min + node.box_max) * 0.5;
+      // Moving the expansion point from the child's centre by
+      // delta = child centre - centre, with x - centre = (x - child centre) + delta:
+      //   C_ij  += C'_ij + N'_i delta_j
+      //   T_ijk += T'_ijk + C'_ij delta_k + C'_ik delta_j + N'_i delta_j delta_k
+      for (const auto& [child, cm] : {std::pair{&left, &ml}, std::pair{&right, &mr}}) {
+        const glm::dvec3 delta = child->center - node.center;
+        for (int i = 0; i < 3; ++i) {
+          for (int j = 0; j < 3; ++j) m.first[i][j] += cm->first[i][j] + cm->dipole[i] * delta[j];
+          for (int jk = 0; jk < 6; ++jk) {
+            const int j = kPairJ[jk], k = kPairK[jk];
+            m.second[i][jk] += cm->second[i][jk] + cm->first[i][j] * delta[k] + cm->first[i][k] * delta[j] +
+                               cm->dipole[i] * delta[j] * delta[k];
+          }
+        }
+      }
+    }
+
+    // The radius is measured, not bounded from the children's: a looser
+    // radius would push evaluations into more exact near-field sums.
+    double radius2 = 0.0;
+    for (std::uint32_t i = node.begin; i < node.end; ++i) {
+      const Triangle& t = triangles_[i];
+      for (const glm::vec3& v : {t.a, t.b, t.c}) {
+        const glm::dvec3 e = glm::dvec3(v) - node.center;
+        radius2 = std::max(radius2, glm::dot(e, e));
+      }
+    }
+    node.radius = std::sqrt(radius2);
+    node.dipole = m.dipole;
+    node.first_order[0] = m.first[0][0];
+    node.first_order[1] = m.first[1][1];
+    node.first_order[2] = m.first[2][2];
+    node.first_order[3] = 0.5 * (m.first[0][1] + m.first[1][0]);
+    node.first_order[4] = 0.5 * (m.first[0][2] + m.first[2][0]);
+    node.first_order[5] = 0.5 * (m.first[1][2] + m.first[2][1]);
+    std::copy(&m.second[0][0], &m.second[0][0] + 18, &node.second_order[0][0]);
+    // What the kernel contracts T with (see operator()): per k,
+    // 2 * sum_i T_iik + sum_j T_kjj.
+    const auto& t = m.second;
+    for (int k = 0; k < 3; ++k) node.second_order_traces[k] = t[k][0] + t[k][1] + t[k][2];
+    node.second_order_traces.x += 2.0 * (t[0][0] + t[1][3] + t[2][4]);
+    node.second_order_traces.y += 2.0 * (t[0][3] + t[1][1] + t[2][5]);
+    node.second_order_traces.z += 2.0 * (t[0][4] + t[1][5] + t[2][2]);
   }
-  node.radius = std::sqrt(radius2);
-  node.first_order[0] = c[0][0];
-  node.first_order[1] = c[1][1];
-  node.first_order[2] = c[2][2];
-  node.first_order[3] = 0.5 * (c[0][1] + c[1][0]);
-  node.first_order[4] = 0.5 * (c[0][2] + c[2][0]);
-  node.first_order[5] = 0.5 * (c[1][2] + c[2][1]);
-  // With T_ijk = second_order[i][jk]: 2 * sum_i T_iik + sum_j T_kjj, per k.
-  const auto& t = node.second_order;
-  for (int k = 0; k < 3; ++k) node.second_order_traces[k] = t[k][0] + t[k][1] + t[k][2];
-  node.second_order_traces.x += 2.0 * (t[0][0] + t[1][3] + t[2][4]);
-  node.second_order_traces.y += 2.0 * (t[0][3] + t[1][1] + t[2][5]);
-  node.second_order_traces.z += 2.0 * (t[0][4] + t[1][5] + t[2][2]);
 }
 
 namespace {

@@ -110,8 +110,7 @@ class BlockClassifier {
 BitVolume voxelize_winding(const Mesh& mesh, const Grid& grid, int threads, JobControl* control) {
   if (control) control->check_cancelled();
   BitVolume volume(grid);
-  const WindingNumberField field(mesh);
-  if (control) control->check_cancelled();
+  const WindingNumberField field(mesh, WindingNumberField::kDefaultBeta, control);
 
   const glm::i64vec3 dims = grid.dims;
   const std::int64_t slabs = (dims.z + kTopBlock - 1) / kTopBlock;
