@@ -33,9 +33,9 @@
 namespace voxd {
 namespace {
 
-// Edge of the top-level blocks, and thickness of the z-slab one task owns.
-// Big enough that empty space far from the mesh costs one evaluation per
-// 16^3 voxels; small enough for 2 threads to balance at 128^3.
+// Edge of the top-level blocks. Big enough that empty space far from the
+// mesh costs one evaluation per 16^3 voxels; small enough that a grid has
+// many tasks (rows of blocks) to balance across threads.
 constexpr std::int64_t kTopBlock = 16;
 // Bound on |w_fast - w| assumed by the block test. The hierarchy's error at
 // beta = 2 is ~1e-3 typically and reached 0.05 only with five concentric
@@ -57,8 +57,8 @@ void set_bits(std::uint64_t* row, std::int64_t i0, std::int64_t i1) {
   }
 }
 
-// Classifies the voxels of one task's z-slab. Writes only rows of that slab,
-// which no other task touches, so no synchronisation is needed.
+// Classifies blocks of voxels, writing their x-rows of the volume. Each task
+// has its own classifier and owns the rows it writes (see voxelize_winding).
 class BlockClassifier {
  public:
   BlockClassifier(const WindingNumberField& field, const Grid& grid, BitVolume& volume, const JobControl* control)
@@ -112,22 +112,26 @@ BitVolume voxelize_winding(const Mesh& mesh, const Grid& grid, int threads, JobC
   BitVolume volume(grid);
   const WindingNumberField field(mesh, WindingNumberField::kDefaultBeta, control);
 
+  // A task is one row of top-level blocks: all of x, kTopBlock rows in y and
+  // in z. Tasks therefore own disjoint sets of x-rows (whole 64-bit words)
+  // and write them without synchronisation.
   const glm::i64vec3 dims = grid.dims;
-  const std::int64_t slabs = (dims.z + kTopBlock - 1) / kTopBlock;
-  // Slabs finish out of order on several threads; the mutex keeps the
+  const std::int64_t block_rows_y = (dims.y + kTopBlock - 1) / kTopBlock;
+  const std::int64_t tasks = block_rows_y * ((dims.z + kTopBlock - 1) / kTopBlock);
+  // Tasks finish out of order on several threads; the mutex keeps the
   // reported fraction monotonic.
-  std::int64_t slabs_done = 0;
+  std::int64_t tasks_done = 0;
   std::mutex progress_mutex;
-  parallel_for(0, slabs, 1, threads, [&](std::int64_t s0, std::int64_t s1) {
+  parallel_for(0, tasks, 1, threads, [&](std::int64_t t0, std::int64_t t1) {
     BlockClassifier classifier(field, grid, volume, control);
-    for (std::int64_t s = s0; s < s1; ++s) {
-      const std::int64_t k0 = s * kTopBlock, k1 = std::min(dims.z, k0 + kTopBlock);
-      for (std::int64_t j0 = 0; j0 < dims.y; j0 += kTopBlock)
-        for (std::int64_t i0 = 0; i0 < dims.x; i0 += kTopBlock)
-          classifier.classify({i0, j0, k0}, {std::min(dims.x, i0 + kTopBlock), std::min(dims.y, j0 + kTopBlock), k1});
+    for (std::int64_t t = t0; t < t1; ++t) {
+      const std::int64_t j0 = (t % block_rows_y) * kTopBlock, k0 = (t / block_rows_y) * kTopBlock;
+      const std::int64_t j1 = std::min(dims.y, j0 + kTopBlock), k1 = std::min(dims.z, k0 + kTopBlock);
+      for (std::int64_t i0 = 0; i0 < dims.x; i0 += kTopBlock)
+        classifier.classify({i0, j0, k0}, {std::min(dims.x, i0 + kTopBlock), j1, k1});
       if (control) {
         std::lock_guard lock(progress_mutex);
-        control->set_progress(static_cast<double>(++slabs_done) / static_cast<double>(slabs));
+        control->set_progress(static_cast<double>(++tasks_done) / static_cast<double>(tasks));
       }
     }
   });
