@@ -309,8 +309,9 @@ TEST(WindingVoxelizer, IcosphereVolumeWithinDiscretizationBound) {
   // Centre sampling misclassifies only voxels the surface cuts, and for a
   // locally flat surface the centre is on the side holding at least half the
   // voxel: error <= h^3/2 per cut voxel. Averaged over orientations a surface
-  // of area A cuts ~1.5 A/h^2 voxels, and those errors mostly cancel; the
-  // brief's A*h/2 is comfortably above what we see (~1e-3 A*h).
+  // of area A cuts ~1.5 A/h^2 voxels, and their errors have both signs and
+  // mostly cancel (centre sampling is unbiased under a random grid shift):
+  // A*h/2 is a safe bound, and what we see is ~1e-3 A*h.
   const Mesh sphere = make_icosphere({0.03, -0.01, 0.02}, 1.0, 4);
   const double volume = test::mesh_volume(sphere), area = surface_area(sphere);
   for (std::int64_t n : {32, 64}) {
