@@ -250,6 +250,9 @@ TEST(WindingNumberField, ClosedMeansNoBoundaryEdgesEvenForUnweldedSoups) {
   EXPECT_TRUE(WindingNumberField(concat({make_box({0, 0, 0}, {2, 2, 2}), make_box({1, 1, 1}, {3, 3, 3})})).closed());
   EXPECT_FALSE(WindingNumberField(sphere_with_hole({0, 0, 0}, 1.0, 2, 0.5)).closed());
   EXPECT_FALSE(WindingNumberField(test::remove_face(make_box({0, 0, 0}, {1, 1, 1}), 1, 1.0)).closed());
+  // Large enough that matching edges by position takes several sorted runs and merges.
+  EXPECT_TRUE(WindingNumberField(unwelded(make_icosphere({0, 0, 0}, 1.0, 5))).closed());
+  EXPECT_FALSE(WindingNumberField(unwelded(sphere_with_hole({0, 0, 0}, 1.0, 5, 0.9))).closed());
   // Inconsistent orientation leaves every edge of the flipped triangle uncancelled.
   Mesh box = make_box({0, 0, 0}, {1, 1, 1});
   std::swap(box.triangles[0][1], box.triangles[0][2]);

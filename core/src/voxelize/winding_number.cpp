@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <functional>
 #include <limits>
 #include <numbers>
 
@@ -17,9 +19,8 @@ constexpr double kFourPi = 4.0 * std::numbers::pi;
 // Triangles per BVH leaf: small enough that near-field exact sums stay short,
 // large enough that the tree (and its expansion coefficients) stays small.
 constexpr std::uint32_t kLeafSize = 8;
-// Construction checks for cancellation about every this many triangles
-// (well under a millisecond of work each). Only the two sorts of the
-// boundary detection run unchecked: ~0.2 s per million triangles.
+// Construction checks for cancellation about every this many triangles or
+// sorted elements (a millisecond of work or less).
 constexpr std::uint32_t kCancelCheckInterval = 1 << 15;
 // Median splits halve the range, so depth <= log2(2^32 / kLeafSize) + 1 < 64.
 constexpr int kStackSize = 128;
@@ -43,6 +44,28 @@ double solid_angle(glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) {
 
 void checkpoint(const JobControl* control) {
   if (control) control->check_cancelled();
+}
+
+// std::sort in cancellable steps: sorted runs, then rounds of pairwise
+// merges, checking for cancellation between steps. The longest unchecked step
+// is the final merge, a linear pass (~30 ms for 4M elements) rather than a
+// whole O(n log n) sort.
+template <class T, class Less>
+void sort_cancellable(std::vector<T>& v, Less less, const JobControl* control) {
+  constexpr std::size_t kRun = 1 << 15;
+  const std::size_t n = v.size();
+  for (std::size_t b = 0; b < n; b += kRun) {
+    checkpoint(control);
+    std::sort(v.begin() + static_cast<std::ptrdiff_t>(b), v.begin() + static_cast<std::ptrdiff_t>(std::min(n, b + kRun)),
+              less);
+  }
+  for (std::size_t width = kRun; width < n; width *= 2) {
+    for (std::size_t b = 0; b + width < n; b += 2 * width) {
+      checkpoint(control);
+      std::inplace_merge(v.begin() + static_cast<std::ptrdiff_t>(b), v.begin() + static_cast<std::ptrdiff_t>(b + width),
+                         v.begin() + static_cast<std::ptrdiff_t>(std::min(n, b + 2 * width)), less);
+    }
+  }
 }
 
 double squared_distance_to_segment(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b) {
@@ -102,8 +125,7 @@ std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& me
     if (a.y != b.y) return a.y < b.y;
     return a.z < b.z;
   };
-  std::sort(by_position.begin(), by_position.end(), less);
-  checkpoint(control);
+  sort_cancellable(by_position, less, control);
   std::vector<std::uint32_t> position_id(mesh.vertices.size());
   std::uint32_t next_id = 0;
   for (std::size_t i = 0; i < by_position.size(); ++i) {
@@ -126,7 +148,7 @@ std::vector<std::array<std::uint32_t, 3>> boundary_multiplicities(const Mesh& me
       edges.emplace_back(key, (std::uint64_t{3} * t + e) * 2 + (p < q ? 1 : 0));
     }
   }
-  std::sort(edges.begin(), edges.end());
+  sort_cancellable(edges, std::less<>(), control);
   checkpoint(control);
 
   std::vector<std::array<std::uint32_t, 3>> multiplicity(mesh.triangles.size(), {0, 0, 0});
