@@ -110,12 +110,23 @@ void gather_x_slabs(const BitVolume& volume, std::int64_t w, std::int64_t y_word
     std::uint64_t block[64];
     for (std::int64_t z = z0; z < z1; ++z) {
       for (std::int64_t yb = 0; yb < y_words; ++yb) {
-        for (std::int64_t t = 0; t < 64; ++t) {
-          const std::int64_t y = yb * 64 + t;
-          block[t] = y < ny ? volume.row(y, z)[w] : 0;
+        const std::int64_t rows = std::min<std::int64_t>(64, ny - yb * 64);
+        std::uint64_t any = 0, all = ~std::uint64_t{0};
+        for (std::int64_t t = 0; t < rows; ++t) {
+          block[t] = volume.row(yb * 64 + t, z)[w];
+          any |= block[t];
+          all &= block[t];
+        }
+        std::fill(block + rows, block + 64, 0);
+        const auto at = static_cast<std::size_t>(z * y_words + yb);
+        if (any == 0 || (all == ~std::uint64_t{0} && rows == 64)) {
+          // Uniform block (inside or outside a solid: most of them), its own
+          // transpose. The bits past nx are 0 in every row, so a block of a
+          // last, partial column is never all ones.
+          for (std::size_t b = 0; b < 64; ++b) x_slabs[b * slab_words + at] = any;
+          continue;
         }
         encode::transpose_64x64(block);  // now bit t of block[b] = voxel (64w + b, 64yb + t, z)
-        const auto at = static_cast<std::size_t>(z * y_words + yb);
         for (std::size_t b = 0; b < 64; ++b) x_slabs[b * slab_words + at] = block[b];
       }
     }

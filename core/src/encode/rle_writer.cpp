@@ -1,13 +1,15 @@
 // Writes voxd's RLE stream (proto-schemas/rle-format.md). Slabs are encoded in
-// parallel in small batches and written in order, so the memory in flight is
-// a batch of encoded slabs, never a copy of the volume.
+// parallel a few ahead of the writer and written in order, so the memory in
+// flight is a handful of encoded slabs, never a copy of the volume.
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <functional>
 #include <vector>
 
 #include "encode/bit_runs.h"
 #include "encode/byte_buffer.h"
+#include "encode/ordered_pipeline.h"
 #include "encode/rle_stream.h"
 #include "encode/volume_checks.h"
 #include "voxd/parallel.h"
@@ -22,43 +24,39 @@ using encode::ByteBuffer;
 // index, payload length), filled in once the payload length is known so that
 // each block goes to the sink in one write.
 constexpr std::size_t kBlockHeaderRoom = 1 + 2 * encode::kMaxVarintBytes;
-// Input bytes encoded per batch: big enough to keep threads busy, small
-// enough that a batch of worst-case (alternating) slabs stays a few MiB.
-constexpr std::size_t kBatchInputBytes = std::size_t{2} << 20;
-// Below this the thread start-up costs more than the encoding.
+// Input bytes of the slabs encoded ahead of the writer: enough to keep the
+// threads busy, while worst-case (alternating) slabs still stay a few MiB.
+constexpr std::size_t kInFlightInputBytes = std::size_t{2} << 20;
+// Below this, starting threads costs more than the encoding.
 constexpr std::size_t kParallelMinBytes = std::size_t{256} << 10;
 
-// Encodes slabs [0, nz) with encode_slab(k, buffer) and writes them in order.
-template <class EncodeSlab>
-void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes, const EncodeSlab& encode_slab,
-                       ByteSink& sink) {
-  const std::int64_t batch = std::clamp<std::int64_t>(
-      static_cast<std::int64_t>(kBatchInputBytes / std::max<std::size_t>(slab_input_bytes, 1)), 1, nz);
-  const int threads = slab_input_bytes * static_cast<std::size_t>(nz) < kParallelMinBytes ? 1 : 0;
-  std::vector<ByteBuffer> buffers(static_cast<std::size_t>(batch));
-  for (std::int64_t k0 = 0; k0 < nz; k0 += batch) {
-    const std::int64_t k1 = std::min(nz, k0 + batch);
-    parallel_for(k0, k1, 1, threads, [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t k = begin; k < end; ++k) {
-        ByteBuffer& buffer = buffers[static_cast<std::size_t>(k - k0)];
+// Encodes slabs [0, nz) with encode_slab(k, buffer), in parallel, and writes
+// their blocks in order, then the end block.
+void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes,
+                       const std::function<void(std::int64_t, ByteBuffer&)>& encode_slab, ByteSink& sink) {
+  const bool small = slab_input_bytes * static_cast<std::size_t>(nz) < kParallelMinBytes;
+  const int threads = small ? 1 : default_thread_count();
+  const std::int64_t slots = std::max<std::int64_t>(
+      2 * threads, std::min<std::int64_t>(64, static_cast<std::int64_t>(
+                                                  kInFlightInputBytes / std::max<std::size_t>(slab_input_bytes, 1))));
+  encode::encode_in_order(
+      nz, threads, slots,
+      [&](std::int64_t k, ByteBuffer& buffer) {
         buffer.reset(kBlockHeaderRoom);
         encode_slab(k, buffer);
-      }
-    });
-    for (std::int64_t k = k0; k < k1; ++k) {
-      ByteBuffer& buffer = buffers[static_cast<std::size_t>(k - k0)];
-      const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
-      std::uint8_t header[kBlockHeaderRoom];
-      std::uint8_t* end = header;
-      *end++ = encode::kSlabTag;
-      end = encode::put_varint(end, static_cast<std::uint64_t>(k));
-      end = encode::put_varint(end, payload);
-      const auto header_size = static_cast<std::size_t>(end - header);
-      std::uint8_t* block = buffer.data() + kBlockHeaderRoom - header_size;
-      std::memcpy(block, header, header_size);
-      sink.write(block, header_size + payload);
-    }
-  }
+      },
+      [&](std::int64_t k, ByteBuffer& buffer) {
+        const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
+        std::uint8_t header[kBlockHeaderRoom];
+        std::uint8_t* end = header;
+        *end++ = encode::kSlabTag;
+        end = encode::put_varint(end, static_cast<std::uint64_t>(k));
+        end = encode::put_varint(end, payload);
+        const auto header_size = static_cast<std::size_t>(end - header);
+        std::uint8_t* block = buffer.data() + kBlockHeaderRoom - header_size;
+        std::memcpy(block, header, header_size);
+        sink.write(block, header_size + payload);
+      });
   std::uint8_t end_block[1 + encode::kMaxVarintBytes];
   end_block[0] = encode::kEndTag;
   const std::uint8_t* end = encode::put_varint(end_block + 1, static_cast<std::uint64_t>(nz));
