@@ -103,6 +103,12 @@ void BM_RleDecodeSphere(benchmark::State& s) {
   for (auto _ : s) benchmark::DoNotOptimize(voxd::read_rle_bits(sink.data, limits));
 }
 
+void BM_BinvoxDecodeSphere(benchmark::State& s) {
+  voxd::VectorSink sink;
+  voxd::write_binvox(sphere(s.range(0)), sink);
+  for (auto _ : s) benchmark::DoNotOptimize(voxd::read_binvox(sink.data));
+}
+
 }  // namespace
 
 BENCHMARK(BM_RleEncodeSphere)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -112,3 +118,4 @@ BENCHMARK(BM_RawBytesEncodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->Use
 BENCHMARK(BM_RleEncodeRandom)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_BinvoxEncodeRandom)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RleDecodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_BinvoxDecodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -270,21 +270,43 @@ void walk_runs(std::span<const std::uint8_t> data, const BinvoxHeader& header, c
   }
 }
 
-// Calls visit(x, y, z) for the voxels with binvox indices [first, first + count).
-template <class Visit>
-void for_each_voxel(std::int64_t d, std::uint64_t first, std::uint64_t count, const Visit& visit) {
+// Splits the run of binvox indices [first, first + count) into pieces that lie
+// in one binvox row (fixed x and z), calling on_piece(x, z, y, n) for y in
+// [y, y + n).
+template <class OnPiece>
+void split_run(std::int64_t d, std::uint64_t first, std::uint64_t count, const OnPiece& on_piece) {
   const auto ud = static_cast<std::uint64_t>(d);
-  auto y = static_cast<std::int64_t>(first % ud);
-  auto z = static_cast<std::int64_t>((first / ud) % ud);
-  auto x = static_cast<std::int64_t>(first / (ud * ud));
-  for (std::uint64_t n = 0; n < count; ++n) {
-    visit(x, y, z);
-    if (++y == d) {
-      y = 0;
-      if (++z == d) {
-        z = 0;
-        ++x;
+  while (count > 0) {
+    const auto y = static_cast<std::int64_t>(first % ud);
+    const auto z = static_cast<std::int64_t>((first / ud) % ud);
+    const auto x = static_cast<std::int64_t>(first / (ud * ud));
+    const std::uint64_t n = std::min<std::uint64_t>(count, static_cast<std::uint64_t>(d - y));
+    on_piece(x, z, y, static_cast<std::int64_t>(n));
+    first += n;
+    count -= n;
+  }
+}
+
+// The inverse of gather_x_slabs: moves 64 bit-packed x-slabs back into word
+// column w of the volume, and clears them.
+void scatter_x_slabs(std::uint64_t* x_slabs, std::int64_t w, std::int64_t y_words, BitVolume& volume) {
+  const std::int64_t ny = volume.grid().dims.y;
+  const std::int64_t nz = volume.grid().dims.z;
+  const auto slab_words = static_cast<std::size_t>(nz * y_words);
+  std::uint64_t block[64];
+  for (std::int64_t z = 0; z < nz; ++z) {
+    for (std::int64_t yb = 0; yb < y_words; ++yb) {
+      const auto at = static_cast<std::size_t>(z * y_words + yb);
+      std::uint64_t any = 0;
+      for (std::size_t b = 0; b < 64; ++b) {
+        block[b] = x_slabs[b * slab_words + at];
+        any |= block[b];
+        x_slabs[b * slab_words + at] = 0;
       }
+      if (any == 0) continue;  // the volume is still zero there
+      encode::transpose_64x64(block);  // now bit b of block[t] = voxel (64w + b, 64yb + t, z)
+      const std::int64_t rows = std::min<std::int64_t>(64, ny - yb * 64);
+      for (std::int64_t t = 0; t < rows; ++t) volume.row(yb * 64 + t, z)[w] = block[t];
     }
   }
 }
@@ -383,12 +405,26 @@ BitVolume read_binvox(std::span<const std::uint8_t> data, const ReadLimits& limi
   const Grid grid = grid_of(header);
   encode::check_read_limit(encode::bit_volume_bytes(grid.dims), limits, "binvox reader");
   BitVolume volume(grid);
+
+  // Runs arrive x-slab by x-slab; collect the 64 x-slabs of one word column
+  // as bit rows, then transpose them into the volume (as the writer does,
+  // reversed), instead of touching a different volume row for every voxel.
+  const std::int64_t d = header.dim;
+  const std::int64_t y_words = (d + 63) / 64;
+  const auto slab_words = static_cast<std::size_t>(d * y_words);
+  std::vector<std::uint64_t> x_slabs(64 * slab_words, 0);
+  std::int64_t column = -1;  // word column held in x_slabs
   walk_runs(data, header, [&](std::uint64_t first, std::uint64_t count, std::uint8_t value) {
     if (value == 0) return;
-    for_each_voxel(header.dim, first, count, [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-      volume.row(y, z)[x >> 6] |= std::uint64_t{1} << (x & 63);
+    split_run(d, first, count, [&](std::int64_t x, std::int64_t z, std::int64_t y, std::int64_t n) {
+      if (x >> 6 != column) {
+        if (column >= 0) scatter_x_slabs(x_slabs.data(), column, y_words, volume);
+        column = x >> 6;
+      }
+      encode::set_bit_range(x_slabs.data() + static_cast<std::size_t>(x & 63) * slab_words + z * y_words, y, y + n);
     });
   });
+  if (column >= 0) scatter_x_slabs(x_slabs.data(), column, y_words, volume);
   return volume;
 }
 
@@ -398,11 +434,37 @@ DenseVolume<std::uint8_t> read_binvox_u8(std::span<const std::uint8_t> data, con
   const Grid grid = grid_of(header);
   encode::check_read_limit(grid.voxel_count(), limits, "binvox reader");
   DenseVolume<std::uint8_t> volume(grid, 0);
+
+  // As in write_binvox for u8: a block of x-slabs (y fastest), copied into
+  // the x-fastest volume once complete.
+  constexpr std::int64_t kXBlock = 16;
+  const std::int64_t d = header.dim;
+  const auto slab_size = static_cast<std::size_t>(d * d);
+  std::vector<std::uint8_t> x_slabs(static_cast<std::size_t>(kXBlock) * slab_size, 0);
+  std::int64_t block = -1;  // x block held in x_slabs
+  const auto flush = [&] {
+    const std::int64_t x0 = block * kXBlock;
+    const std::int64_t width = std::min(kXBlock, d - x0);
+    for (std::int64_t z = 0; z < d; ++z) {
+      for (std::int64_t y = 0; y < d; ++y) {
+        std::uint8_t* dst = &volume.at(x0, y, z);
+        const auto at = static_cast<std::size_t>(z * d + y);
+        for (std::int64_t b = 0; b < width; ++b) dst[b] = x_slabs[static_cast<std::size_t>(b) * slab_size + at];
+      }
+    }
+    std::fill(x_slabs.begin(), x_slabs.end(), 0);
+  };
   walk_runs(data, header, [&](std::uint64_t first, std::uint64_t count, std::uint8_t value) {
     if (value == 0) return;
-    for_each_voxel(header.dim, first, count,
-                   [&](std::int64_t x, std::int64_t y, std::int64_t z) { volume.at(x, y, z) = value; });
+    split_run(d, first, count, [&](std::int64_t x, std::int64_t z, std::int64_t y, std::int64_t n) {
+      if (x / kXBlock != block) {
+        if (block >= 0) flush();
+        block = x / kXBlock;
+      }
+      std::fill_n(x_slabs.data() + static_cast<std::size_t>(x % kXBlock) * slab_size + z * d + y, n, value);
+    });
   });
+  if (block >= 0) flush();
   return volume;
 }
 
