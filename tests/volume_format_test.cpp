@@ -401,13 +401,15 @@ TEST(VolumeFormatRle, LyingHeaderAllocatesNothing) {
 // identical to the one a single thread would write (the spec has one
 // encoding per volume) and read back the same.
 TEST(VolumeFormatRle, ParallelEncodingKeepsSlabOrder) {
-  const BitVolume volume = random_volume(make_grid({1024, 256, 100}), 31, 0.001);
+  // 4 KiB slabs: 400 KiB in all is over the 256 KiB single-thread threshold,
+  // and 100 slabs are more than the 64 slots.
+  const BitVolume volume = random_volume(make_grid({512, 64, 100}), 31, 0.001);
   const Bytes stream = encode(volume, VolumeFormat::rle);
   expect_same_voxels(volume, read_rle_bits(stream));
   // Cut the volume into single slabs: each encodes alone, single-threaded,
   // and its slab block must appear in the big stream unchanged.
   for (std::int64_t k : {0, 1, 63, 64, 65, 99}) {
-    BitVolume one(make_grid({1024, 256, 1}));
+    BitVolume one(make_grid({512, 64, 1}));
     std::copy(volume.slab(k), volume.slab(k) + volume.slab_words(), one.slab(0));
     const Bytes single = encode(one, VolumeFormat::rle);
     // Payload of slab 0 in `single`: after the header, tag, index 0, length.
@@ -435,7 +437,7 @@ class FailingSink final : public ByteSink {
 };
 
 TEST(VolumeFormatRle, SinkFailureStopsEveryEncoderWithoutHanging) {
-  const BitVolume volume = random_volume(make_grid({1024, 256, 100}), 33, 0.01);
+  const BitVolume volume = random_volume(make_grid({512, 64, 100}), 33, 0.01);
   for (VolumeFormat f : {VolumeFormat::rle, VolumeFormat::binvox, VolumeFormat::raw}) {
     class CountingSink final : public ByteSink {
      public:
