@@ -1,6 +1,8 @@
 #pragma once
 // Volume encoders and decoders. Encoders stream slab by slab into a ByteSink
-// and never copy the whole volume. Formats:
+// and never copy the whole volume. Large volumes are encoded on worker
+// threads, but the sink is only ever called on the calling thread, in order.
+// Formats:
 //  - rle:    voxd's run-length stream (proto-schemas/rle-format.md)
 //  - binvox: Patrick Min's binvox (cubic; non-cubic grids padded with empty voxels).
 //            Bit volumes are written as "#binvox 1" (values 0/1); u8 volumes as

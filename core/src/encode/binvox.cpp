@@ -22,6 +22,7 @@
 #include "encode/bit_runs.h"
 #include "encode/bit_transpose.h"
 #include "encode/byte_buffer.h"
+#include "encode/ordered_pipeline.h"
 #include "encode/volume_checks.h"
 #include "voxd/parallel.h"
 #include "voxd/volume_format.h"
@@ -32,6 +33,10 @@ namespace {
 using encode::ByteBuffer;
 
 constexpr std::size_t kFlushBytes = std::size_t{1} << 20;
+// Below this volume size, starting threads costs more than the encoding.
+constexpr std::size_t kParallelMinBytes = std::size_t{1} << 20;
+// Word columns gathered ahead of the run emission (at least 2 when parallel).
+constexpr std::size_t kColumnBufferBytes = std::size_t{16} << 20;
 // Longest header a reader scans for its "data" line; real headers are ~60 bytes.
 constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
 constexpr std::string_view kMagic = "#binvox";
@@ -105,32 +110,29 @@ void gather_x_slabs(const BitVolume& volume, std::int64_t w, std::int64_t y_word
   const std::int64_t ny = volume.grid().dims.y;
   const std::int64_t nz = volume.grid().dims.z;
   const auto slab_words = static_cast<std::size_t>(nz * y_words);
-  const int threads = volume.byte_size() < (std::size_t{4} << 20) ? 1 : 0;
-  parallel_for(0, nz, 16, threads, [&](std::int64_t z0, std::int64_t z1) {
-    std::uint64_t block[64];
-    for (std::int64_t z = z0; z < z1; ++z) {
-      for (std::int64_t yb = 0; yb < y_words; ++yb) {
-        const std::int64_t rows = std::min<std::int64_t>(64, ny - yb * 64);
-        std::uint64_t any = 0, all = ~std::uint64_t{0};
-        for (std::int64_t t = 0; t < rows; ++t) {
-          block[t] = volume.row(yb * 64 + t, z)[w];
-          any |= block[t];
-          all &= block[t];
-        }
-        std::fill(block + rows, block + 64, 0);
-        const auto at = static_cast<std::size_t>(z * y_words + yb);
-        if (any == 0 || (all == ~std::uint64_t{0} && rows == 64)) {
-          // Uniform block (inside or outside a solid: most of them), its own
-          // transpose. The bits past nx are 0 in every row, so a block of a
-          // last, partial column is never all ones.
-          for (std::size_t b = 0; b < 64; ++b) x_slabs[b * slab_words + at] = any;
-          continue;
-        }
-        encode::transpose_64x64(block);  // now bit t of block[b] = voxel (64w + b, 64yb + t, z)
-        for (std::size_t b = 0; b < 64; ++b) x_slabs[b * slab_words + at] = block[b];
+  std::uint64_t block[64];
+  for (std::int64_t z = 0; z < nz; ++z) {
+    for (std::int64_t yb = 0; yb < y_words; ++yb) {
+      const std::int64_t rows = std::min<std::int64_t>(64, ny - yb * 64);
+      std::uint64_t any = 0, all = ~std::uint64_t{0};
+      for (std::int64_t t = 0; t < rows; ++t) {
+        block[t] = volume.row(yb * 64 + t, z)[w];
+        any |= block[t];
+        all &= block[t];
       }
+      std::fill(block + rows, block + 64, 0);
+      const auto at = static_cast<std::size_t>(z * y_words + yb);
+      if (any == 0 || (all == ~std::uint64_t{0} && rows == 64)) {
+        // Uniform block (inside or outside a solid: most of them), its own
+        // transpose. The bits past nx are 0 in every row, so a block of a
+        // last, partial column is never all ones.
+        for (std::size_t b = 0; b < 64; ++b) x_slabs[b * slab_words + at] = any;
+        continue;
+      }
+      encode::transpose_64x64(block);  // now bit t of block[b] = voxel (64w + b, 64yb + t, z)
+      for (std::size_t b = 0; b < 64; ++b) x_slabs[b * slab_words + at] = block[b];
     }
-  });
+  }
 }
 
 // Length of the run of bytes equal to row[begin].
@@ -332,23 +334,37 @@ void write_binvox(const BitVolume& volume, ByteSink& sink) {
   const auto ud = static_cast<std::uint64_t>(d);
   const std::int64_t y_words = (ny + 63) / 64;
   const auto slab_words = static_cast<std::size_t>(nz * y_words);
-  std::vector<std::uint64_t> x_slabs(64 * slab_words);
+
+  // Word columns are gathered a few ahead on worker threads while the calling
+  // thread turns the previous ones into runs: the two phases overlap with no
+  // barrier, and memory stays at `slots` columns.
+  const int threads = volume.byte_size() < kParallelMinBytes ? 1 : default_thread_count();
+  const std::size_t column_bytes = 64 * slab_words * sizeof(std::uint64_t);
+  const std::size_t slots =
+      threads == 1 ? 1
+                   : std::clamp<std::size_t>(kColumnBufferBytes / column_bytes, 2, static_cast<std::size_t>(threads) + 1);
+  std::vector<std::vector<std::uint64_t>> columns(slots);
 
   BinvoxRunWriter pairs(sink);
   encode::BitRunSplitter runs;
   const auto emit = [&pairs](bool value, std::uint64_t n) { pairs.add(value ? 1 : 0, n); };
-  for (std::int64_t w = 0; w < volume.row_words(); ++w) {
-    gather_x_slabs(volume, w, y_words, x_slabs.data());
-    for (std::int64_t b = 0; b < 64 && 64 * w + b < nx; ++b) {
-      const std::uint64_t* x_slab = x_slabs.data() + static_cast<std::size_t>(b) * slab_words;
-      for (std::int64_t z = 0; z < nz; ++z) {
-        runs.add_row(x_slab + z * y_words, ny, emit);
-        runs.add_zeros(static_cast<std::uint64_t>(d - ny), emit);
-      }
-      runs.add_zeros(static_cast<std::uint64_t>(d - nz) * ud, emit);
-      pairs.flush_if_large();
-    }
-  }
+  encode::run_ordered_pipeline(
+      volume.row_words(), threads, slots,
+      [&](std::int64_t w, std::size_t slot) {
+        columns[slot].resize(64 * slab_words);
+        gather_x_slabs(volume, w, y_words, columns[slot].data());
+      },
+      [&](std::int64_t w, std::size_t slot) {
+        for (std::int64_t b = 0; b < 64 && 64 * w + b < nx; ++b) {
+          const std::uint64_t* x_slab = columns[slot].data() + static_cast<std::size_t>(b) * slab_words;
+          for (std::int64_t z = 0; z < nz; ++z) {
+            runs.add_row(x_slab + z * y_words, ny, emit);
+            runs.add_zeros(static_cast<std::uint64_t>(d - ny), emit);
+          }
+          runs.add_zeros(static_cast<std::uint64_t>(d - nz) * ud, emit);
+          pairs.flush_if_large();
+        }
+      });
   runs.add_zeros(static_cast<std::uint64_t>(d - nx) * ud * ud, emit);
   runs.finish(emit);
   pairs.finish();

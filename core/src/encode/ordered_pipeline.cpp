@@ -23,21 +23,21 @@ struct JoinAll {
 
 }  // namespace
 
-void encode_in_order(std::int64_t count, int threads, std::int64_t slots,
-                     const std::function<void(std::int64_t, ByteBuffer&)>& encode,
-                     const std::function<void(std::int64_t, ByteBuffer&)>& write) {
+void run_ordered_pipeline(std::int64_t count, int threads, std::size_t slot_count,
+                          const std::function<void(std::int64_t, std::size_t)>& produce,
+                          const std::function<void(std::int64_t, std::size_t)>& consume) {
   if (count <= 0) return;
   const int wanted_threads =
       static_cast<int>(std::min<std::int64_t>(threads > 0 ? threads : default_thread_count(), count));
-  slots = std::clamp<std::int64_t>(slots, 1, count);
+  // Signed, for the `i - slots` comparisons below.
+  const auto slots = static_cast<std::int64_t>(std::max<std::size_t>(slot_count, 1));
 
-  std::vector<ByteBuffer> buffers(static_cast<std::size_t>(slots));
   std::mutex mutex;
   std::condition_variable changed;
   std::atomic<std::int64_t> next_claim{0};
   // Guarded by mutex:
-  std::vector<char> done(static_cast<std::size_t>(slots), 0);  // slot holds an encoded, unwritten piece
-  std::int64_t written = 0;                                    // pieces [0, written) are written
+  std::vector<char> done(static_cast<std::size_t>(slots), 0);  // slot holds a produced, unconsumed piece
+  std::int64_t consumed = 0;                                    // pieces [0, consumed) are consumed
   bool failed = false;
   std::exception_ptr error;
 
@@ -49,16 +49,16 @@ void encode_in_order(std::int64_t count, int threads, std::int64_t slots,
     }
     changed.notify_all();
   };
-  // Encodes claimed piece i once its slot is free; false if the pipeline failed.
-  const auto encode_claimed = [&](std::int64_t i) {
+  // Produces claimed piece i once its slot is free; false if the pipeline failed.
+  const auto produce_claimed = [&](std::int64_t i) {
     const auto slot = static_cast<std::size_t>(i % slots);
     {
       std::unique_lock lock(mutex);
-      changed.wait(lock, [&] { return failed || written > i - slots; });
+      changed.wait(lock, [&] { return failed || consumed > i - slots; });
       if (failed) return false;
     }
     try {
-      encode(i, buffers[slot]);
+      produce(i, slot);
     } catch (...) {
       fail(std::current_exception());
       return false;
@@ -73,7 +73,7 @@ void encode_in_order(std::int64_t count, int threads, std::int64_t slots,
   const auto worker = [&] {
     for (;;) {
       const std::int64_t i = next_claim.fetch_add(1);
-      if (i >= count || !encode_claimed(i)) return;
+      if (i >= count || !produce_claimed(i)) return;
     }
   };
 
@@ -84,7 +84,7 @@ void encode_in_order(std::int64_t count, int threads, std::int64_t slots,
   try {
     for (int t = 1; t < wanted_threads; ++t) pool.emplace_back(worker);
   } catch (const std::system_error&) {
-    // Fewer threads than wanted: the calling thread encodes what they do not.
+    // Fewer threads than wanted: the calling thread produces what they do not.
   }
 
   try {
@@ -92,28 +92,28 @@ void encode_in_order(std::int64_t count, int threads, std::int64_t slots,
       std::size_t slot = 0;
       {
         std::unique_lock lock(mutex);
-        if (failed || written == count) break;
-        slot = static_cast<std::size_t>(written % slots);
+        if (failed || consumed == count) break;
+        slot = static_cast<std::size_t>(consumed % slots);
         if (!done[slot]) {
-          // Rather than idle, encode the next unclaimed piece if its slot is free.
+          // Rather than idle, produce the next unclaimed piece if its slot is free.
           std::int64_t i = next_claim.load();
-          if (i < count && written > i - slots && next_claim.compare_exchange_strong(i, i + 1)) {
+          if (i < count && consumed > i - slots && next_claim.compare_exchange_strong(i, i + 1)) {
             lock.unlock();
-            encode_claimed(i);
+            produce_claimed(i);
             continue;
           }
           changed.wait(lock, [&] {
             const std::int64_t claim = next_claim.load();
-            return failed || done[slot] || (claim < count && written > claim - slots);
+            return failed || done[slot] || (claim < count && consumed > claim - slots);
           });
           continue;
         }
       }
-      write(written, buffers[slot]);  // only this thread changes `written`
+      consume(consumed, slot);  // only this thread changes `consumed`
       {
         std::lock_guard lock(mutex);
         done[slot] = 0;
-        ++written;
+        ++consumed;
       }
       changed.notify_all();
     }

@@ -36,16 +36,21 @@ void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes,
                        const std::function<void(std::int64_t, ByteBuffer&)>& encode_slab, ByteSink& sink) {
   const bool small = slab_input_bytes * static_cast<std::size_t>(nz) < kParallelMinBytes;
   const int threads = small ? 1 : default_thread_count();
-  const std::int64_t slots = std::max<std::int64_t>(
-      2 * threads, std::min<std::int64_t>(64, static_cast<std::int64_t>(
-                                                  kInFlightInputBytes / std::max<std::size_t>(slab_input_bytes, 1))));
-  encode::encode_in_order(
-      nz, threads, slots,
-      [&](std::int64_t k, ByteBuffer& buffer) {
+  // Slabs in flight: about kInFlightInputBytes of input, but at least two per
+  // thread so that none idles, and no more than there are slabs.
+  const auto per_thread = static_cast<std::size_t>(2 * threads);
+  std::size_t slots = kInFlightInputBytes / std::max<std::size_t>(slab_input_bytes, 1);
+  slots = std::clamp(slots, per_thread, std::max<std::size_t>(64, per_thread));
+  std::vector<ByteBuffer> buffers(std::min(slots, static_cast<std::size_t>(nz)));
+  encode::run_ordered_pipeline(
+      nz, threads, buffers.size(),
+      [&](std::int64_t k, std::size_t slot) {
+        ByteBuffer& buffer = buffers[slot];
         buffer.reset(kBlockHeaderRoom);
         encode_slab(k, buffer);
       },
-      [&](std::int64_t k, ByteBuffer& buffer) {
+      [&](std::int64_t k, std::size_t slot) {
+        ByteBuffer& buffer = buffers[slot];
         const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
         std::uint8_t header[kBlockHeaderRoom];
         std::uint8_t* end = header;
