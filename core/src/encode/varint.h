@@ -20,13 +20,4 @@ inline std::uint8_t* put_varint(std::uint8_t* p, std::uint64_t v) {
   return p;
 }
 
-inline std::size_t varint_size(std::uint64_t v) {
-  std::size_t n = 1;
-  while (v >= 0x80) {
-    v >>= 7;
-    ++n;
-  }
-  return n;
-}
-
 }  // namespace voxd::encode
