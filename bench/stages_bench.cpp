@@ -89,4 +89,4 @@ BENCHMARK(BM_Encode)
 }  // namespace
 }  // namespace voxd::bench
 
-BENCHMARK_MAIN();
+

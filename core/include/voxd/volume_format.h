@@ -1,8 +1,12 @@
 #pragma once
 // Volume encoders and decoders. Encoders stream slab by slab into a ByteSink
-// and never copy the whole volume. Formats:
+// and never copy the whole volume. Large volumes are encoded on worker
+// threads, but the sink is only ever called on the calling thread, in order.
+// Formats:
 //  - rle:    voxd's run-length stream (proto-schemas/rle-format.md)
-//  - binvox: Patrick Min's binvox (cubic; non-cubic grids padded with empty voxels)
+//  - binvox: Patrick Min's binvox (cubic; non-cubic grids padded with empty voxels).
+//            Bit volumes are written as "#binvox 1" (values 0/1); u8 volumes as
+//            "#binvox 2", the version whose set voxels carry a value 1..255.
 //  - raw:    headerless, x fastest then y then z; one byte per voxel (0/1) or
 //            packed bits (LSB first, no row padding)
 #include <cstdint>
@@ -25,6 +29,8 @@ std::optional<VolumeFormat> volume_format_from_string(std::string_view name);
 std::optional<VolumeFormat> volume_format_from_path(std::string_view path);
 // MIME type used when serving the format.
 const char* media_type(VolumeFormat format) noexcept;
+// File extension with the dot (".rle", ".binvox", ".raw").
+const char* file_extension(VolumeFormat format) noexcept;
 
 struct EncodeOptions {
   RawPacking raw_packing = RawPacking::bytes;
@@ -36,15 +42,29 @@ void encode_volume(const BitVolume& volume, VolumeFormat format, ByteSink& sink,
 void write_rle(const BitVolume& volume, ByteSink& sink);
 void write_rle(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
 void write_binvox(const BitVolume& volume, ByteSink& sink);
+void write_binvox(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
 void write_raw(const BitVolume& volume, RawPacking packing, ByteSink& sink);
+
+// What a reader may allocate for the decoded volume. Readers validate the
+// whole input before allocating, so a lying header cannot make them allocate;
+// this bounds what a valid but huge input may cost (Error(limit_exceeded)).
+struct ReadLimits {
+  std::uint64_t max_volume_bytes = std::uint64_t{1} << 30;
+};
 
 // Readers (round trips, tests, CLI conversions). Throw Error(malformed_input /
 // truncated_input) on bad data.
-BitVolume read_rle_bits(std::span<const std::uint8_t> data);
-DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data);
+BitVolume read_rle_bits(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
+DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 // binvox has no voxel size/origin beyond translate/scale; the returned grid is
 // the cubic D^3 grid with origin = translate and voxel_size = scale / D.
-BitVolume read_binvox(std::span<const std::uint8_t> data);
-BitVolume read_raw(std::span<const std::uint8_t> data, const Grid& grid, RawPacking packing);
+// Reads versions 1 and 2; read_binvox sets the voxels whose value is non-zero.
+BitVolume read_binvox(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
+DenseVolume<std::uint8_t> read_binvox_u8(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
+// `grid` gives the dims (Error(invalid_argument) if out of range); the data
+// must be exactly the size they imply. Bytes must be 0 or 1; bits past the
+// last voxel in the last byte must be 0.
+BitVolume read_raw(std::span<const std::uint8_t> data, const Grid& grid, RawPacking packing,
+                   const ReadLimits& limits = {});
 
 }  // namespace voxd

@@ -1,0 +1,121 @@
+// Encoder and decoder throughput on a solid sphere (the typical voxelizer
+// output: long runs, ~2 transitions per row) and on random bits (worst case:
+// a transition every other voxel).
+//   ./build/bench/volume_format_bench --benchmark_filter=Sphere
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <random>
+
+#include <benchmark/benchmark.h>
+
+#include "voxd/volume_format.h"
+
+namespace {
+
+using voxd::BitVolume;
+using voxd::Grid;
+
+// Counts bytes and drops them, so the benchmark measures the encoder alone.
+class CountingSink final : public voxd::ByteSink {
+ public:
+  using ByteSink::write;
+  void write(std::span<const std::uint8_t> bytes) override { size += bytes.size(); }
+  std::size_t size = 0;
+};
+
+Grid cube_grid(std::int64_t n) {
+  Grid g;
+  g.dims = glm::i64vec3(n);
+  g.voxel_size = 1.0 / static_cast<double>(n);
+  return g;
+}
+
+// Solid sphere of radius 0.45 n in an n^3 grid, filled row by row.
+const BitVolume& sphere(std::int64_t n) {
+  static std::map<std::int64_t, std::unique_ptr<BitVolume>> cache;
+  auto& slot = cache[n];
+  if (slot) return *slot;
+  slot = std::make_unique<BitVolume>(cube_grid(n));
+  const double c = 0.5 * static_cast<double>(n), r = 0.45 * static_cast<double>(n);
+  for (std::int64_t k = 0; k < n; ++k)
+    for (std::int64_t j = 0; j < n; ++j) {
+      const double dy = static_cast<double>(j) + 0.5 - c, dz = static_cast<double>(k) + 0.5 - c;
+      const double h2 = r * r - dy * dy - dz * dz;
+      if (h2 < 0) continue;
+      const double h = std::sqrt(h2);
+      const auto i0 = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(c - h - 0.5)));
+      const auto i1 = std::min<std::int64_t>(n, static_cast<std::int64_t>(std::floor(c + h - 0.5)) + 1);
+      for (std::int64_t i = i0; i < i1; ++i) slot->set(i, j, k, true);
+    }
+  return *slot;
+}
+
+const BitVolume& random_bits(std::int64_t n) {
+  static std::map<std::int64_t, std::unique_ptr<BitVolume>> cache;
+  auto& slot = cache[n];
+  if (slot) return *slot;
+  slot = std::make_unique<BitVolume>(cube_grid(n));
+  std::mt19937_64 rng(1);
+  const std::int64_t mask_bits = n % 64;
+  for (std::int64_t k = 0; k < n; ++k)
+    for (std::int64_t j = 0; j < n; ++j)
+      for (std::int64_t w = 0; w < slot->row_words(); ++w) {
+        std::uint64_t v = rng();
+        if (w == slot->row_words() - 1 && mask_bits) v &= (std::uint64_t{1} << mask_bits) - 1;
+        slot->row(j, k)[w] = v;
+      }
+  return *slot;
+}
+
+void encode_bench(benchmark::State& state, const BitVolume& volume, voxd::VolumeFormat format,
+                  voxd::RawPacking packing = voxd::RawPacking::bytes) {
+  voxd::EncodeOptions options;
+  options.raw_packing = packing;
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    CountingSink sink;
+    voxd::encode_volume(volume, format, sink, options);
+    bytes = sink.size;
+  }
+  state.counters["output_MiB"] = static_cast<double>(bytes) / (1 << 20);
+  state.counters["voxels/s"] = benchmark::Counter(static_cast<double>(volume.grid().voxel_count()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_RleEncodeSphere(benchmark::State& s) { encode_bench(s, sphere(s.range(0)), voxd::VolumeFormat::rle); }
+void BM_BinvoxEncodeSphere(benchmark::State& s) { encode_bench(s, sphere(s.range(0)), voxd::VolumeFormat::binvox); }
+void BM_RawBitsEncodeSphere(benchmark::State& s) {
+  encode_bench(s, sphere(s.range(0)), voxd::VolumeFormat::raw, voxd::RawPacking::bits);
+}
+void BM_RawBytesEncodeSphere(benchmark::State& s) { encode_bench(s, sphere(s.range(0)), voxd::VolumeFormat::raw); }
+void BM_RleEncodeRandom(benchmark::State& s) { encode_bench(s, random_bits(s.range(0)), voxd::VolumeFormat::rle); }
+void BM_BinvoxEncodeRandom(benchmark::State& s) {
+  encode_bench(s, random_bits(s.range(0)), voxd::VolumeFormat::binvox);
+}
+
+void BM_RleDecodeSphere(benchmark::State& s) {
+  voxd::VectorSink sink;
+  voxd::write_rle(sphere(s.range(0)), sink);
+  voxd::ReadLimits limits;
+  limits.max_volume_bytes = std::uint64_t{1} << 34;
+  for (auto _ : s) benchmark::DoNotOptimize(voxd::read_rle_bits(sink.data, limits));
+}
+
+void BM_BinvoxDecodeSphere(benchmark::State& s) {
+  voxd::VectorSink sink;
+  voxd::write_binvox(sphere(s.range(0)), sink);
+  for (auto _ : s) benchmark::DoNotOptimize(voxd::read_binvox(sink.data));
+}
+
+}  // namespace
+
+BENCHMARK(BM_RleEncodeSphere)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_BinvoxEncodeSphere)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RawBitsEncodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RawBytesEncodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RleEncodeRandom)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_BinvoxEncodeRandom)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RleDecodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_BinvoxDecodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();

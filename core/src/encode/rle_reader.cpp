@@ -1,0 +1,186 @@
+// Reads voxd's RLE stream (proto-schemas/rle-format.md). The input is
+// untrusted: a first pass checks every block and run without allocating the
+// volume, so a header that lies about the dims costs nothing; only a stream
+// that is valid end to end gets its volume allocated and filled (second pass).
+#include <algorithm>
+#include <string>
+
+#include "encode/bit_runs.h"
+#include "encode/byte_cursor.h"
+#include "encode/rle_stream.h"
+#include "encode/volume_checks.h"
+#include "voxd/volume_format.h"
+
+namespace voxd {
+namespace {
+
+using encode::ByteCursor;
+
+std::string hex_byte(std::uint8_t b) {
+  const char* digits = "0123456789abcdef";
+  return std::string("0x") + digits[b >> 4] + digits[b & 15];
+}
+
+// Checks the framing of the slab blocks and the end block, calling
+// visit(k, payload, payload_offset) for each slab in order. Takes the cursor
+// by value so that each pass starts from the first block.
+template <class Visit>
+void walk_slab_blocks(ByteCursor in, std::int64_t nz, const Visit& visit) {
+  for (std::int64_t k = 0; k < nz; ++k) {
+    const std::size_t block_at = in.offset();
+    const std::uint8_t tag = in.u8("a slab block tag");
+    if (tag == encode::kEndTag)
+      in.fail(ErrorCode::malformed_input, "end block at byte " + std::to_string(block_at) + " after " +
+                                              std::to_string(k) + " slab blocks; the header's dims give " +
+                                              std::to_string(nz) + " slabs");
+    if (tag != encode::kSlabTag)
+      in.fail(ErrorCode::malformed_input, "byte " + std::to_string(block_at) +
+                                              ": expected a slab block (tag 0x53 'S'), found " + hex_byte(tag));
+    const std::uint64_t index = in.varint("a slab index");
+    if (index != static_cast<std::uint64_t>(k))
+      in.fail(ErrorCode::malformed_input, "slab block at byte " + std::to_string(block_at) + " has index " +
+                                              std::to_string(index) + " where slab " + std::to_string(k) +
+                                              " was expected (slabs come in order from 0)");
+    const std::uint64_t length = in.varint("a slab payload length");
+    const std::size_t payload_at = in.offset();
+    visit(k, in.bytes(length, "a slab payload"), payload_at);
+  }
+  const std::size_t end_at = in.offset();
+  const std::uint8_t tag = in.u8("the end block");
+  if (tag == encode::kSlabTag)
+    in.fail(ErrorCode::malformed_input, "slab block at byte " + std::to_string(end_at) +
+                                            " is one more than the " + std::to_string(nz) +
+                                            " slabs the header's dims give");
+  if (tag != encode::kEndTag)
+    in.fail(ErrorCode::malformed_input, "byte " + std::to_string(end_at) +
+                                            ": expected the end block (tag 0x45 'E'), found " + hex_byte(tag));
+  const std::uint64_t count = in.varint("the end block's slab count");
+  if (count != static_cast<std::uint64_t>(nz))
+    in.fail(ErrorCode::malformed_input, "the end block counts " + std::to_string(count) + " slabs, the header " +
+                                            std::to_string(nz));
+  if (!in.at_end())
+    in.fail(ErrorCode::malformed_input, std::to_string(in.remaining()) + " unexpected bytes after the end block");
+}
+
+ByteCursor payload_cursor(std::span<const std::uint8_t> payload, std::size_t payload_at, std::int64_t k) {
+  // The block's length says the payload is complete, so a run cut short by
+  // its end is a malformed block, not a truncated stream.
+  return ByteCursor(payload, ErrorCode::malformed_input, "RLE stream: slab " + std::to_string(k) + " payload",
+                    payload_at);
+}
+
+void check_covered(const ByteCursor& in, std::uint64_t covered, std::uint64_t slab_voxels) {
+  if (covered != slab_voxels)
+    in.fail(ErrorCode::malformed_input, "the runs cover " + std::to_string(covered) + " of the slab's " +
+                                            std::to_string(slab_voxels) + " voxels");
+}
+
+// Bit payload: varint run lengths alternating 0s and 1s, 0s first; calls
+// on_ones(first_voxel, length) for each non-empty run of 1s.
+template <class OnOnes>
+void decode_bit_payload(ByteCursor in, std::uint64_t slab_voxels, const OnOnes& on_ones) {
+  std::uint64_t position = 0;
+  bool ones = false;
+  while (!in.at_end()) {
+    const std::uint64_t run = in.varint("a run length");
+    if (run > slab_voxels - position)
+      in.fail(ErrorCode::malformed_input,
+              "the runs add up to more than the slab's " + std::to_string(slab_voxels) + " voxels");
+    if (ones && run > 0) on_ones(position, run);
+    position += run;
+    ones = !ones;
+  }
+  check_covered(in, position, slab_voxels);
+}
+
+// u8 payload: (varint run length, value byte) pairs; calls
+// on_run(first_voxel, length, value) for each.
+template <class OnRun>
+void decode_u8_payload(ByteCursor in, std::uint64_t slab_voxels, const OnRun& on_run) {
+  std::uint64_t position = 0;
+  while (!in.at_end()) {
+    const std::uint64_t run = in.varint("a run length");
+    const std::uint8_t value = in.u8("a run value");
+    if (run > slab_voxels - position)
+      in.fail(ErrorCode::malformed_input,
+              "the runs add up to more than the slab's " + std::to_string(slab_voxels) + " voxels");
+    on_run(position, run, value);
+    position += run;
+  }
+  check_covered(in, position, slab_voxels);
+}
+
+// Sets `length` voxels from slab-linear index `first` (i + nx * j); a run may
+// continue over several rows.
+void set_run(std::uint64_t* slab, std::int64_t row_words, std::int64_t nx, std::uint64_t first,
+             std::uint64_t length) {
+  auto j = static_cast<std::int64_t>(first / static_cast<std::uint64_t>(nx));
+  auto i = static_cast<std::int64_t>(first % static_cast<std::uint64_t>(nx));
+  while (length > 0) {
+    const auto n = static_cast<std::int64_t>(std::min<std::uint64_t>(length, static_cast<std::uint64_t>(nx - i)));
+    encode::set_bit_range(slab + j * row_words, i, i + n);
+    length -= static_cast<std::uint64_t>(n);
+    i = 0;
+    ++j;
+  }
+}
+
+encode::RleHeader read_header_of_type(ByteCursor& in, encode::RleValueType wanted, const char* reader) {
+  const encode::RleHeader header = encode::read_rle_header(in);
+  if (header.value_type != wanted)
+    in.fail(ErrorCode::malformed_input, std::string("the stream holds ") + to_string(header.value_type) +
+                                            " values; " + reader + " reads only " + to_string(wanted) +
+                                            " streams");
+  return header;
+}
+
+std::uint64_t slab_voxel_count(const Grid& grid) {
+  return static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y);
+}
+
+}  // namespace
+
+BitVolume read_rle_bits(std::span<const std::uint8_t> data, const ReadLimits& limits) {
+  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
+  const encode::RleHeader header = read_header_of_type(in, encode::RleValueType::bit, "read_rle_bits");
+  const Grid& grid = header.grid;
+  const std::uint64_t slab_voxels = slab_voxel_count(grid);
+
+  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
+    decode_bit_payload(payload_cursor(payload, at, k), slab_voxels, [](std::uint64_t, std::uint64_t) {});
+  });
+  encode::check_read_limit(encode::bit_volume_bytes(grid.dims), limits, "RLE reader");
+
+  BitVolume volume(grid);
+  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
+    std::uint64_t* slab = volume.slab(k);
+    decode_bit_payload(payload_cursor(payload, at, k), slab_voxels, [&](std::uint64_t first, std::uint64_t length) {
+      set_run(slab, volume.row_words(), grid.dims.x, first, length);
+    });
+  });
+  return volume;
+}
+
+DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data, const ReadLimits& limits) {
+  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
+  const encode::RleHeader header = read_header_of_type(in, encode::RleValueType::u8, "read_rle_u8");
+  const Grid& grid = header.grid;
+  const std::uint64_t slab_voxels = slab_voxel_count(grid);
+
+  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
+    decode_u8_payload(payload_cursor(payload, at, k), slab_voxels, [](std::uint64_t, std::uint64_t, std::uint8_t) {});
+  });
+  encode::check_read_limit(grid.voxel_count(), limits, "RLE reader");
+
+  DenseVolume<std::uint8_t> volume(grid, 0);
+  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
+    std::uint8_t* slab = volume.slab(k);
+    decode_u8_payload(payload_cursor(payload, at, k), slab_voxels,
+                      [&](std::uint64_t first, std::uint64_t length, std::uint8_t value) {
+                        if (value != 0) std::fill_n(slab + first, length, value);
+                      });
+  });
+  return volume;
+}
+
+}  // namespace voxd

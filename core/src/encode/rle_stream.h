@@ -1,0 +1,46 @@
+#pragma once
+// Constants and header of voxd's RLE stream (proto-schemas/rle-format.md),
+// shared by the writer and the reader.
+//
+//   preamble   "VOXDRLE" + version byte (1)
+//   header     u32 little-endian length N, then N bytes of UTF-8 JSON
+//   slab block 'S', varint k, varint payload length, payload   (k = 0..nz-1)
+//   end block  'E', varint slab count
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "encode/byte_cursor.h"
+#include "voxd/grid.h"
+
+namespace voxd::encode {
+
+inline constexpr std::string_view kRleMagic = "VOXDRLE";
+inline constexpr std::uint8_t kRleVersion = 1;
+inline constexpr std::uint8_t kSlabTag = 'S';
+inline constexpr std::uint8_t kEndTag = 'E';
+// Readers refuse longer JSON headers: nothing legitimate comes near it and
+// it bounds what a lying length can make us parse.
+inline constexpr std::uint32_t kMaxRleHeaderBytes = 1u << 20;
+
+enum class RleValueType { bit, u8, u16, f32, rgba8 };
+
+const char* to_string(RleValueType type) noexcept;
+std::optional<RleValueType> rle_value_type_from_string(std::string_view name);
+
+struct RleHeader {
+  Grid grid;
+  RleValueType value_type = RleValueType::bit;
+};
+
+// Preamble + length-prefixed JSON header. Throws Error(invalid_argument) for a
+// grid JSON cannot carry (non-finite numbers, non-positive sizes).
+std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value_type);
+
+// Reads and validates the preamble and JSON header, leaving `in` at the first
+// block. Throws Error(malformed_input / truncated_input).
+RleHeader read_rle_header(ByteCursor& in);
+
+}  // namespace voxd::encode

@@ -1,0 +1,137 @@
+// Writes voxd's RLE stream (proto-schemas/rle-format.md). Slabs are encoded in
+// parallel a few ahead of the writer and written in order, so the memory in
+// flight is a handful of encoded slabs, never a copy of the volume.
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <functional>
+#include <vector>
+
+#include "encode/bit_runs.h"
+#include "encode/byte_buffer.h"
+#include "encode/ordered_pipeline.h"
+#include "encode/rle_stream.h"
+#include "encode/volume_checks.h"
+#include "voxd/parallel.h"
+#include "voxd/volume_format.h"
+
+namespace voxd {
+namespace {
+
+using encode::ByteBuffer;
+
+// Room left at the front of each slab buffer for the block header (tag, slab
+// index, payload length), filled in once the payload length is known so that
+// each block goes to the sink in one write.
+constexpr std::size_t kBlockHeaderRoom = 1 + 2 * encode::kMaxVarintBytes;
+// Input bytes of the slabs encoded ahead of the writer: enough to keep the
+// threads busy, while worst-case (alternating) slabs still stay a few MiB.
+constexpr std::size_t kInFlightInputBytes = std::size_t{2} << 20;
+// Below this, starting threads costs more than the encoding.
+constexpr std::size_t kParallelMinBytes = std::size_t{256} << 10;
+
+// Encodes slabs [0, nz) with encode_slab(k, buffer), in parallel, and writes
+// their blocks in order, then the end block.
+void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes,
+                       const std::function<void(std::int64_t, ByteBuffer&)>& encode_slab, ByteSink& sink) {
+  const bool small = slab_input_bytes * static_cast<std::size_t>(nz) < kParallelMinBytes;
+  const int threads = small ? 1 : default_thread_count();
+  // Slabs in flight: about kInFlightInputBytes of input, but at least two per
+  // thread so that none idles, and no more than there are slabs.
+  const auto per_thread = static_cast<std::size_t>(2 * threads);
+  std::size_t slots = kInFlightInputBytes / std::max<std::size_t>(slab_input_bytes, 1);
+  slots = std::clamp(slots, per_thread, std::max<std::size_t>(64, per_thread));
+  std::vector<ByteBuffer> buffers(std::min(slots, static_cast<std::size_t>(nz)));
+  encode::run_ordered_pipeline(
+      nz, threads, buffers.size(),
+      [&](std::int64_t k, std::size_t slot) {
+        ByteBuffer& buffer = buffers[slot];
+        buffer.reset(kBlockHeaderRoom);
+        encode_slab(k, buffer);
+      },
+      [&](std::int64_t k, std::size_t slot) {
+        ByteBuffer& buffer = buffers[slot];
+        const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
+        std::uint8_t header[kBlockHeaderRoom];
+        std::uint8_t* end = header;
+        *end++ = encode::kSlabTag;
+        end = encode::put_varint(end, static_cast<std::uint64_t>(k));
+        end = encode::put_varint(end, payload);
+        const auto header_size = static_cast<std::size_t>(end - header);
+        std::uint8_t* block = buffer.data() + kBlockHeaderRoom - header_size;
+        std::memcpy(block, header, header_size);
+        sink.write(block, header_size + payload);
+      });
+  std::uint8_t end_block[1 + encode::kMaxVarintBytes];
+  end_block[0] = encode::kEndTag;
+  const std::uint8_t* end = encode::put_varint(end_block + 1, static_cast<std::uint64_t>(nz));
+  sink.write(end_block, static_cast<std::size_t>(end - end_block));
+}
+
+void write_header(const Grid& grid, encode::RleValueType type, ByteSink& sink) {
+  const std::vector<std::uint8_t> header = encode::encode_rle_header(grid, type);
+  sink.write(header.data(), header.size());
+}
+
+// Bit slab payload: alternating run lengths, 0s first; runs cross rows.
+void encode_bit_slab(const BitVolume& volume, std::int64_t k, ByteBuffer& out) {
+  const std::int64_t nx = volume.grid().dims.x;
+  encode::BitRunSplitter runs;
+  const auto put = [&out](bool, std::uint64_t length) { out.put_varint(length); };
+  for (std::int64_t j = 0; j < volume.grid().dims.y; ++j) runs.add_row(volume.row(j, k), nx, put);
+  runs.finish(put);
+}
+
+// Length of the run of bytes equal to values[begin] starting at begin,
+// comparing 8 bytes at a time.
+std::size_t byte_run_length(const std::uint8_t* values, std::size_t begin, std::size_t n) {
+  const std::uint8_t v = values[begin];
+  const std::uint64_t pattern = 0x0101010101010101ull * v;
+  std::size_t i = begin + 1;
+  while (i + 8 <= n) {
+    std::uint64_t word;
+    std::memcpy(&word, values + i, 8);
+    if (const std::uint64_t diff = word ^ pattern; diff != 0) {
+      // The first differing byte in memory order is the lowest one on a
+      // little-endian machine, the highest on a big-endian one.
+      const int byte = std::endian::native == std::endian::little ? std::countr_zero(diff) / 8
+                                                                  : std::countl_zero(diff) / 8;
+      return i + static_cast<std::size_t>(byte) - begin;
+    }
+    i += 8;
+  }
+  while (i < n && values[i] == v) ++i;
+  return i - begin;
+}
+
+// u8 slab payload: (varint run length, value byte) pairs of maximal runs.
+void encode_u8_slab(const DenseVolume<std::uint8_t>& volume, std::int64_t k, ByteBuffer& out) {
+  const std::uint8_t* values = volume.slab(k);
+  const std::size_t n = volume.slab_size();
+  for (std::size_t i = 0; i < n;) {
+    const std::size_t run = byte_run_length(values, i, n);
+    out.put_varint(run);
+    out.put_byte(values[i]);
+    i += run;
+  }
+}
+
+}  // namespace
+
+void write_rle(const BitVolume& volume, ByteSink& sink) {
+  encode::require_voxels(volume.grid(), "RLE writer");
+  write_header(volume.grid(), encode::RleValueType::bit, sink);
+  write_slab_blocks(
+      volume.grid().dims.z, volume.slab_words() * sizeof(std::uint64_t),
+      [&volume](std::int64_t k, ByteBuffer& out) { encode_bit_slab(volume, k, out); }, sink);
+}
+
+void write_rle(const DenseVolume<std::uint8_t>& volume, ByteSink& sink) {
+  encode::require_voxels(volume, "RLE writer");
+  write_header(volume.grid(), encode::RleValueType::u8, sink);
+  write_slab_blocks(
+      volume.grid().dims.z, volume.slab_size(),
+      [&volume](std::int64_t k, ByteBuffer& out) { encode_u8_slab(volume, k, out); }, sink);
+}
+
+}  // namespace voxd
