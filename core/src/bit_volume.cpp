@@ -2,6 +2,7 @@
 
 #include <sys/mman.h>
 
+#include <atomic>
 #include <bit>
 #include <string>
 
@@ -29,11 +30,16 @@ void BitVolume::Unmap::operator()(std::uint64_t* p) const {
 }
 
 std::uint64_t BitVolume::count() const {
-  std::uint64_t total = 0;
-  const std::size_t n = word_count();
-  const std::uint64_t* w = data();
-  for (std::size_t i = 0; i < n; ++i) total += static_cast<std::uint64_t>(std::popcount(w[i]));
-  return total;
+  std::atomic<std::uint64_t> total{0};
+  const std::size_t slab = slab_words();
+  parallel_for(0, grid_.dims.z, 16, 0, [&](std::int64_t k0, std::int64_t k1) {
+    const std::uint64_t* w = this->slab(k0);
+    std::uint64_t sum = 0;
+    for (std::size_t i = 0, n = slab * static_cast<std::size_t>(k1 - k0); i < n; ++i)
+      sum += static_cast<std::uint64_t>(std::popcount(w[i]));
+    total.fetch_add(sum, std::memory_order_relaxed);
+  });
+  return total.load();
 }
 
 void BitVolume::merge_or(const BitVolume& other) {
