@@ -1,0 +1,127 @@
+// Format detection from content. Magic numbers decide Draco and PLY; the exact
+// size rule (84 + 50 * count == size) decides binary STL even when its header
+// starts with "solid", as many exporters write it; then the text formats are
+// told apart by their first keywords, and anything else that is binary and
+// long enough for an STL header is taken as binary STL so the decoder can say
+// what is wrong with it. The name hint only decides when content cannot.
+#include <algorithm>
+#include <cstring>
+#include <string_view>
+
+#include "mesh_io/text_lines.h"
+#include "voxd/mesh_decode.h"
+
+namespace voxd {
+namespace {
+
+constexpr std::size_t kStlHeaderBytes = 84;
+constexpr std::size_t kStlRecordBytes = 50;
+// Enough to see past an 80-byte STL header and a few lines of text.
+constexpr std::size_t kBinarySniffBytes = 512;
+// How far to look for the first OBJ statement past leading comments.
+constexpr std::size_t kObjSniffBytes = 64 * 1024;
+constexpr int kObjStatementsToCheck = 8;
+
+std::string_view as_text(std::span<const std::uint8_t> data, std::size_t max_bytes) {
+  return {reinterpret_cast<const char*>(data.data()), std::min(data.size(), max_bytes)};
+}
+
+char lower(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
+
+bool equals_ignoring_case(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (lower(a[i]) != lower(b[i])) return false;
+  return true;
+}
+
+bool has_extension(std::string_view name, std::string_view extension) {
+  return name.size() > extension.size() &&
+         equals_ignoring_case(name.substr(name.size() - extension.size()), extension);
+}
+
+// Control characters other than whitespace never appear in the text formats.
+bool has_binary_bytes(std::string_view bytes) {
+  for (char ch : bytes) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 && c != '\t' && c != '\n' && c != '\r' && c != '\f' && c != '\v') return true;
+  }
+  return false;
+}
+
+bool is_exact_size_binary_stl(std::span<const std::uint8_t> data) {
+  if (data.size() < kStlHeaderBytes) return false;
+  std::uint32_t count;
+  std::memcpy(&count, data.data() + 80, 4);
+  return kStlHeaderBytes + kStlRecordBytes * std::uint64_t{count} == data.size();
+}
+
+bool starts_with_magic_line(std::string_view text, std::string_view magic) {
+  return text.starts_with(magic) && text.size() > magic.size() &&
+         (text[magic.size()] == '\n' || text[magic.size()] == '\r');
+}
+
+bool starts_with_solid(std::string_view head) {
+  mesh_io::TextLines lines(head);
+  while (lines.next_line()) {
+    const std::string_view token = lines.next_token();
+    if (!token.empty()) return equals_ignoring_case(token, "solid");
+  }
+  return false;
+}
+
+bool is_obj_keyword(std::string_view token) {
+  static constexpr std::string_view keywords[] = {
+      "v",    "vt",   "vn",   "vp",     "f",      "l",     "p",     "o",      "g",     "s",
+      "mg",   "usemtl", "mtllib", "usemap", "maplib", "cstype", "deg", "bmat", "step", "curv",
+      "curv2", "surf", "parm", "trim", "hole", "scrv", "sp", "end", "con", "lod",
+      "shadow_obj", "trace_obj", "ctech", "stech", "bevel", "c_interp", "d_interp"};
+  for (std::string_view k : keywords)
+    if (token == k) return true;
+  return false;
+}
+
+enum class Verdict { no, undecided, yes };
+
+// OBJ when the first statements after any comments are OBJ keywords and at
+// least one of them is a vertex or face.
+Verdict classify_obj(std::span<const std::uint8_t> data) {
+  const std::string_view head = as_text(data, kObjSniffBytes);
+  const bool whole_file = head.size() == data.size();
+  mesh_io::TextLines lines(head);
+  int statements = 0;
+  bool geometry = false;
+  while (statements < kObjStatementsToCheck && lines.next_line()) {
+    // The window's last line may be cut mid-keyword.
+    if (!whole_file && lines.next_line_offset() == head.size()) break;
+    const std::string_view keyword = lines.next_token();
+    if (keyword.empty() || keyword.starts_with('#')) continue;
+    if (!is_obj_keyword(keyword)) return Verdict::no;
+    geometry = geometry || keyword == "v" || keyword == "f";
+    ++statements;
+  }
+  // Only comments, or only names and materials so far: could be OBJ.
+  return geometry ? Verdict::yes : Verdict::undecided;
+}
+
+}  // namespace
+
+MeshFormat detect_mesh_format(std::span<const std::uint8_t> data, std::string_view name_hint) {
+  if (data.empty()) return MeshFormat::unknown;
+  const std::string_view head = as_text(data, kBinarySniffBytes);
+  if (head.starts_with("DRACO")) return MeshFormat::draco;
+  if (starts_with_magic_line(head, "ply")) return MeshFormat::ply;
+  if (is_exact_size_binary_stl(data)) return MeshFormat::stl_binary;
+  if (has_binary_bytes(head)) {
+    return data.size() >= kStlHeaderBytes ? MeshFormat::stl_binary : MeshFormat::unknown;
+  }
+  if (starts_with_solid(head)) return MeshFormat::stl_ascii;
+  switch (classify_obj(data)) {
+    case Verdict::yes: return MeshFormat::obj;
+    case Verdict::undecided: return has_extension(name_hint, ".obj") ? MeshFormat::obj : MeshFormat::unknown;
+    case Verdict::no: break;
+  }
+  return MeshFormat::unknown;
+}
+
+}  // namespace voxd
