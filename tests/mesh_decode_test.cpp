@@ -206,6 +206,18 @@ TEST(MeshDecode, ObjPolygonIsFanTriangulated) {
   EXPECT_EQ(decoded.triangles[2], (std::array<std::uint32_t, 3>{0, 3, 4}));
 }
 
+TEST(MeshDecode, NumbersOutsideFloatRange) {
+  // Too small for float is zero, however it is written; too large is not finite.
+  const std::string tiny = "0." + std::string(60, '0') + "1";
+  const Mesh decoded = decode_mesh(bytes_of("v 1e-50 +2 0\nv " + tiny + " 0 -1e-400\nv 0 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(decoded.vertices[0], glm::vec3(0, 2, 0));
+  EXPECT_EQ(decoded.vertices[1], glm::vec3(0, 0, 0));
+  expect_error([] { decode_mesh(bytes_of("v 0 0 0\nv 1 0 0\nv 0 1 -1e400\nf 1 2 3\n")); },
+               ErrorCode::non_finite_coordinates, {"line 3"});
+  expect_error([] { decode_mesh(bytes_of("v 0 0 0\nv 1 0 0\nv 0 1 " + std::string(400, '9') + "\nf 1 2 3\n")); },
+               ErrorCode::non_finite_coordinates, {"line 3"});
+}
+
 TEST(MeshDecode, ObjForwardReferencesAreResolved) {
   const Mesh decoded = decode_mesh(bytes_of("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"), "late.obj");
   EXPECT_EQ(decoded.triangles.size(), 1u);

@@ -114,7 +114,7 @@ class BinarySource {
   float read_coordinate(PlyType type) {
     switch (type) {
       case PlyType::float32: return read<float>();
-      case PlyType::float64: return narrow(read<double>());
+      case PlyType::float64: return detail::narrow_to_float(read<double>());
       default: return static_cast<float>(read_integer(type));
     }
   }
@@ -148,15 +148,6 @@ class BinarySource {
     if constexpr (sizeof(Bits) == 2) return __builtin_bswap16(bits);
     if constexpr (sizeof(Bits) == 4) return __builtin_bswap32(bits);
     if constexpr (sizeof(Bits) == 8) return __builtin_bswap64(bits);
-  }
-
-  static float narrow(double value) {
-    // Narrowing a double beyond float range is undefined behaviour; saturate
-    // to infinity, which the caller rejects as non-finite.
-    constexpr double max = std::numeric_limits<float>::max();
-    if (value > max) return std::numeric_limits<float>::infinity();
-    if (value < -max) return -std::numeric_limits<float>::infinity();
-    return static_cast<float>(value);  // NaN stays NaN
   }
 
   [[noreturn]] void throw_truncated() const {
@@ -257,7 +248,10 @@ class PlyParser {
       if (!lines_.next_line())
         throw Error(ErrorCode::malformed_input, "PLY header never ends: there is no 'end_header' line");
       const std::string_view keyword = lines_.next_token();
-      if (keyword == "end_header") break;
+      if (keyword == "end_header") {
+        lines_.skip_rest_of_line();  // ASCII data starts on the next line
+        break;
+      }
       if (keyword.empty() || keyword == "comment" || keyword == "obj_info") continue;
       if (keyword == "format") {
         const std::string_view encoding = lines_.next_token();

@@ -73,54 +73,69 @@ class TextLines {
   std::size_t line_number_ = 0;
 };
 
-// Parses a whole token as a coordinate. Values beyond float range become
-// infinite (and are then rejected as non-finite by the caller), values too
-// small for float become zero. False when the token is not a number.
-inline bool parse_float(std::string_view token, float& out) {
+namespace detail {
+
+inline std::string_view without_plus_sign(std::string_view token) {
   if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
-  const char* first = token.data();
-  const char* last = first + token.size();
-  auto [ptr, ec] = std::from_chars(first, last, out);
-  if (ptr != last || token.empty()) return false;
-  if (ec == std::errc()) return true;
-  if (ec != std::errc::result_out_of_range) return false;
-  // from_chars leaves `out` untouched on overflow and underflow alike; the
-  // exponent's sign tells which one it was.
+  return token;
+}
+
+// Narrowing a double beyond float range is undefined behaviour, so saturate
+// to infinity (which callers reject as non-finite).
+inline float narrow_to_float(double value) {
+  constexpr double max = std::numeric_limits<float>::max();
+  if (value > max) return std::numeric_limits<float>::infinity();
+  if (value < -max) return -std::numeric_limits<float>::infinity();
+  return static_cast<float>(value);  // NaN stays NaN; tiny values round to 0
+}
+
+// For a number even a double cannot hold: from_chars reports overflow and
+// underflow alike, so tell them apart from the text.
+inline float beyond_double(std::string_view token) {
   const bool negative = token[0] == '-';
-  const std::size_t e = token.find_first_of("eE");
-  const bool tiny = e != std::string_view::npos && e + 1 < token.size() && token[e + 1] == '-';
+  const std::string_view digits = negative ? token.substr(1) : token;
+  const std::size_t e = digits.find_first_of("eE");
+  const bool tiny = e != std::string_view::npos ? (e + 1 < digits.size() && digits[e + 1] == '-')
+                                                : (digits.starts_with('0') || digits.starts_with('.'));
   const float magnitude = tiny ? 0.0f : std::numeric_limits<float>::infinity();
-  out = negative ? -magnitude : magnitude;
+  return negative ? -magnitude : magnitude;
+}
+
+}  // namespace detail
+
+// Parses a whole token as double-typed data (a PLY "double" property),
+// narrowed to float. False when the token is not a number.
+inline bool parse_double_as_float(std::string_view token, float& out) {
+  token = detail::without_plus_sign(token);
+  if (token.empty()) return false;
+  double value = 0.0;
+  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  if (ptr != token.data() + token.size()) return false;
+  if (ec == std::errc()) out = detail::narrow_to_float(value);
+  else if (ec == std::errc::result_out_of_range) out = detail::beyond_double(token);
+  else return false;
   return true;
 }
 
-// Same for double-typed data (PLY "double" properties), narrowed to float.
-inline bool parse_double_as_float(std::string_view token, float& out) {
-  if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
-  const char* first = token.data();
-  const char* last = first + token.size();
-  double value = 0.0;
-  auto [ptr, ec] = std::from_chars(first, last, value);
-  if (ptr != last || token.empty()) return false;
-  if (ec == std::errc::result_out_of_range) return parse_float(token, out);
-  if (ec != std::errc()) return false;
-  // Narrowing a double beyond float range is undefined behaviour, so saturate.
-  constexpr double max = std::numeric_limits<float>::max();
-  if (value > max || value < -max) {
-    out = value > 0 ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
-    return true;
-  }
-  out = static_cast<float>(value);
-  return true;
+// Parses a whole token as a coordinate, rounding once, straight to float.
+// Values beyond float range become infinite (and are rejected as non-finite
+// by the caller), values too small for float become zero.
+inline bool parse_float(std::string_view token, float& out) {
+  token = detail::without_plus_sign(token);
+  if (token.empty()) return false;
+  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), out);
+  if (ptr != token.data() + token.size()) return false;
+  if (ec == std::errc()) return true;
+  // from_chars leaves `out` alone when out of float range.
+  return ec == std::errc::result_out_of_range && parse_double_as_float(token, out);
 }
 
 // Parses a whole token as a decimal integer (an optional sign allowed).
 inline bool parse_integer(std::string_view token, std::int64_t& out) {
-  if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
-  const char* first = token.data();
-  const char* last = first + token.size();
-  auto [ptr, ec] = std::from_chars(first, last, out);
-  return ec == std::errc() && ptr == last && !token.empty();
+  token = detail::without_plus_sign(token);
+  if (token.empty()) return false;
+  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), out);
+  return ec == std::errc() && ptr == token.data() + token.size();
 }
 
 }  // namespace voxd::mesh_io
