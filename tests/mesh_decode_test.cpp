@@ -385,9 +385,17 @@ TEST(MeshDecodeErrors, UnknownFormatListsSupportedOnes) {
   expect_error([] { decode_mesh(bytes_of("hello world\nthis is not a mesh\n"), "notes.txt"); },
                ErrorCode::unknown_format,
                {"'notes.txt'", "'hello world", "binary STL", "ASCII STL", "OBJ", "PLY", "Draco"});
-  const Bytes junk = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13};
-  expect_error([&] { decode_mesh(junk); }, ErrorCode::unknown_format, {"\\x89PNG", "supported formats"});
+  const Bytes junk = {0x01, 0x02, 'a', 0xfe};
+  expect_error([&] { decode_mesh(junk); }, ErrorCode::unknown_format, {"'\\x01\\x02a\\xfe'", "supported formats"});
   expect_error([&] { decode_mesh_as(MeshFormat::unknown, junk); }, ErrorCode::unknown_format, {"supported formats"});
+  // Well-known other formats are named, even when long enough to pass for a
+  // (broken) binary STL.
+  Bytes zip(400, 0);
+  std::memcpy(zip.data(), "PK\x03\x04", 4);
+  EXPECT_EQ(detect_mesh_format(zip, "part.3mf"), MeshFormat::unknown);
+  expect_error([&] { decode_mesh(zip, "part.3mf"); }, ErrorCode::unknown_format, {"'part.3mf'", "ZIP archive", "3MF"});
+  const Bytes png = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13};
+  expect_error([&] { decode_mesh(png); }, ErrorCode::unknown_format, {"PNG image", "supported formats"});
 }
 
 TEST(MeshDecodeErrors, ByteLimitIsCheckedBeforeParsing) {

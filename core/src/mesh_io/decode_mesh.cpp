@@ -3,6 +3,7 @@
 #include <string>
 
 #include "mesh_io/decode_checks.h"
+#include "mesh_io/detect_format.h"
 #include "mesh_io/format_decoders.h"
 #include "voxd/error.h"
 #include "voxd/mesh_decode.h"
@@ -44,9 +45,12 @@ Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint,
   const MeshFormat format = detect_mesh_format(data, name_hint);
   if (format == MeshFormat::unknown) {
     const std::string name = name_hint.empty() ? std::string("the file") : mesh_io::quote_token(name_hint);
-    throw Error(ErrorCode::unknown_format, "cannot recognize the mesh format of " + name + ", which starts with " +
-                                               mesh_io::quote_token(as_text(data.first(std::min<std::size_t>(data.size(), 16)))) +
-                                               "; " + kSupportedFormats);
+    const std::string_view foreign = mesh_io::foreign_format_name(data);
+    const std::string what = foreign.empty() ? "starts with " + mesh_io::quote_token(as_text(data.first(
+                                                                    std::min<std::size_t>(data.size(), 16))))
+                                             : "looks like " + std::string(foreign);
+    throw Error(ErrorCode::unknown_format,
+                "cannot recognize the mesh format of " + name + ", which " + what + "; " + kSupportedFormats);
   }
   return decode_mesh_as(format, data, limits);
 }

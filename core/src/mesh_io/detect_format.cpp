@@ -8,6 +8,7 @@
 #include <cstring>
 #include <string_view>
 
+#include "mesh_io/detect_format.h"
 #include "mesh_io/text_lines.h"
 #include "voxd/mesh_decode.h"
 
@@ -20,7 +21,7 @@ constexpr std::size_t kStlRecordBytes = 50;
 constexpr std::size_t kBinarySniffBytes = 512;
 // How far to look for the first OBJ statement past leading comments.
 constexpr std::size_t kObjSniffBytes = 64 * 1024;
-constexpr int kObjStatementsToCheck = 8;
+constexpr int kObjStatementsToCheck = 32;
 
 std::string_view as_text(std::span<const std::uint8_t> data, std::size_t max_bytes) {
   return {reinterpret_cast<const char*>(data.data()), std::min(data.size(), max_bytes)};
@@ -83,28 +84,52 @@ bool is_obj_keyword(std::string_view token) {
 
 enum class Verdict { no, undecided, yes };
 
-// OBJ when the first statements after any comments are OBJ keywords and at
-// least one of them is a vertex or face.
+// OBJ when the first statement after any comments is an OBJ keyword and a
+// vertex or face follows soon. Unknown statements after the first one are
+// tolerated, as the decoder ignores them (exporters add their own).
 Verdict classify_obj(std::span<const std::uint8_t> data) {
   const std::string_view head = as_text(data, kObjSniffBytes);
   const bool whole_file = head.size() == data.size();
   mesh_io::TextLines lines(head);
   int statements = 0;
-  bool geometry = false;
   while (statements < kObjStatementsToCheck && lines.next_line()) {
     // The window's last line may be cut mid-keyword.
     if (!whole_file && lines.next_line_offset() == head.size()) break;
     const std::string_view keyword = lines.next_token();
     if (keyword.empty() || keyword.starts_with('#')) continue;
-    if (!is_obj_keyword(keyword)) return Verdict::no;
-    geometry = geometry || keyword == "v" || keyword == "f";
+    if (statements == 0 && !is_obj_keyword(keyword)) return Verdict::no;
+    if (keyword == "v" || keyword == "f") return Verdict::yes;
     ++statements;
   }
   // Only comments, or only names and materials so far: could be OBJ.
-  return geometry ? Verdict::yes : Verdict::undecided;
+  return Verdict::undecided;
 }
 
 }  // namespace
+
+namespace mesh_io {
+
+std::string_view foreign_format_name(std::span<const std::uint8_t> data) {
+  struct Signature {
+    std::string_view magic;
+    std::string_view name;
+  };
+  static constexpr Signature signatures[] = {
+      {"PK\x03\x04", "a ZIP archive (3MF files are ZIP archives)"},
+      {"glTF", "binary glTF (.glb)"},
+      {"Kaydara FBX Binary", "binary FBX"},
+      {"\x1f\x8b", "a gzip-compressed file"},
+      {"\x89PNG", "a PNG image"},
+      {"\xFF\xD8\xFF", "a JPEG image"},
+      {"%PDF", "a PDF document"},
+  };
+  const std::string_view head = as_text(data, 32);
+  for (const Signature& s : signatures)
+    if (head.starts_with(s.magic)) return s.name;
+  return {};
+}
+
+}  // namespace mesh_io
 
 MeshFormat detect_mesh_format(std::span<const std::uint8_t> data, std::string_view name_hint) {
   if (data.empty()) return MeshFormat::unknown;
@@ -112,6 +137,8 @@ MeshFormat detect_mesh_format(std::span<const std::uint8_t> data, std::string_vi
   if (head.starts_with("DRACO")) return MeshFormat::draco;
   if (starts_with_magic_line(head, "ply")) return MeshFormat::ply;
   if (is_exact_size_binary_stl(data)) return MeshFormat::stl_binary;
+  // Well-known other formats would otherwise pass for a broken binary STL.
+  if (!mesh_io::foreign_format_name(data).empty()) return MeshFormat::unknown;
   if (has_binary_bytes(head)) {
     return data.size() >= kStlHeaderBytes ? MeshFormat::stl_binary : MeshFormat::unknown;
   }
