@@ -46,8 +46,7 @@ Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint,
   if (format == MeshFormat::unknown) {
     const std::string name = name_hint.empty() ? std::string("the file") : mesh_io::quote_token(name_hint);
     const std::string_view foreign = mesh_io::foreign_format_name(data);
-    const std::string what = foreign.empty() ? "starts with " + mesh_io::quote_token(as_text(data.first(
-                                                                    std::min<std::size_t>(data.size(), 16))))
+    const std::string what = foreign.empty() ? "starts with " + mesh_io::quote_token(as_text(data).substr(0, 16))
                                              : "looks like " + std::string(foreign);
     throw Error(ErrorCode::unknown_format,
                 "cannot recognize the mesh format of " + name + ", which " + what + "; " + kSupportedFormats);

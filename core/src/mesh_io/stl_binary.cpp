@@ -3,7 +3,6 @@
 // triangle soup: the corners are copied as they are, three new vertices per
 // triangle, because this is the format of large uploads and the voxelizers do
 // not need welded vertices.
-#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cstring>
@@ -32,7 +31,7 @@ std::uint32_t read_triangle_count(const std::uint8_t* header) {
 }
 
 // True if any of the nine corner coordinates has an all-ones exponent (NaN or
-// Inf). Integer bit tests vectorize and do not depend on floating-point flags.
+// Inf): a cheap integer test that no floating-point flag can turn off.
 bool has_non_finite_corner(const std::uint8_t* record) {
   std::uint32_t words[9];
   std::memcpy(words, record + kCornersOffset, kCornersBytes);
