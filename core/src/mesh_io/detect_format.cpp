@@ -27,18 +27,9 @@ std::string_view as_text(std::span<const std::uint8_t> data, std::size_t max_byt
   return {reinterpret_cast<const char*>(data.data()), std::min(data.size(), max_bytes)};
 }
 
-char lower(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
-
-bool equals_ignoring_case(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (lower(a[i]) != lower(b[i])) return false;
-  return true;
-}
-
 bool has_extension(std::string_view name, std::string_view extension) {
   return name.size() > extension.size() &&
-         equals_ignoring_case(name.substr(name.size() - extension.size()), extension);
+         mesh_io::equals_ignoring_case(name.substr(name.size() - extension.size()), extension);
 }
 
 // Control characters other than whitespace never appear in the text formats.
@@ -66,7 +57,7 @@ bool starts_with_solid(std::string_view head) {
   mesh_io::TextLines lines(head);
   while (lines.next_line()) {
     const std::string_view token = lines.next_token();
-    if (!token.empty()) return equals_ignoring_case(token, "solid");
+    if (!token.empty()) return mesh_io::equals_ignoring_case(token, "solid");
   }
   return false;
 }

@@ -15,16 +15,6 @@ namespace {
 
 constexpr std::string_view kFormat = "ASCII STL";
 
-bool keyword_is(std::string_view token, std::string_view keyword) {
-  if (token.size() != keyword.size()) return false;
-  for (std::size_t i = 0; i < token.size(); ++i) {
-    char c = token[i];
-    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
-    if (c != keyword[i]) return false;
-  }
-  return true;
-}
-
 // Tokens of the whole file, across line breaks.
 class TokenStream {
  public:
@@ -51,18 +41,18 @@ class AsciiStlParser {
 
   Mesh parse() {
     const std::string_view first = tokens_.next();
-    if (!keyword_is(first, "solid")) fail_expected("'solid'", first);
+    if (!equals_ignoring_case(first, "solid")) fail_expected("'solid'", first);
     tokens_.skip_rest_of_line();  // the solid's name, which may contain anything
     for (;;) {
       const std::string_view token = tokens_.next();
       if (token.empty()) break;  // a missing "endsolid" is common and harmless
-      if (keyword_is(token, "facet")) {
+      if (equals_ignoring_case(token, "facet")) {
         parse_facet();
-      } else if (keyword_is(token, "endsolid")) {
+      } else if (equals_ignoring_case(token, "endsolid")) {
         tokens_.skip_rest_of_line();
         const std::string_view next = tokens_.next();
         if (next.empty()) break;
-        if (!keyword_is(next, "solid")) fail_expected("'solid' or the end of the file after 'endsolid'", next);
+        if (!equals_ignoring_case(next, "solid")) fail_expected("'solid' or the end of the file after 'endsolid'", next);
         tokens_.skip_rest_of_line();
       } else {
         fail_expected("'facet' or 'endsolid'", token);
@@ -80,7 +70,7 @@ class AsciiStlParser {
     // it, so whatever stands between "facet" and "outer" is skipped (bounded,
     // so a missing "outer" is reported near where it belongs).
     std::string_view token = next_in_facet();
-    for (int skipped = 0; !keyword_is(token, "outer"); ++skipped) {
+    for (int skipped = 0; !equals_ignoring_case(token, "outer"); ++skipped) {
       if (skipped == 4) fail_expected("'outer loop'", token);
       token = next_in_facet();
     }
@@ -89,8 +79,8 @@ class AsciiStlParser {
     const auto first = static_cast<std::uint32_t>(mesh_.vertices.size());
     for (int corner = 0; corner < 3; ++corner) {
       token = next_in_facet();
-      if (!keyword_is(token, "vertex")) {
-        if (keyword_is(token, "endloop"))
+      if (!equals_ignoring_case(token, "vertex")) {
+        if (equals_ignoring_case(token, "endloop"))
           fail("the facet starting at line " + std::to_string(facet_line_) + " has " + std::to_string(corner) +
                " vertices; a facet needs exactly 3");
         fail_expected("'vertex'", token);
@@ -98,10 +88,10 @@ class AsciiStlParser {
       mesh_.vertices.push_back(parse_vertex());
     }
     token = next_in_facet();
-    if (keyword_is(token, "vertex"))
+    if (equals_ignoring_case(token, "vertex"))
       fail("the facet starting at line " + std::to_string(facet_line_) +
            " has more than 3 vertices; STL facets are triangles, triangulate the mesh before export");
-    if (!keyword_is(token, "endloop")) fail_expected("'endloop'", token);
+    if (!equals_ignoring_case(token, "endloop")) fail_expected("'endloop'", token);
     expect("endfacet");
     mesh_.triangles.push_back({first, first + 1, first + 2});
   }
@@ -128,7 +118,7 @@ class AsciiStlParser {
 
   void expect(std::string_view keyword) {
     const std::string_view token = next_in_facet();
-    if (!keyword_is(token, keyword)) fail_expected(quote_token(keyword), token);
+    if (!equals_ignoring_case(token, keyword)) fail_expected(quote_token(keyword), token);
   }
 
   [[noreturn]] void fail_expected(const std::string& expected, std::string_view found) {

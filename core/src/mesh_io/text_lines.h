@@ -130,6 +130,15 @@ inline bool parse_float(std::string_view token, float& out) {
   return ec == std::errc::result_out_of_range && parse_double_as_float(token, out);
 }
 
+// ASCII case-insensitive comparison, for keywords some exporters upper-case.
+inline bool equals_ignoring_case(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  const auto lower = [](char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; };
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (lower(a[i]) != lower(b[i])) return false;
+  return true;
+}
+
 // Parses a whole token as a decimal integer (an optional sign allowed).
 inline bool parse_integer(std::string_view token, std::int64_t& out) {
   token = detail::without_plus_sign(token);
