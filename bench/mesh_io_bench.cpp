@@ -1,0 +1,45 @@
+// Mesh ingest speed on a 1.1M-triangle torus: the binary STL decode from
+// memory (the format of large uploads), welding its soup, and the report.
+// Run: build/bench/mesh_io_bench --benchmark_min_time=2
+#include <benchmark/benchmark.h>
+
+#include "support/test_meshes.h"
+#include "voxd/mesh_decode.h"
+#include "voxd/mesh_report.h"
+
+namespace {
+
+using namespace voxd;
+
+// 1000 x 550 quads = 1,100,000 triangles.
+const std::vector<std::uint8_t>& torus_stl() {
+  static const std::vector<std::uint8_t> bytes = test::to_binary_stl(test::make_torus({0, 0, 0}, 40, 10, 1000, 550));
+  return bytes;
+}
+
+const Mesh& torus_soup() {
+  static const Mesh soup = decode_mesh_as(MeshFormat::stl_binary, torus_stl());
+  return soup;
+}
+
+void BM_DecodeBinaryStl(benchmark::State& state) {
+  const auto& bytes = torus_stl();
+  for (auto _ : state) benchmark::DoNotOptimize(decode_mesh(bytes, "torus.stl"));
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * bytes.size()));
+  state.counters["triangles"] = static_cast<double>((bytes.size() - 84) / 50);
+}
+BENCHMARK(BM_DecodeBinaryStl)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_WeldSoup(benchmark::State& state) {
+  const Mesh& soup = torus_soup();
+  for (auto _ : state) benchmark::DoNotOptimize(weld_vertices(soup));
+}
+BENCHMARK(BM_WeldSoup)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_MeshReport(benchmark::State& state) {
+  const Mesh& soup = torus_soup();
+  for (auto _ : state) benchmark::DoNotOptimize(make_mesh_report(soup));
+}
+BENCHMARK(BM_MeshReport)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
