@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <climits>
+#include <cstdint>
+#include <vector>
 
 #include "voxd/parallel.h"
 #include "voxd/voxelize.h"
@@ -18,13 +21,18 @@ ScanAxes axes_for_ray(int ray) {
   }
 }
 
-// In-place inclusive prefix XOR of a row of bits: bit i becomes the XOR of
-// bits 0..i, turning crossing toggles into filled runs.
-inline void prefix_xor_row(std::uint64_t* row, std::int64_t words, std::uint64_t last_word_mask) {
+// In-place inclusive prefix XOR of words [first, last] of a row (the words
+// holding toggles): bit i becomes the XOR of bits 0..i, turning crossing
+// toggles into filled runs. Words before `first` hold no toggle and stay
+// zero; words after `last` take the final state (ones only when the row ends
+// inside the mesh, e.g. a grid that cuts it). Untouched words, and the memory
+// pages under them, are never written.
+inline void prefix_xor_row(std::uint64_t* row, std::int64_t first, std::int64_t last, std::int64_t words,
+                           std::uint64_t last_word_mask) {
   std::uint64_t carry = 0;
-  for (std::int64_t w = 0; w < words; ++w) {
+  for (std::int64_t w = first; w <= last; ++w) {
     std::uint64_t x = row[w];
-    if (x == 0) {  // most words hold no crossing: inside or outside throughout
+    if (x == 0) {  // no crossing in this word: inside or outside throughout
       row[w] = carry;
       continue;
     }
@@ -38,7 +46,10 @@ inline void prefix_xor_row(std::uint64_t* row, std::int64_t words, std::uint64_t
     carry = std::uint64_t{0} - (x >> 63);
     row[w] = x;
   }
-  row[words - 1] &= last_word_mask;  // bits past dims.x stay zero
+  if (carry != 0) {
+    for (std::int64_t w = last + 1; w < words; ++w) row[w] = carry;
+  }
+  if (carry != 0 || last == words - 1) row[words - 1] &= last_word_mask;  // bits past dims.x stay zero
 }
 
 }  // namespace
@@ -71,12 +82,23 @@ void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
     }
   };
   // A crossing before the grid toggles voxel 0; one past it affects nothing.
+  // Rays along x also record each row's first and last toggled word, so the
+  // prefix pass below touches only the words between them.
+  std::vector<std::uint32_t> first_word, last_word;
+  if (axes_.ray == 0) {
+    first_word.assign(static_cast<std::size_t>((row1 - row0) * ny), UINT32_MAX);
+    last_word.assign(first_word.size(), 0);
+  }
   switch (axes_.ray) {
     case 0:
       for_each_triangle([&](std::int64_t j, std::int64_t k, std::int64_t c) {
         if (c >= ray_len) return;
         c = std::max<std::int64_t>(c, 0);
         toggle((k * ny + j) * rw + (c >> 6), c & 63);
+        const auto r = static_cast<std::size_t>((k - row0) * ny + j);
+        const auto w = static_cast<std::uint32_t>(c >> 6);
+        first_word[r] = std::min(first_word[r], w);
+        last_word[r] = std::max(last_word[r], w);
       });
       break;
     case 1:
@@ -100,7 +122,10 @@ void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
     case 0: {
       const std::uint64_t mask = (nx & 63) ? (std::uint64_t{1} << (nx & 63)) - 1 : ~std::uint64_t{0};
       for (std::int64_t k = row0; k < row1; ++k)
-        for (std::int64_t j = 0; j < ny; ++j) prefix_xor_row(volume.row(j, k), rw, mask);
+        for (std::int64_t j = 0; j < ny; ++j) {
+          const auto r = static_cast<std::size_t>((k - row0) * ny + j);
+          if (first_word[r] <= last_word[r]) prefix_xor_row(volume.row(j, k), first_word[r], last_word[r], rw, mask);
+        }
       break;
     }
     case 1:
