@@ -24,14 +24,23 @@ inline constexpr std::int64_t kFixedLimit = std::int64_t{1} << 60;
 
 using FixedPoint = std::array<std::int64_t, 3>;
 
-struct FixedMesh {
-  std::vector<FixedPoint> vertices;
-  const std::vector<std::array<std::uint32_t, 3>>* triangles = nullptr;
-};
+// Quantizes corners on the fly: cheaper than a quantized copy of a triangle
+// soup (an STL's 3 vertices per triangle), which would cost 24 bytes a vertex
+// and a page fault every 170 vertices.
+class FixedMesh {
+ public:
+  FixedMesh(const Mesh& mesh, const Grid& grid);
 
-// Throws Error(invalid_argument) if a vertex lies absurdly far (2^40 voxels)
-// from the grid.
-FixedMesh quantize_mesh(const Mesh& mesh, const Grid& grid, int threads);
+  const std::vector<std::array<std::uint32_t, 3>>& triangles() const { return mesh_->triangles; }
+  // Throws Error(invalid_argument) if the vertex lies absurdly far (2^40
+  // voxels) from the grid.
+  FixedPoint vertex(std::uint32_t v) const;
+
+ private:
+  const Mesh* mesh_;
+  glm::dvec3 origin_;
+  double scale_;
+};
 
 // floor(q / kFixedOne) and ceil(q / kFixedOne) (C++20 >> is arithmetic).
 inline std::int64_t floor_fixed(std::int64_t q) { return q >> kFixedBits; }

@@ -55,8 +55,10 @@ inline void prefix_xor_row(std::uint64_t* row, std::int64_t first, std::int64_t 
 }  // namespace
 
 ParityVoxelizer::ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads)
-    : grid_(grid), axes_(axes_for_ray(ray_axis)), threads_(threads > 0 ? threads : default_thread_count()) {
-  fixed_ = quantize_mesh(mesh, grid, threads_);
+    : grid_(grid),
+      axes_(axes_for_ray(ray_axis)),
+      threads_(threads > 0 ? threads : default_thread_count()),
+      fixed_(mesh, grid) {
   const std::int64_t rows = grid.dims[axes_.v];
   // Enough chunks to balance threads, few enough that triangles rarely straddle.
   const std::int64_t per_chunk = std::clamp<std::int64_t>(rows / (8 * threads_), 1, 16);
@@ -71,14 +73,13 @@ void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
   const std::int64_t ray_len = grid_.dims[axes_.ray];
   const std::int64_t columns_u = grid_.dims[axes_.u];
   std::uint64_t* words = volume.data();
-  const auto& tris = *fixed_.triangles;
+  const auto& tris = fixed_.triangles();
 
   auto toggle = [words](std::int64_t word, std::int64_t bit) { words[word] ^= std::uint64_t{1} << bit; };
   auto for_each_triangle = [&](auto&& emit) {
     for (std::uint32_t n = bins_.offsets[chunk]; n < bins_.offsets[chunk + 1]; ++n) {
       const auto& t = tris[bins_.triangles[n]];
-      scan_triangle(fixed_.vertices[t[0]], fixed_.vertices[t[1]], fixed_.vertices[t[2]], axes_, row0, row1, columns_u,
-                    emit);
+      scan_triangle(fixed_.vertex(t[0]), fixed_.vertex(t[1]), fixed_.vertex(t[2]), axes_, row0, row1, columns_u, emit);
     }
   };
   // A crossing before the grid toggles voxel 0; one past it affects nothing.

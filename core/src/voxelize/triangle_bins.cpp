@@ -12,7 +12,7 @@ TriangleBins bin_triangles(const FixedMesh& mesh, int axis, std::int64_t rows, s
   TriangleBins bins;
   bins.rows_per_chunk = rows_per_chunk;
   bins.chunk_count = (rows + rows_per_chunk - 1) / rows_per_chunk;
-  const auto& tris = *mesh.triangles;
+  const auto& tris = mesh.triangles();
   const auto n = static_cast<std::int64_t>(tris.size());
 
   // Chunk range of each triangle, computed in parallel; -1 marks "none".
@@ -20,8 +20,8 @@ TriangleBins bin_triangles(const FixedMesh& mesh, int axis, std::int64_t rows, s
   parallel_for(0, n, 1 << 15, threads, [&](std::int64_t b, std::int64_t e) {
     for (std::int64_t t = b; t < e; ++t) {
       const auto& tri = tris[static_cast<std::size_t>(t)];
-      const std::int64_t a = mesh.vertices[tri[0]][axis], bb = mesh.vertices[tri[1]][axis],
-                         c = mesh.vertices[tri[2]][axis];
+      const std::int64_t a = mesh.vertex(tri[0])[axis], bb = mesh.vertex(tri[1])[axis],
+                         c = mesh.vertex(tri[2])[axis];
       const std::int64_t r0 = std::max<std::int64_t>(0, ceil_fixed(std::min({a, bb, c})) - margin);
       const std::int64_t r1 = std::min<std::int64_t>(rows - 1, floor_fixed(std::max({a, bb, c})) + margin);
       if (r0 > r1) {
