@@ -40,54 +40,72 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
   return bits * volumes;
 }
 
-VoxelJobResult run_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
-                             const api::JobParams& params, const JobLimits& limits, bool with_report,
-                             JobControl* control, int threads) {
-  VoxelJobResult result;
+PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
+                                   const api::JobParams& params, const JobLimits& limits) {
+  PreparedVoxelJob job;
+  job.params = params;
   Stopwatch clock;
-  result.format = detect_mesh_format(mesh_bytes, name_hint);
-  Mesh mesh = decode_mesh(mesh_bytes, name_hint, limits.decode);
-  result.triangles = mesh.triangle_count();
-  result.timings.add("parse", clock.lap());
-  if (control) control->check_cancelled();
+  job.format = detect_mesh_format(mesh_bytes, name_hint);
+  job.mesh = decode_mesh(mesh_bytes, name_hint, limits.decode);
+  job.triangles = job.mesh.triangle_count();
+  job.timings.add("parse", clock.lap());
 
-  if (with_report) {
-    result.report = make_mesh_report(mesh);
-    result.timings.add("report", clock.lap());
-  }
-
-  bool rotated = false;
-  if (params.rotation) {
-    rotate_mesh(mesh, *params.rotation);
-    result.rotation = *params.rotation;
-    rotated = true;
-  }
+  // Only the rotation and the bounds it gives are needed to size the grid;
+  // the vertices are rotated by the worker, after the mesh report.
+  if (params.rotation) job.rotation = *params.rotation;
+  Aabb box = job.rotation == glm::dmat3(1.0) ? bounds(job.mesh) : rotated_bounds(job.mesh, job.rotation);
   if (params.orient_auto) {
-    const glm::dmat3 permutation = auto_orient_rotation(bounds(mesh));
+    const glm::dmat3 permutation = auto_orient_rotation(box);
     if (permutation != glm::dmat3(1.0)) {
-      rotate_mesh(mesh, permutation);
-      result.rotation = permutation * result.rotation;
-      rotated = true;
+      job.rotation = permutation * job.rotation;
+      box = rotated_bounds(job.mesh, job.rotation);
     }
   }
-  if (rotated) result.timings.add("transform", clock.lap());
 
-  result.grid = resolve_grid(params.grid, bounds(mesh));
-  if (result.grid.voxel_count() > limits.max_voxels)
+  job.grid = resolve_grid(params.grid, box);
+  if (job.grid.voxel_count() > limits.max_voxels)
     throw Error(ErrorCode::limit_exceeded,
-                "the grid has " + std::to_string(result.grid.voxel_count()) + " voxels, over the limit of " +
-                    std::to_string(limits.max_voxels) + "; use a lower resolution or a larger voxel_size");
-  if (control) control->check_cancelled();
+                "the grid has " + std::to_string(job.grid.voxel_count()) + " voxels (" +
+                    std::to_string(job.grid.dims.x) + " x " + std::to_string(job.grid.dims.y) + " x " +
+                    std::to_string(job.grid.dims.z) + "), over the limit of " + std::to_string(limits.max_voxels) +
+                    "; use a lower resolution or a larger voxel_size");
+  job.memory_estimate = estimate_job_memory(job.grid, params);
+  job.timings.add("grid", clock.lap());
+  return job;
+}
 
+VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads) {
+  VoxelJobResult result;
+  result.format = job.format;
+  result.triangles = job.triangles;
+  result.rotation = job.rotation;
+  result.grid = job.grid;
+  result.timings = std::move(job.timings);
+  Stopwatch clock;
+  if (control) control->check_cancelled();
+  if (with_report) {
+    result.report = make_mesh_report(job.mesh);
+    result.timings.add("report", clock.lap());
+  }
+  if (job.rotation != glm::dmat3(1.0)) {
+    rotate_mesh(job.mesh, job.rotation);
+    result.timings.add("transform", clock.lap());
+  }
   VoxelizeOptions options;
-  options.mode = params.mode;
-  options.inside = params.inside;
+  options.mode = job.params.mode;
+  options.inside = job.params.inside;
   options.threads = threads;
-  result.volume = voxelize(mesh, result.grid, options, control);
+  result.volume = voxelize(job.mesh, job.grid, options, control);
   result.timings.add("voxelize", clock.lap());
   result.filled = result.volume.count();
   result.timings.add("count", clock.lap());
   return result;
+}
+
+VoxelJobResult run_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
+                             const api::JobParams& params, const JobLimits& limits, bool with_report,
+                             JobControl* control, int threads) {
+  return execute_voxel_job(prepare_voxel_job(mesh_bytes, name_hint, params, limits), with_report, control, threads);
 }
 
 }  // namespace voxd

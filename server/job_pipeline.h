@@ -31,11 +31,26 @@ struct StageTimings {
   double total() const;
 };
 
+// A job after its cheap, synchronous part: decoded, rotated, grid resolved and
+// checked against the limits. The service does this at submission, so a bad
+// upload or an oversized grid is refused at once with a clear error, and
+// workers receive only jobs that fit.
+struct PreparedVoxelJob {
+  api::JobParams params;
+  Mesh mesh;  // as uploaded; execute_voxel_job rotates it
+  MeshFormat format = MeshFormat::unknown;
+  std::uint64_t triangles = 0;
+  glm::dmat3 rotation{1.0};  // applied before voxelization (rotation, then orient)
+  Grid grid;
+  std::uint64_t memory_estimate = 0;  // bytes at peak, for admission control
+  StageTimings timings;
+};
+
 struct VoxelJobResult {
   MeshFormat format = MeshFormat::unknown;
   std::uint64_t triangles = 0;
   std::optional<MeshReport> report;  // when requested: it costs a weld
-  glm::dmat3 rotation{1.0};          // applied before voxelization (rotation, then orient)
+  glm::dmat3 rotation{1.0};
   Grid grid;
   BitVolume volume;
   std::uint64_t filled = 0;
@@ -45,6 +60,15 @@ struct VoxelJobResult {
 // Bytes the job's volumes will take at peak, for admission control.
 std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params);
 
+// Decode, rotate/orient, resolve the grid, check limits. Throws voxd::Error.
+PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
+                                   const api::JobParams& params, const JobLimits& limits);
+
+// The expensive part: (mesh report of the mesh as uploaded,) rotation,
+// voxelization, count.
+VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads = 0);
+
+// Both steps, as the CLI runs them.
 VoxelJobResult run_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                              const api::JobParams& params, const JobLimits& limits, bool with_report,
                              JobControl* control, int threads = 0);

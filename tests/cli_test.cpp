@@ -127,6 +127,21 @@ TEST_F(CliTest, ParamsFileAndFlagsCombineFlagsWinning) {
   EXPECT_EQ(s.at("filled_voxels"), 125);  // centres 1,3,5,7,9 per axis inside [0,10]
 }
 
+TEST_F(CliTest, RotationTurnsTheMeshBeforeTheGridIsLaidOut) {
+  // A 10 x 2 x 2 bar turned 90 degrees about z lies along y; the report
+  // still describes the bar as uploaded.
+  const std::string mesh = write_mesh("bar.stl", test::make_box({0, 0, 0}, {10, 2, 2}));
+  const auto r = run_process(kVoxd + " voxelize " + mesh +
+                             " --params '{\"rotation\": {\"axis\": [0, 0, 1], \"angle_deg\": 90}, \"grid\": {\"voxel_size\": 0.5}}' -o " +
+                             path("bar.rle") + " --json --report");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({4, 20, 4}));
+  EXPECT_EQ(s.at("filled_voxels"), 4 * 20 * 4);
+  EXPECT_EQ(s.at("report").at("bbox_max"), json::array({10.0, 2.0, 2.0}));
+  EXPECT_NEAR(s.at("rotation")[1][0].get<double>(), 1.0, 1e-12);  // x maps to y
+}
+
 TEST_F(CliTest, OrientAutoPutsTheSmallestExtentOnX) {
   const std::string mesh = write_mesh("plate.stl", test::make_box({0, 0, 0}, {10, 8, 1}));
   const auto r = run_process(kVoxd + " voxelize " + mesh + " --params '{\"orient\": \"auto\", \"grid\": {\"voxel_size\": 0.5}}' -o " + path("p.rle") + " --json");

@@ -1,6 +1,9 @@
 #include "voxd/transform.h"
 
 #include <cmath>
+#include <limits>
+
+#include <glm/common.hpp>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -38,6 +41,18 @@ glm::dmat3 auto_orient_rotation(const Aabb& bounds) {
 
 void rotate_mesh(Mesh& mesh, const glm::dmat3& rotation) {
   for (auto& v : mesh.vertices) v = glm::vec3(rotation * glm::dvec3(v));
+}
+
+Aabb rotated_bounds(const Mesh& mesh, const glm::dmat3& rotation) {
+  if (mesh.triangles.empty()) return {};
+  Aabb b{glm::dvec3(std::numeric_limits<double>::infinity()), glm::dvec3(-std::numeric_limits<double>::infinity())};
+  for (const auto& t : mesh.triangles)
+    for (std::uint32_t v : t) {
+      const glm::dvec3 p(glm::vec3(rotation * glm::dvec3(mesh.vertices[v])));
+      b.min = glm::min(b.min, p);
+      b.max = glm::max(b.max, p);
+    }
+  return b;
 }
 
 }  // namespace voxd

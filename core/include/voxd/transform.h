@@ -19,4 +19,8 @@ glm::dmat3 auto_orient_rotation(const Aabb& bounds);
 
 void rotate_mesh(Mesh& mesh, const glm::dmat3& rotation);
 
+// Bounds the mesh would have after rotate_mesh (float rounding included),
+// without modifying it.
+Aabb rotated_bounds(const Mesh& mesh, const glm::dmat3& rotation);
+
 }  // namespace voxd
