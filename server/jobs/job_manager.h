@@ -1,0 +1,142 @@
+#pragma once
+// The service's job engine: a bounded queue feeding worker threads, a job
+// table with states and progress, results persisted in an on-disk store that
+// survives restarts, and expiry. No HTTP here: server/http turns requests into
+// these calls and these results into responses.
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "api/job_params.h"
+#include "server/job_pipeline.h"
+#include "voxd/bit_volume.h"
+
+namespace voxd::server {
+
+enum class JobState { queued, running, succeeded, failed, cancelled };
+const char* to_string(JobState state) noexcept;
+
+// Why a job failed, in the terms of an RFC 9457 problem ("type" is a short
+// slug such as "interrupted", "invalid-mesh", "limit-exceeded", "internal").
+struct JobFailure {
+  std::string type;
+  std::string title;
+  std::string detail;
+};
+
+// A consistent copy of one job, safe to use after the job table changes.
+struct JobSnapshot {
+  std::string id;  // 32 lowercase hex characters, random
+  JobState state = JobState::queued;
+  double progress = 0.0;  // 0..1
+  std::string created_at, started_at, finished_at;  // RFC 3339 UTC, empty until reached
+  nlohmann::json params;                            // the job JSON as submitted
+  std::string mesh_format;
+  std::uint64_t triangles = 0;
+  std::optional<MeshReport> mesh;  // set once the worker made it
+  Grid grid;                       // resolved at submission
+  std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
+  std::optional<std::uint64_t> filled_voxels;           // when succeeded
+  std::optional<JobFailure> failure;                    // when failed
+  std::string content_hash;  // SHA-256 of mesh bytes + canonical params JSON (hex)
+  bool cached = false;       // answered from an identical earlier job's result
+};
+
+struct JobManagerConfig {
+  int workers = 0;              // 0 = hardware concurrency
+  std::size_t queue_size = 64;  // jobs waiting (not running) at most
+  std::filesystem::path data_dir = "voxd-data";
+  JobLimits limits;
+  std::uint64_t max_job_memory = std::uint64_t{4} << 30;  // bytes of volumes one job may need
+  std::chrono::seconds result_ttl{24 * 3600};            // finished jobs expire after this
+  // Called (from worker or submitting threads, never under the table's lock)
+  // on every state change, for logs and metrics.
+  std::function<void(const JobSnapshot&)> on_state_change;
+};
+
+// Submission refused because the queue is full: HTTP 429 with Retry-After.
+class QueueFull : public std::runtime_error {
+ public:
+  QueueFull(const std::string& message, int retry_after_seconds)
+      : std::runtime_error(message), retry_after_seconds_(retry_after_seconds) {}
+  int retry_after_seconds() const { return retry_after_seconds_; }
+
+ private:
+  int retry_after_seconds_;
+};
+
+// Submission refused because the service is shutting down: HTTP 503.
+class NotAccepting : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct JobCounts {
+  std::uint64_t queued = 0, running = 0, succeeded = 0, failed = 0, cancelled = 0;
+  std::size_t queue_depth = 0;
+};
+
+class JobManager {
+ public:
+  // Opens (creates) the store under data_dir; jobs recorded as queued or
+  // running by a previous process become failed with type "interrupted";
+  // finished results are kept. Starts the workers.
+  explicit JobManager(JobManagerConfig config);
+  ~JobManager();  // shutdown(0s) if not done yet
+  JobManager(const JobManager&) = delete;
+  JobManager& operator=(const JobManager&) = delete;
+
+  // Runs prepare_voxel_job on the calling thread (cheap: decode + grid), so bad
+  // meshes and oversized grids throw voxd::Error right away, then checks the
+  // memory estimate against max_job_memory (Error limit_exceeded) and queues
+  // the job. An identical earlier submission (same mesh bytes and canonical
+  // params) that succeeded and has not expired is answered from its result:
+  // the new job is created already succeeded with cached = true.
+  // Throws QueueFull, NotAccepting, voxd::Error, api::InvalidParams.
+  JobSnapshot submit(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
+                     const nlohmann::json& params_json);
+
+  std::optional<JobSnapshot> get(const std::string& id) const;
+
+  // Newest first. `total` receives the number of jobs.
+  std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const;
+
+  enum class RemoveResult { cancelled, deleted, not_found };
+  // Queued or running: cancel (a running voxelization stops within ~50 ms and
+  // the job ends cancelled). Finished: delete the job and its files.
+  RemoveResult cancel_or_delete(const std::string& id);
+
+  // The result volume of a succeeded job (loaded from the store if not in
+  // memory); nullptr if the job is unknown or not succeeded.
+  std::shared_ptr<const BitVolume> volume(const std::string& id);
+
+  // Submits and waits for the result (POST /v1/voxelize). The job goes
+  // through the same queue, so it cannot starve asynchronous jobs.
+  std::shared_ptr<const BitVolume> run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
+                                            const nlohmann::json& params_json, JobSnapshot* snapshot);
+
+  JobCounts counts() const;
+  bool accepting() const;
+
+  // Stops accepting; lets running jobs finish for up to `deadline`, then
+  // cancels them (recorded as failed/interrupted so a restart reports them);
+  // queued jobs are recorded as failed/interrupted. Joins the workers.
+  void shutdown(std::chrono::seconds deadline);
+
+  // Removes jobs finished longer than result_ttl ago (also runs periodically).
+  std::size_t expire_now();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace voxd::server
