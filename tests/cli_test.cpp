@@ -169,6 +169,7 @@ TEST_F(CliTest, ErrorsExitNonZeroWithOneLineMessages) {
       {"voxelize " + mesh + " -o " + path("x.rle") + " --frobnicate 3", 2, "unknown option --frobnicate"},
       {"voxelize " + mesh + " -o " + path("x.rle") + " --origin 1,2", 2, "--origin expects 3"},
       {"frobnicate", 2, "unknown command"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --resolution 100 --max-voxels 1000", 1, "over the limit of 1000"},
       {"inspect " + path("empty.stl"), 1, "empty"},
   };
   test::write_file(path("empty.stl"), {});

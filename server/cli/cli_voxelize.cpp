@@ -37,6 +37,7 @@ volume to OUT ("-" for standard output).
   --format F             rle | binvox | raw (default: from OUT's extension)
   --raw-packing P        bytes (default) | bits, for --format raw
   --threads N            worker threads (default: all cores)
+  --max-voxels N         refuse grids with more voxels (default 2^36: 8 GiB of bits)
   --report               include the mesh report (topology, area, volume)
   --json                 print the summary as JSON on standard output
 
@@ -118,7 +119,7 @@ std::string format_seconds(double s) {
 int voxelize_command(int argc, char** argv) {
   Args args(argc, argv, 2,
             {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "format",
-             "raw-packing", "threads", "output"},
+             "raw-packing", "threads", "output", "max-voxels"},
             {"json", "report", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -159,6 +160,17 @@ int voxelize_command(int argc, char** argv) {
   const std::string& mesh_path = args.positional()[0];
   MappedFile file(mesh_path);
   JobLimits limits;
+  // A local run may use the machine: 2^36 voxels is a 4096^3 grid (8 GiB of bits).
+  limits.max_voxels = std::uint64_t{1} << 36;
+  if (auto m = args.value("max-voxels")) {
+    try {
+      std::size_t pos = 0;
+      limits.max_voxels = std::stoull(*m, &pos);
+      if (pos != m->size() || limits.max_voxels == 0) throw std::invalid_argument(*m);
+    } catch (const std::exception&) {
+      throw UsageError("--max-voxels expects a positive integer, got '" + *m + "'");
+    }
+  }
   VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, args.has("report"), nullptr, threads);
 
   // Encode to a temporary file renamed into place, so OUT is never half written.
