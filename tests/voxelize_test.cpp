@@ -1,5 +1,6 @@
 // Solid (parity, vote) and surface voxelization against analytic answers and
 // independent reference methods.
+#include <bit>
 #include <cmath>
 #include <random>
 
@@ -386,6 +387,28 @@ TEST(VoteVoxelizer, EqualsParityOnClosedMeshesAndRepairsACrack) {
   std::uint64_t diff = 0;
   for (std::size_t w = 0; w < parity.word_count(); ++w) diff += std::popcount(parity.data()[w] ^ cracked_vote.data()[w]);
   EXPECT_LE(diff, 2u);
+}
+
+TEST(Voxelize, SolidPlusSurfaceIsTheUnionAndKeepsThinWalls) {
+  // A closed box with a wall thinner than a voxel welded onto it.
+  const Mesh part = test::concat({make_box({1.25, 1.25, 1.25}, {5.75, 5.75, 5.75}), make_box({5.75, 2.1, 2.1}, {9.2, 2.3, 5.2})});
+  const Grid g = cube_grid({0, 0, 0}, 1.0, 11);
+  VoxelizeOptions options;
+  options.mode = VoxelMode::solid_and_surface;
+  const BitVolume both = voxelize(part, g, options);
+  const BitVolume solid = voxelize_parity(part, g, 0, 0, nullptr);
+  const BitVolume surface = voxelize_surface(part, g, 0, nullptr);
+  std::uint64_t expected = 0;
+  for (std::size_t w = 0; w < both.word_count(); ++w) {
+    ASSERT_EQ(both.data()[w], solid.data()[w] | surface.data()[w]);
+    expected += std::popcount(solid.data()[w] | surface.data()[w]);
+  }
+  EXPECT_EQ(both.count(), expected);
+  // The fin (y in [2.1, 2.3]) holds no voxel centre but is kept.
+  EXPECT_FALSE(solid.get(8, 2, 3));
+  EXPECT_TRUE(both.get(8, 2, 3));
+  options.mode = VoxelMode::surface;
+  EXPECT_EQ(voxelize(part, g, options).count(), surface.count());
 }
 
 TEST(SurfaceVoxelizer, AxisAlignedBoxShellIsExact) {
