@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config git ca-certificates curl
   libembree-dev libglm-dev libcpp-httplib-dev nlohmann-json3-dev
-  libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev
+  libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-jsonschema
 )

@@ -119,7 +119,9 @@ class JobManager {
   std::shared_ptr<const BitVolume> volume(const std::string& id);
 
   // Submits and waits for the result (POST /v1/voxelize). The job goes
-  // through the same queue, so it cannot starve asynchronous jobs.
+  // through the same queue, so it cannot starve asynchronous jobs, but it is
+  // never stored. Returns nullptr when the job did not succeed; `snapshot`
+  // then holds its failure. Throws like submit().
   std::shared_ptr<const BitVolume> run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
                                             const nlohmann::json& params_json, JobSnapshot* snapshot);
 

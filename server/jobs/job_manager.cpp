@@ -1,0 +1,548 @@
+#include "server/jobs/job_manager.h"
+
+#include <algorithm>
+#include <condition_variable>
+#include <deque>
+#include <list>
+#include <mutex>
+#include <random>
+#include <thread>
+#include <unordered_map>
+
+#include <spdlog/spdlog.h>
+
+#include "api/param_error.h"
+#include "server/jobs/content_hash.h"
+#include "server/jobs/job_record.h"
+#include "server/jobs/job_store.h"
+#include "voxd/error.h"
+#include "voxd/parallel.h"
+
+namespace voxd::server {
+
+const char* to_string(JobState state) noexcept {
+  switch (state) {
+    case JobState::queued: return "queued";
+    case JobState::running: return "running";
+    case JobState::succeeded: return "succeeded";
+    case JobState::failed: return "failed";
+    case JobState::cancelled: return "cancelled";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using Clock = std::chrono::system_clock;
+
+bool finished(JobState s) { return s == JobState::succeeded || s == JobState::failed || s == JobState::cancelled; }
+
+std::string new_job_id() {
+  thread_local std::mt19937_64 rng{std::random_device{}() ^ (static_cast<std::uint64_t>(std::random_device{}()) << 32)};
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string id(32, '0');
+  for (int half = 0; half < 2; ++half) {
+    std::uint64_t r = rng();
+    for (int i = 0; i < 16; ++i, r >>= 4) id[static_cast<std::size_t>(half * 16 + i)] = kHex[r & 15];
+  }
+  return id;
+}
+
+// Problem slug of an engine error that ends a job.
+std::string failure_type(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::empty_input:
+    case ErrorCode::truncated_input:
+    case ErrorCode::malformed_input:
+    case ErrorCode::non_finite_coordinates:
+    case ErrorCode::no_usable_triangles: return "invalid-mesh";
+    case ErrorCode::unknown_format: return "unsupported-format";
+    case ErrorCode::limit_exceeded: return "limit-exceeded";
+    case ErrorCode::invalid_argument: return "invalid-params";
+    default: return "internal";
+  }
+}
+
+JobFailure interrupted(const char* was) {
+  return {"interrupted", "Interrupted by a restart",
+          std::string("the job was ") + was + " when the service stopped; submit it again"};
+}
+
+}  // namespace
+
+struct Job {
+  JobSnapshot snap;
+  std::optional<PreparedVoxelJob> prepared;  // until a worker takes it
+  JobControl control;
+  bool ephemeral = false;           // synchronous job: never stored, dropped after use
+  std::shared_ptr<const BitVolume> result;  // a synchronous job's volume, for its caller
+  bool stopped_by_shutdown = false;  // cancelled because the service stops
+};
+
+struct JobManager::Impl {
+  explicit Impl(JobManagerConfig c) : config(std::move(c)), store(config.data_dir) {}
+
+  JobManagerConfig config;
+  JobStore store;
+  int engine_threads = 0;
+
+  mutable std::mutex mutex;
+  std::condition_variable work_cv;      // workers wait here for jobs
+  std::condition_variable finished_cv;  // synchronous callers wait here
+  std::condition_variable expiry_cv;
+  std::unordered_map<std::string, std::shared_ptr<Job>> jobs;
+  std::deque<std::shared_ptr<Job>> queue;
+  std::unordered_map<std::string, std::string> succeeded_by_hash;  // content hash -> job id
+  bool accepting = true;
+  bool stopping = false;
+  double recent_job_seconds = 1.0;  // moving average, for Retry-After
+
+  // Recently used result volumes, so streaming a fresh result reads no disk.
+  static constexpr std::size_t kCacheBytes = std::size_t{1} << 30;
+  std::list<std::pair<std::string, std::shared_ptr<const BitVolume>>> cache;
+  std::size_t cache_bytes = 0;
+
+  std::vector<std::thread> workers;
+  std::thread expirer;
+  bool shut_down = false;
+
+  void notify(const JobSnapshot& s) const {
+    if (!config.on_state_change) return;
+    try {
+      config.on_state_change(s);
+    } catch (const std::exception& e) {
+      spdlog::error("job state listener failed: {}", e.what());
+    }
+  }
+
+  void persist(const Job& job, const JobSnapshot& s) const {
+    if (job.ephemeral) return;
+    try {
+      store.save(s);
+    } catch (const std::exception& e) {
+      spdlog::error("job {}: cannot write its record: {}", s.id, e.what());
+    }
+  }
+
+  // Requires the lock.
+  void cache_put(const std::string& id, std::shared_ptr<const BitVolume> v) {
+    cache_drop(id);
+    cache_bytes += v->byte_size();
+    cache.emplace_front(id, std::move(v));
+    while (cache_bytes > kCacheBytes && cache.size() > 1) {
+      cache_bytes -= cache.back().second->byte_size();
+      cache.pop_back();
+    }
+  }
+  void cache_drop(const std::string& id) {
+    for (auto it = cache.begin(); it != cache.end(); ++it)
+      if (it->first == id) {
+        cache_bytes -= it->second->byte_size();
+        cache.erase(it);
+        return;
+      }
+  }
+  std::shared_ptr<const BitVolume> cache_get(const std::string& id) {
+    for (auto it = cache.begin(); it != cache.end(); ++it)
+      if (it->first == id) {
+        cache.splice(cache.begin(), cache, it);
+        return it->second;
+      }
+    return nullptr;
+  }
+
+  JobSnapshot snapshot_of(const Job& job) const {
+    JobSnapshot s = job.snap;
+    if (s.state == JobState::running) s.progress = job.control.progress();
+    return s;
+  }
+
+  void work() {
+    for (;;) {
+      std::shared_ptr<Job> job;
+      PreparedVoxelJob prepared;
+      JobSnapshot started;
+      {
+        std::unique_lock lock(mutex);
+        work_cv.wait(lock, [&] { return stopping || !queue.empty(); });
+        if (stopping) return;
+        job = queue.front();
+        queue.pop_front();
+        if (job->snap.state != JobState::queued) continue;  // cancelled while waiting
+        job->snap.state = JobState::running;
+        job->snap.started_at = format_time(Clock::now());
+        prepared = std::move(*job->prepared);
+        job->prepared.reset();
+        started = job->snap;
+      }
+      notify(started);
+      const auto t0 = std::chrono::steady_clock::now();
+      JobSnapshot done;
+      std::shared_ptr<const BitVolume> volume;
+      try {
+        VoxelJobResult r = execute_voxel_job(std::move(prepared), true, &job->control, engine_threads);
+        volume = std::make_shared<const BitVolume>(std::move(r.volume));
+        if (!job->ephemeral) store.save_volume(job->snap.id, *volume);
+        std::lock_guard lock(mutex);
+        JobSnapshot& s = job->snap;
+        s.state = JobState::succeeded;
+        s.progress = 1.0;
+        s.mesh = r.report;
+        for (auto& t : r.timings.stages)
+          if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
+            s.timings.push_back(t);
+        s.filled_voxels = r.filled;
+        if (job->ephemeral) {
+          job->result = volume;
+        } else {
+          cache_put(s.id, volume);
+          succeeded_by_hash[s.content_hash] = s.id;
+        }
+      } catch (const Error& e) {
+        std::lock_guard lock(mutex);
+        JobSnapshot& s = job->snap;
+        if (e.code() == ErrorCode::cancelled) {
+          s.state = job->stopped_by_shutdown ? JobState::failed : JobState::cancelled;
+          if (job->stopped_by_shutdown) s.failure = interrupted("running");
+        } else {
+          s.state = JobState::failed;
+          s.failure = JobFailure{failure_type(e.code()), "The job failed", e.what()};
+        }
+      } catch (const std::exception& e) {
+        spdlog::error("job {}: internal error: {}", job->snap.id, e.what());
+        std::lock_guard lock(mutex);
+        job->snap.state = JobState::failed;
+        job->snap.failure = JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
+      }
+      {
+        std::lock_guard lock(mutex);
+        job->snap.finished_at = format_time(Clock::now());
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        recent_job_seconds = 0.8 * recent_job_seconds + 0.2 * seconds;
+        done = job->snap;
+      }
+      persist(*job, done);
+      notify(done);
+      finished_cv.notify_all();
+    }
+  }
+
+  void expire_loop() {
+    const auto ttl = config.result_ttl;
+    const auto period = std::max(std::chrono::seconds(1), std::min<std::chrono::seconds>(std::chrono::seconds(60), ttl / 10));
+    std::unique_lock lock(mutex);
+    while (!stopping) {
+      expiry_cv.wait_for(lock, period, [&] { return stopping; });
+      if (stopping) return;
+      lock.unlock();
+      expire();
+      lock.lock();
+    }
+  }
+
+  std::size_t expire() {
+    const auto cutoff = Clock::now() - config.result_ttl;
+    std::vector<std::string> victims;
+    {
+      std::lock_guard lock(mutex);
+      for (const auto& [id, job] : jobs)
+        if (finished(job->snap.state) && !job->snap.finished_at.empty() && parse_time(job->snap.finished_at) < cutoff)
+          victims.push_back(id);
+      for (const auto& id : victims) forget(id);
+    }
+    for (const auto& id : victims) store.remove(id);
+    return victims.size();
+  }
+
+  // Requires the lock.
+  void forget(const std::string& id) {
+    auto it = jobs.find(id);
+    if (it == jobs.end()) return;
+    auto h = succeeded_by_hash.find(it->second->snap.content_hash);
+    if (h != succeeded_by_hash.end() && h->second == id) succeeded_by_hash.erase(h);
+    cache_drop(id);
+    jobs.erase(it);
+  }
+
+  int retry_after() const {
+    const int workers_n = std::max<int>(1, static_cast<int>(workers.size()));
+    const double seconds = recent_job_seconds * static_cast<double>(queue.size() + 1) / workers_n;
+    return std::clamp(static_cast<int>(std::ceil(seconds)), 1, 3600);
+  }
+
+  std::shared_ptr<Job> enqueue(std::vector<std::uint8_t>& mesh_bytes, const std::string& name_hint,
+                               const nlohmann::json& params_json, bool ephemeral, JobSnapshot* cached_out);
+};
+
+JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {
+  Impl& m = *impl_;
+  // Jobs a previous process left queued or running are reported failed with
+  // reason "interrupted" rather than silently re-run: a client polling them
+  // learns what happened and decides whether to resubmit.
+  for (JobSnapshot s : m.store.load_all()) {
+    if (!finished(s.state)) {
+      s.failure = interrupted(s.state == JobState::queued ? "queued" : "running");
+      s.state = JobState::failed;
+      s.finished_at = format_time(Clock::now());
+      m.store.save(s);
+    }
+    if (s.state == JobState::succeeded) {
+      auto prev = m.succeeded_by_hash.find(s.content_hash);
+      if (prev == m.succeeded_by_hash.end() || m.jobs.at(prev->second)->snap.created_at < s.created_at)
+        m.succeeded_by_hash[s.content_hash] = s.id;
+    }
+    auto job = std::make_shared<Job>();
+    job->snap = std::move(s);
+    m.jobs.emplace(job->snap.id, job);
+  }
+  const int n = m.config.workers > 0 ? m.config.workers : default_thread_count();
+  // Each job's engine may use every core: a lone big job should not wait on
+  // idle cores, and two concurrent ones share them through the scheduler.
+  m.engine_threads = 0;
+  for (int i = 0; i < n; ++i) m.workers.emplace_back([&m] { m.work(); });
+  m.expirer = std::thread([&m] { m.expire_loop(); });
+}
+
+JobManager::~JobManager() { shutdown(std::chrono::seconds(0)); }
+
+std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_bytes, const std::string& name_hint,
+                                               const nlohmann::json& params_json, bool ephemeral,
+                                               JobSnapshot* cached_out) {
+  {
+    std::lock_guard lock(mutex);
+    if (!accepting) throw NotAccepting("the service is shutting down and accepts no new jobs");
+    if (queue.size() >= config.queue_size)
+      throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later",
+                      retry_after());
+  }
+  const api::JobParams params = api::parse_job_params(params_json);
+  const std::string hash = content_hash(mesh_bytes, params_json.dump());
+
+  // An identical earlier submission that succeeded answers this one.
+  if (!ephemeral && cached_out) {
+    std::optional<JobSnapshot> original;
+    {
+      std::lock_guard lock(mutex);
+      auto h = succeeded_by_hash.find(hash);
+      if (h != succeeded_by_hash.end()) original = jobs.at(h->second)->snap;
+    }
+    if (original) {
+      JobSnapshot s = *original;
+      s.id = new_job_id();
+      s.created_at = s.started_at = s.finished_at = format_time(Clock::now());
+      s.params = params_json;
+      s.cached = true;
+      s.timings.clear();
+      try {
+        store.share_volume(original->id, s.id);
+        store.save(s);
+        auto job = std::make_shared<Job>();
+        job->snap = s;
+        {
+          std::lock_guard lock(mutex);
+          jobs.emplace(s.id, job);
+        }
+        *cached_out = s;
+        return nullptr;
+      } catch (const std::exception& e) {
+        // The original was deleted meanwhile: fall through and compute.
+        store.remove(s.id);
+        spdlog::info("job cache miss for {}: {}", original->id, e.what());
+      }
+    }
+  }
+
+  PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, config.limits);
+  if (prepared.memory_estimate > config.max_job_memory)
+    throw Error(ErrorCode::limit_exceeded,
+                "the job needs about " + std::to_string(prepared.memory_estimate >> 20) + " MiB for its volumes, over the limit of " +
+                    std::to_string(config.max_job_memory >> 20) + " MiB; use a lower resolution or a larger voxel_size");
+  mesh_bytes.clear();
+  mesh_bytes.shrink_to_fit();
+
+  auto job = std::make_shared<Job>();
+  job->ephemeral = ephemeral;
+  JobSnapshot& s = job->snap;
+  s.id = new_job_id();
+  s.state = JobState::queued;
+  s.created_at = format_time(Clock::now());
+  s.params = params_json;
+  s.mesh_format = to_string(prepared.format);
+  s.triangles = prepared.triangles;
+  s.grid = prepared.grid;
+  s.timings = prepared.timings.stages;
+  s.content_hash = hash;
+  job->prepared = std::move(prepared);
+  // Recorded before a worker can see it, so the final record always wins.
+  persist(*job, s);
+  {
+    std::lock_guard lock(mutex);
+    if (!accepting || queue.size() >= config.queue_size) {
+      const bool closing = !accepting;
+      const int wait = retry_after();
+      if (!ephemeral) store.remove(s.id);
+      if (closing) throw NotAccepting("the service is shutting down and accepts no new jobs");
+      throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later", wait);
+    }
+    jobs.emplace(s.id, job);
+    queue.push_back(job);
+  }
+  work_cv.notify_one();
+  notify(s);
+  return job;
+}
+
+JobSnapshot JobManager::submit(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
+                               const nlohmann::json& params_json) {
+  JobSnapshot cached;
+  auto job = impl_->enqueue(mesh_bytes, name_hint, params_json, false, &cached);
+  if (!job) {
+    impl_->notify(cached);
+    return cached;
+  }
+  std::lock_guard lock(impl_->mutex);
+  return impl_->snapshot_of(*job);
+}
+
+std::optional<JobSnapshot> JobManager::get(const std::string& id) const {
+  std::lock_guard lock(impl_->mutex);
+  auto it = impl_->jobs.find(id);
+  if (it == impl_->jobs.end() || it->second->ephemeral) return std::nullopt;
+  return impl_->snapshot_of(*it->second);
+}
+
+std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
+  std::vector<JobSnapshot> all;
+  {
+    std::lock_guard lock(impl_->mutex);
+    for (const auto& [id, job] : impl_->jobs)
+      if (!job->ephemeral) all.push_back(impl_->snapshot_of(*job));
+  }
+  std::sort(all.begin(), all.end(), [](const JobSnapshot& a, const JobSnapshot& b) {
+    return a.created_at != b.created_at ? a.created_at > b.created_at : a.id > b.id;
+  });
+  if (total) *total = all.size();
+  if (offset >= all.size()) return {};
+  const auto first = all.begin() + static_cast<std::ptrdiff_t>(offset);
+  return {first, first + static_cast<std::ptrdiff_t>(std::min(limit, all.size() - offset))};
+}
+
+JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
+  std::optional<JobSnapshot> cancelled;
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto it = impl_->jobs.find(id);
+    if (it == impl_->jobs.end() || it->second->ephemeral) return RemoveResult::not_found;
+    Job& job = *it->second;
+    if (job.snap.state == JobState::queued) {
+      job.snap.state = JobState::cancelled;
+      job.snap.finished_at = format_time(Clock::now());
+      job.prepared.reset();
+      cancelled = job.snap;
+    } else if (job.snap.state == JobState::running) {
+      job.control.request_cancel();  // the worker records the end state
+      return RemoveResult::cancelled;
+    } else {
+      impl_->forget(id);
+    }
+  }
+  if (cancelled) {
+    impl_->persist(Job{}, *cancelled);
+    impl_->notify(*cancelled);
+    impl_->finished_cv.notify_all();
+    return RemoveResult::cancelled;
+  }
+  impl_->store.remove(id);
+  return RemoveResult::deleted;
+}
+
+std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto it = impl_->jobs.find(id);
+    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
+    if (auto v = impl_->cache_get(id)) return v;
+  }
+  auto v = impl_->store.load_volume(id);
+  if (v) {
+    std::lock_guard lock(impl_->mutex);
+    if (impl_->jobs.count(id)) impl_->cache_put(id, v);
+  }
+  return v;
+}
+
+std::shared_ptr<const BitVolume> JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
+                                                      const nlohmann::json& params_json, JobSnapshot* snapshot) {
+  std::shared_ptr<Job> job = impl_->enqueue(mesh_bytes, name_hint, params_json, true, nullptr);
+  std::unique_lock lock(impl_->mutex);
+  impl_->finished_cv.wait(lock, [&] { return finished(job->snap.state); });
+  if (snapshot) *snapshot = job->snap;
+  impl_->jobs.erase(job->snap.id);
+  return job->snap.state == JobState::succeeded ? job->result : nullptr;
+}
+
+JobCounts JobManager::counts() const {
+  JobCounts c;
+  std::lock_guard lock(impl_->mutex);
+  for (const auto& [id, job] : impl_->jobs) {
+    switch (job->snap.state) {
+      case JobState::queued: ++c.queued; break;
+      case JobState::running: ++c.running; break;
+      case JobState::succeeded: ++c.succeeded; break;
+      case JobState::failed: ++c.failed; break;
+      case JobState::cancelled: ++c.cancelled; break;
+    }
+  }
+  c.queue_depth = impl_->queue.size();
+  return c;
+}
+
+bool JobManager::accepting() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->accepting;
+}
+
+void JobManager::shutdown(std::chrono::seconds deadline) {
+  Impl& m = *impl_;
+  std::vector<JobSnapshot> abandoned;
+  {
+    std::unique_lock lock(m.mutex);
+    if (m.shut_down) return;
+    m.shut_down = true;
+    m.accepting = false;
+    // Queued jobs will not run in this process: record them as interrupted.
+    for (auto& job : m.queue) {
+      if (job->snap.state != JobState::queued) continue;
+      job->snap.state = JobState::failed;
+      job->snap.failure = interrupted("queued");
+      job->snap.finished_at = format_time(Clock::now());
+      job->prepared.reset();
+      abandoned.push_back(job->snap);
+    }
+    m.queue.clear();
+    auto running = [&] {
+      for (const auto& [id, job] : m.jobs)
+        if (job->snap.state == JobState::running) return true;
+      return false;
+    };
+    if (!m.finished_cv.wait_for(lock, deadline, [&] { return !running(); })) {
+      for (auto& [id, job] : m.jobs)
+        if (job->snap.state == JobState::running) {
+          job->stopped_by_shutdown = true;
+          job->control.request_cancel();
+        }
+      m.finished_cv.wait(lock, [&] { return !running(); });
+    }
+    m.stopping = true;
+  }
+  for (const auto& s : abandoned) m.store.save(s);
+  m.finished_cv.notify_all();
+  m.work_cv.notify_all();
+  m.expiry_cv.notify_all();
+  for (auto& t : m.workers) t.join();
+  if (m.expirer.joinable()) m.expirer.join();
+}
+
+std::size_t JobManager::expire_now() { return impl_->expire(); }
+
+}  // namespace voxd::server

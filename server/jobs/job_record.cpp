@@ -1,0 +1,148 @@
+#include "server/jobs/job_record.h"
+
+#include <ctime>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "api/result_json.h"
+
+namespace voxd::server {
+namespace {
+
+using nlohmann::json;
+
+json time_or_null(const std::string& t) { return t.empty() ? json(nullptr) : json(t); }
+std::string time_from(const json& v) { return v.is_null() ? std::string() : v.get<std::string>(); }
+
+glm::dvec3 vec3_from(const json& v) { return {v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()}; }
+
+MeshReport report_from_json(const json& j) {
+  MeshReport r;
+  r.triangles = j.at("triangles");
+  r.vertices = j.at("vertices");
+  r.bbox.min = vec3_from(j.at("bbox_min"));
+  r.bbox.max = vec3_from(j.at("bbox_max"));
+  r.degenerate_triangles = j.at("degenerate_triangles");
+  r.boundary_edges = j.at("boundary_edges");
+  r.nonmanifold_edges = j.at("nonmanifold_edges");
+  r.inconsistent_edges = j.at("inconsistent_edges");
+  r.watertight = j.at("watertight");
+  r.surface_area = j.at("surface_area");
+  r.volume = j.at("volume").is_null() ? 0.0 : j.at("volume").get<double>();
+  return r;
+}
+
+Grid grid_from_json(const json& j) {
+  Grid g;
+  g.origin = vec3_from(j.at("origin"));
+  g.voxel_size = j.at("voxel_size");
+  g.dims = {j.at("dims").at(0).get<std::int64_t>(), j.at("dims").at(1).get<std::int64_t>(),
+            j.at("dims").at(2).get<std::int64_t>()};
+  return g;
+}
+
+int failure_status(const std::string& type) {
+  if (type == "interrupted") return 503;
+  if (type == "internal") return 500;
+  return 422;
+}
+
+}  // namespace
+
+std::string format_time(std::chrono::system_clock::time_point t) {
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(t.time_since_epoch()).count();
+  const std::time_t secs = static_cast<std::time_t>(ms / 1000);
+  std::tm tm{};
+  gmtime_r(&secs, &tm);
+  char buf[40];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  char out[48];
+  std::snprintf(out, sizeof out, "%s.%03dZ", buf, static_cast<int>(ms % 1000));
+  return out;
+}
+
+std::chrono::system_clock::time_point parse_time(const std::string& text) {
+  std::tm tm{};
+  int millis = 0;
+  std::istringstream in(text);
+  in >> std::get_time(&tm, "%Y-%m-%dT%H:%M:%S");
+  if (in.fail()) throw std::invalid_argument("bad time '" + text + "'");
+  char dot = 0;
+  if (in >> dot && dot == '.') in >> millis;
+  return std::chrono::system_clock::from_time_t(timegm(&tm)) + std::chrono::milliseconds(millis);
+}
+
+std::optional<JobState> job_state_from_string(const std::string& name) {
+  for (JobState s : {JobState::queued, JobState::running, JobState::succeeded, JobState::failed, JobState::cancelled})
+    if (name == to_string(s)) return s;
+  return std::nullopt;
+}
+
+json to_json(const JobSnapshot& job) {
+  json out = {
+      {"id", job.id},
+      {"state", to_string(job.state)},
+      {"progress", job.progress},
+      {"created_at", time_or_null(job.created_at)},
+      {"started_at", time_or_null(job.started_at)},
+      {"finished_at", time_or_null(job.finished_at)},
+      {"params", job.params},
+      {"mesh", job.mesh ? api::to_json(*job.mesh) : json(nullptr)},
+      {"mesh_format", job.mesh_format},
+      {"triangles", job.triangles},
+      {"grid", api::to_json(job.grid)},
+      {"cached", job.cached},
+      {"content_hash", job.content_hash},
+      {"links", {{"self", "/v1/jobs/" + job.id}, {"volume", "/v1/jobs/" + job.id + "/volume"}}},
+  };
+  json timings = json::object();
+  for (const auto& [stage, seconds] : job.timings) timings[stage] = seconds;
+  out["timings"] = timings;
+  if (job.filled_voxels) {
+    out["filled_voxels"] = *job.filled_voxels;
+    out["filled_volume"] = static_cast<double>(*job.filled_voxels) * job.grid.voxel_volume();
+  } else {
+    out["filled_voxels"] = nullptr;
+    out["filled_volume"] = nullptr;
+  }
+  if (job.failure) {
+    out["error"] = {{"type", "urn:voxd:problem:" + job.failure->type},
+                    {"title", job.failure->title},
+                    {"status", failure_status(job.failure->type)},
+                    {"detail", job.failure->detail}};
+  } else {
+    out["error"] = nullptr;
+  }
+  return out;
+}
+
+JobSnapshot job_from_json(const json& r) {
+  JobSnapshot job;
+  job.id = r.at("id");
+  const auto state = job_state_from_string(r.at("state").get<std::string>());
+  if (!state) throw std::invalid_argument("unknown state");
+  job.state = *state;
+  job.progress = r.at("progress");
+  job.created_at = time_from(r.at("created_at"));
+  job.started_at = time_from(r.at("started_at"));
+  job.finished_at = time_from(r.at("finished_at"));
+  job.params = r.at("params");
+  if (!r.at("mesh").is_null()) job.mesh = report_from_json(r.at("mesh"));
+  job.mesh_format = r.at("mesh_format");
+  job.triangles = r.at("triangles");
+  job.grid = grid_from_json(r.at("grid"));
+  for (const auto& [stage, seconds] : r.at("timings").items()) job.timings.emplace_back(stage, seconds.get<double>());
+  if (!r.at("filled_voxels").is_null()) job.filled_voxels = r.at("filled_voxels").get<std::uint64_t>();
+  if (!r.at("error").is_null()) {
+    const std::string type = r.at("error").at("type");
+    const std::string prefix = "urn:voxd:problem:";
+    job.failure = JobFailure{type.rfind(prefix, 0) == 0 ? type.substr(prefix.size()) : type,
+                             r.at("error").at("title"), r.at("error").at("detail")};
+  }
+  job.cached = r.at("cached");
+  job.content_hash = r.at("content_hash");
+  return job;
+}
+
+}  // namespace voxd::server

@@ -1,0 +1,21 @@
+#pragma once
+// JobSnapshot <-> JSON: the job record stored on disk and the status body the
+// API returns (proto-schemas/job-status.schema.json) are the same document.
+#include <chrono>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "server/jobs/job_manager.h"
+
+namespace voxd::server {
+
+nlohmann::json to_json(const JobSnapshot& job);
+// Throws std::exception on a malformed record.
+JobSnapshot job_from_json(const nlohmann::json& record);
+// RFC 3339 UTC with milliseconds, e.g. 2026-11-22T23:41:30.123Z.
+std::string format_time(std::chrono::system_clock::time_point t);
+std::chrono::system_clock::time_point parse_time(const std::string& text);
+std::optional<JobState> job_state_from_string(const std::string& name);
+
+}  // namespace voxd::server

@@ -1,0 +1,101 @@
+#include "server/jobs/job_store.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include <spdlog/spdlog.h>
+
+#include "server/jobs/job_record.h"
+#include "voxd/byte_sink.h"
+#include "voxd/error.h"
+#include "voxd/volume_format.h"
+
+namespace voxd::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+void fsync_path(const fs::path& p, int flags) {
+  const int fd = ::open(p.c_str(), flags | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+// Writes through `write` into a temporary file, then fsyncs and renames it.
+template <typename WriteFn>
+void write_atomically(const fs::path& target, WriteFn&& write) {
+  const fs::path tmp = target.string() + ".tmp";
+  {
+    FileSink sink(tmp.string());
+    write(sink);
+    sink.close();
+  }
+  fsync_path(tmp, O_RDONLY);
+  fs::rename(tmp, target);
+  fsync_path(target.parent_path(), O_RDONLY | O_DIRECTORY);
+}
+
+}  // namespace
+
+JobStore::JobStore(fs::path data_dir) : jobs_(std::move(data_dir) / "jobs") {
+  std::error_code ec;
+  fs::create_directories(jobs_, ec);
+  if (ec) throw Error(ErrorCode::io_error, "cannot create data directory '" + jobs_.string() + "': " + ec.message());
+}
+
+std::vector<JobSnapshot> JobStore::load_all() const {
+  std::vector<JobSnapshot> jobs;
+  for (const auto& entry : fs::directory_iterator(jobs_)) {
+    if (!entry.is_directory()) continue;
+    const fs::path record = entry.path() / "record.json";
+    try {
+      std::ifstream in(record);
+      if (!in) throw std::runtime_error("missing record.json");
+      JobSnapshot job = job_from_json(nlohmann::json::parse(in));
+      if (job.id != entry.path().filename().string()) throw std::runtime_error("id does not match its directory");
+      jobs.push_back(std::move(job));
+    } catch (const std::exception& e) {
+      spdlog::warn("job store: skipping unreadable job record {}: {}", record.string(), e.what());
+    }
+  }
+  return jobs;
+}
+
+void JobStore::save(const JobSnapshot& job) const {
+  fs::create_directories(job_dir(job.id));
+  const std::string text = to_json(job).dump();
+  write_atomically(job_dir(job.id) / "record.json", [&](ByteSink& sink) { sink.write(text.data(), text.size()); });
+}
+
+void JobStore::save_volume(const std::string& id, const BitVolume& volume) const {
+  fs::create_directories(job_dir(id));
+  write_atomically(job_dir(id) / "volume.rle", [&](ByteSink& sink) { write_rle(volume, sink); });
+}
+
+void JobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
+  fs::create_directories(job_dir(to_id));
+  std::error_code ec;
+  fs::create_hard_link(job_dir(from_id) / "volume.rle", job_dir(to_id) / "volume.rle", ec);
+  if (ec) fs::copy_file(job_dir(from_id) / "volume.rle", job_dir(to_id) / "volume.rle", fs::copy_options::overwrite_existing);
+}
+
+std::shared_ptr<const BitVolume> JobStore::load_volume(const std::string& id) const {
+  std::ifstream in(job_dir(id) / "volume.rle", std::ios::binary);
+  if (!in) return nullptr;
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  return std::make_shared<const BitVolume>(read_rle_bits(bytes));
+}
+
+void JobStore::remove(const std::string& id) const {
+  std::error_code ec;
+  fs::remove_all(job_dir(id), ec);
+  if (ec) spdlog::warn("job store: cannot remove {}: {}", job_dir(id).string(), ec.message());
+}
+
+}  // namespace voxd::server
