@@ -106,12 +106,33 @@ struct JobManager::Impl {
   std::thread expirer;
   bool shut_down = false;
 
-  void notify(const JobSnapshot& s) const {
+  // State changes are queued under `mutex` in the order they happen and handed
+  // to the listener outside it, one at a time and in that order: a worker that
+  // starts a job the instant it is queued must not report "running" before the
+  // submitter reports "queued".
+  std::deque<JobSnapshot> pending_events;  // guarded by mutex
+  std::mutex delivery_mutex;
+
+  void announce(const JobSnapshot& s) {  // caller holds mutex
+    if (config.on_state_change) pending_events.push_back(s);
+  }
+
+  void deliver() {  // caller holds no lock
     if (!config.on_state_change) return;
-    try {
-      config.on_state_change(s);
-    } catch (const std::exception& e) {
-      spdlog::error("job state listener failed: {}", e.what());
+    std::lock_guard delivering(delivery_mutex);
+    for (;;) {
+      JobSnapshot event;
+      {
+        std::lock_guard lock(mutex);
+        if (pending_events.empty()) return;
+        event = std::move(pending_events.front());
+        pending_events.pop_front();
+      }
+      try {
+        config.on_state_change(event);
+      } catch (const std::exception& e) {
+        spdlog::error("job state listener failed: {}", e.what());
+      }
     }
   }
 
@@ -161,7 +182,6 @@ struct JobManager::Impl {
     for (;;) {
       std::shared_ptr<Job> job;
       PreparedVoxelJob prepared;
-      JobSnapshot started;
       {
         std::unique_lock lock(mutex);
         work_cv.wait(lock, [&] { return stopping || !queue.empty(); });
@@ -173,9 +193,9 @@ struct JobManager::Impl {
         job->snap.started_at = format_time(Clock::now());
         prepared = std::move(*job->prepared);
         job->prepared.reset();
-        started = job->snap;
+        announce(job->snap);
       }
-      notify(started);
+      deliver();
       const auto t0 = std::chrono::steady_clock::now();
       JobSnapshot done;
       std::shared_ptr<const BitVolume> volume;
@@ -220,9 +240,10 @@ struct JobManager::Impl {
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         recent_job_seconds = 0.8 * recent_job_seconds + 0.2 * seconds;
         done = job->snap;
+        announce(done);
       }
       persist(*job, done);
-      notify(done);
+      deliver();
       finished_cv.notify_all();
     }
   }
@@ -271,7 +292,8 @@ struct JobManager::Impl {
   }
 
   std::shared_ptr<Job> enqueue(std::vector<std::uint8_t>& mesh_bytes, const std::string& name_hint,
-                               const nlohmann::json& params_json, bool ephemeral, JobSnapshot* cached_out);
+                               const nlohmann::json& params_json, bool ephemeral, JobSnapshot* cached_out,
+                               std::uint64_t max_voxels = 0);
 };
 
 JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {
@@ -307,7 +329,7 @@ JobManager::~JobManager() { shutdown(std::chrono::seconds(0)); }
 
 std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_bytes, const std::string& name_hint,
                                                const nlohmann::json& params_json, bool ephemeral,
-                                               JobSnapshot* cached_out) {
+                                               JobSnapshot* cached_out, std::uint64_t max_voxels) {
   {
     std::lock_guard lock(mutex);
     if (!accepting) throw NotAccepting("the service is shutting down and accepts no new jobs");
@@ -353,6 +375,10 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   }
 
   PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, config.limits);
+  if (max_voxels > 0 && prepared.grid.voxel_count() > max_voxels)
+    throw Error(ErrorCode::limit_exceeded, "the grid has " + std::to_string(prepared.grid.voxel_count()) +
+                                               " voxels; synchronous voxelization takes at most " +
+                                               std::to_string(max_voxels) + ": submit it to POST /v1/jobs instead");
   if (prepared.memory_estimate > config.max_job_memory)
     throw Error(ErrorCode::limit_exceeded,
                 "the job needs about " + std::to_string(prepared.memory_estimate >> 20) + " MiB for its volumes, over the limit of " +
@@ -386,9 +412,10 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
     }
     jobs.emplace(s.id, job);
     queue.push_back(job);
+    announce(s);
   }
   work_cv.notify_one();
-  notify(s);
+  deliver();
   return job;
 }
 
@@ -397,7 +424,11 @@ JobSnapshot JobManager::submit(std::vector<std::uint8_t> mesh_bytes, const std::
   JobSnapshot cached;
   auto job = impl_->enqueue(mesh_bytes, name_hint, params_json, false, &cached);
   if (!job) {
-    impl_->notify(cached);
+    {
+      std::lock_guard lock(impl_->mutex);
+      impl_->announce(cached);
+    }
+    impl_->deliver();
     return cached;
   }
   std::lock_guard lock(impl_->mutex);
@@ -439,6 +470,7 @@ JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
       job.snap.finished_at = format_time(Clock::now());
       job.prepared.reset();
       cancelled = job.snap;
+      impl_->announce(job.snap);
     } else if (job.snap.state == JobState::running) {
       job.control.request_cancel();  // the worker records the end state
       return RemoveResult::cancelled;
@@ -448,7 +480,7 @@ JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
   }
   if (cancelled) {
     impl_->persist(Job{}, *cancelled);
-    impl_->notify(*cancelled);
+    impl_->deliver();
     impl_->finished_cv.notify_all();
     return RemoveResult::cancelled;
   }
@@ -472,8 +504,9 @@ std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
 }
 
 std::shared_ptr<const BitVolume> JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
-                                                      const nlohmann::json& params_json, JobSnapshot* snapshot) {
-  std::shared_ptr<Job> job = impl_->enqueue(mesh_bytes, name_hint, params_json, true, nullptr);
+                                                      const nlohmann::json& params_json, JobSnapshot* snapshot,
+                                                      std::uint64_t max_voxels) {
+  std::shared_ptr<Job> job = impl_->enqueue(mesh_bytes, name_hint, params_json, true, nullptr, max_voxels);
   std::unique_lock lock(impl_->mutex);
   impl_->finished_cv.wait(lock, [&] { return finished(job->snap.state); });
   if (snapshot) *snapshot = job->snap;
@@ -518,6 +551,7 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
       job->snap.finished_at = format_time(Clock::now());
       job->prepared.reset();
       abandoned.push_back(job->snap);
+      m.announce(job->snap);
     }
     m.queue.clear();
     auto running = [&] {
@@ -536,6 +570,7 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
     m.stopping = true;
   }
   for (const auto& s : abandoned) m.store.save(s);
+  m.deliver();
   m.finished_cv.notify_all();
   m.work_cv.notify_all();
   m.expiry_cv.notify_all();

@@ -122,8 +122,10 @@ class JobManager {
   // through the same queue, so it cannot starve asynchronous jobs, but it is
   // never stored. Returns nullptr when the job did not succeed; `snapshot`
   // then holds its failure. Throws like submit().
+  // `max_voxels` (0 = none) is an extra, smaller grid limit for this call.
   std::shared_ptr<const BitVolume> run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
-                                            const nlohmann::json& params_json, JobSnapshot* snapshot);
+                                            const nlohmann::json& params_json, JobSnapshot* snapshot,
+                                            std::uint64_t max_voxels = 0);
 
   JobCounts counts() const;
   bool accepting() const;
