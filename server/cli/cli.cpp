@@ -16,6 +16,7 @@ constexpr const char* kUsage = R"(voxd: voxelization engine and service
 usage:
   voxd inspect MESH                    mesh report as JSON
   voxd voxelize MESH -o OUT [options]  voxelize to rle / binvox / raw
+  voxd serve [options]                 the HTTP service (voxd serve --help)
   voxd --version
 
 Run 'voxd COMMAND --help' for a command's options.
@@ -36,6 +37,7 @@ int run(int argc, char** argv) {
     }
     if (command == "inspect") return inspect_command(argc, argv);
     if (command == "voxelize") return voxelize_command(argc, argv);
+    if (command == "serve") return serve_command(argc, argv);
     throw UsageError("unknown command '" + command + "' (try voxd --help)");
   } catch (const UsageError& e) {
     std::cerr << "voxd: " << e.what() << '\n';

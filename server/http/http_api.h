@@ -1,0 +1,34 @@
+#pragma once
+// The REST API: routes of proto-schemas/openapi.json over the job engine.
+#include <atomic>
+#include <string>
+
+#include "server/http/metrics.h"
+#include "server/http/server_config.h"
+#include "server/jobs/job_manager.h"
+
+namespace httplib {
+class Server;
+}
+
+namespace voxd::server {
+
+class HttpApi {
+ public:
+  HttpApi(const ServeConfig& config, JobManager& jobs, Metrics& metrics)
+      : config_(config), jobs_(jobs), metrics_(metrics) {}
+  void install(httplib::Server& server);
+  // Readiness turns false for the rest of the process (SIGTERM received).
+  void set_draining() { draining_ = true; }
+
+ private:
+  const ServeConfig& config_;
+  JobManager& jobs_;
+  Metrics& metrics_;
+  std::atomic<bool> draining_{false};
+};
+
+// The OpenAPI document, embedded at build time from proto-schemas/openapi.json.
+extern const char* const kOpenApiDocument;
+
+}  // namespace voxd::server

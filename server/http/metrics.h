@@ -1,0 +1,39 @@
+#pragma once
+// Prometheus text-format metrics (exposition format 0.0.4): jobs by state,
+// queue depth, stage durations, HTTP traffic and rejections.
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "server/jobs/job_manager.h"
+
+namespace voxd::server {
+
+class Metrics {
+ public:
+  void count_request(const std::string& method, const std::string& route, int status);
+  void count_rejected(const std::string& reason);
+  void observe_stage(const std::string& stage, double seconds);
+  void add_bytes_in(std::uint64_t n) { bytes_in_ += n; }
+  void add_bytes_out(std::uint64_t n) { bytes_out_ += n; }
+  std::string render(const JobCounts& jobs) const;
+
+ private:
+  struct Histogram {
+    std::vector<std::uint64_t> buckets;  // cumulative counts per bound
+    std::uint64_t count = 0;
+    double sum = 0;
+  };
+  static const std::vector<double>& bounds();
+  mutable std::mutex mutex_;
+  std::map<std::tuple<std::string, std::string, int>, std::uint64_t> requests_;
+  std::map<std::string, std::uint64_t> rejected_;
+  std::map<std::string, Histogram> stages_;
+  std::atomic<std::uint64_t> bytes_in_{0}, bytes_out_{0};
+};
+
+}  // namespace voxd::server

@@ -1,0 +1,76 @@
+#include "server/http/problem.h"
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+
+#include "api/param_error.h"
+#include "server/jobs/job_manager.h"
+#include "voxd/error.h"
+
+namespace voxd::server {
+
+Problem make_problem(int status, std::string slug, std::string title, std::string detail) {
+  Problem p;
+  p.status = status;
+  p.slug = std::move(slug);
+  p.title = std::move(title);
+  p.detail = std::move(detail);
+  return p;
+}
+
+Problem problem_from_current_exception() {
+  try {
+    throw;
+  } catch (const ProblemError& e) {
+    return e.problem();
+  } catch (const api::InvalidParams& e) {
+    Problem p = make_problem(422, "invalid-params", "Invalid job parameters", e.what());
+    p.errors = nlohmann::json::array();
+    for (const auto& f : e.errors()) p.errors.push_back({{"path", f.path}, {"message", f.message}});
+    return p;
+  } catch (const QueueFull& e) {
+    Problem p = make_problem(429, "queue-full", "Too many jobs", e.what());
+    p.headers.emplace_back("Retry-After", std::to_string(e.retry_after_seconds()));
+    return p;
+  } catch (const NotAccepting& e) {
+    return make_problem(503, "shutting-down", "The service is shutting down", e.what());
+  } catch (const Error& e) {
+    switch (e.code()) {
+      case ErrorCode::empty_input:
+      case ErrorCode::truncated_input:
+      case ErrorCode::malformed_input:
+      case ErrorCode::non_finite_coordinates:
+      case ErrorCode::no_usable_triangles:
+        return make_problem(422, "invalid-mesh", "The mesh cannot be used", e.what());
+      case ErrorCode::unknown_format:
+        return make_problem(415, "unsupported-format", "Unsupported mesh format", e.what());
+      case ErrorCode::limit_exceeded:
+        return make_problem(422, "limit-exceeded", "Over the service's limits", e.what());
+      case ErrorCode::invalid_argument:
+        return make_problem(422, "invalid-params", "Invalid job parameters", e.what());
+      case ErrorCode::cancelled:
+        return make_problem(409, "cancelled", "The job was cancelled", e.what());
+      case ErrorCode::io_error:
+        break;
+    }
+    spdlog::error("request failed: {}", e.what());
+    return make_problem(500, "internal", "Internal error", "the request failed unexpectedly; it was logged");
+  } catch (const std::exception& e) {
+    spdlog::error("request failed: {}", e.what());
+    return make_problem(500, "internal", "Internal error", "the request failed unexpectedly; it was logged");
+  }
+}
+
+void send_problem(httplib::Response& res, const Problem& p, const std::string& instance) {
+  nlohmann::json body = {{"type", "urn:voxd:problem:" + p.slug},
+                         {"title", p.title},
+                         {"status", p.status},
+                         {"detail", p.detail},
+                         {"instance", instance}};
+  if (!p.errors.is_null()) body["errors"] = p.errors;
+  res.status = p.status;
+  for (const auto& [name, value] : p.headers) res.set_header(name, value);
+  res.set_content(body.dump(), "application/problem+json");
+}
+
+}  // namespace voxd::server

@@ -1,0 +1,106 @@
+// `voxd serve`: the HTTP service with its embedded defaults.
+#include <pthread.h>
+#include <signal.h>
+
+#include <iostream>
+#include <thread>
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+
+#include "server/cli/cli.h"
+#include "server/http/http_api.h"
+#include "server/http/metrics.h"
+#include "server/http/server_config.h"
+#include "server/jobs/job_manager.h"
+#include "voxd/error.h"
+
+namespace voxd::cli {
+
+int serve_command(int argc, char** argv) {
+  using namespace voxd::server;
+  for (int i = 2; i < argc; ++i)
+    if (std::string(argv[i]) == "--help") {
+      std::cout << serve_help();
+      return 0;
+    }
+  const ServeConfig config = parse_serve_config(argc, argv, 2);
+  if (config.log_format == "json")
+    spdlog::set_pattern(R"({"time":"%Y-%m-%dT%H:%M:%S.%eZ","level":"%l","message":%v})", spdlog::pattern_time_type::utc);
+  else
+    spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%eZ %l %v", spdlog::pattern_time_type::utc);
+  // JSON log lines carry their message as a JSON value.
+  auto log = [&](const std::string& text) {
+    if (config.log_format == "json") spdlog::info(nlohmann::json(text).dump());
+    else spdlog::info(text);
+  };
+
+  // Signals are taken by one thread with sigwait; every thread started after
+  // this inherits the mask, so none is interrupted at a random point.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGTERM);
+  sigaddset(&stop_signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  Metrics metrics;
+  JobManagerConfig jc;
+  jc.workers = config.workers;
+  jc.queue_size = config.queue_size;
+  jc.data_dir = config.data_dir;
+  jc.limits.decode.max_bytes = config.max_upload_bytes;
+  jc.limits.decode.max_triangles = config.max_triangles;
+  jc.limits.max_voxels = config.max_voxels;
+  jc.max_job_memory = config.max_job_memory;
+  jc.result_ttl = std::chrono::seconds(config.result_ttl);
+  jc.on_state_change = [&](const JobSnapshot& s) {
+    if (s.state == JobState::succeeded || s.state == JobState::failed)
+      for (const auto& [stage, seconds] : s.timings) metrics.observe_stage(stage, seconds);
+    if (config.log_format == "json")
+      spdlog::info(nlohmann::json{{"event", "job"}, {"id", s.id}, {"state", to_string(s.state)},
+                                  {"error", s.failure ? s.failure->detail : ""}}.dump());
+    else
+      spdlog::info("job {} {}{}", s.id, to_string(s.state), s.failure ? ": " + s.failure->detail : "");
+  };
+  JobManager jobs(jc);
+
+  httplib::Server server;
+  HttpApi api(config, jobs, metrics);
+  api.install(server);
+  server.set_payload_max_length(config.max_upload_bytes);
+  server.set_read_timeout(config.read_timeout, 0);
+  server.set_write_timeout(config.write_timeout, 0);
+  server.set_keep_alive_timeout(5);
+  server.set_keep_alive_max_count(1000);  // batch clients reuse one connection
+  const int http_threads = config.http_threads;
+  server.new_task_queue = [http_threads] { return new httplib::ThreadPool(static_cast<std::size_t>(http_threads)); };
+
+  int port = config.port;
+  if (port == 0) {
+    port = server.bind_to_any_port(config.host);
+  } else if (!server.bind_to_port(config.host, port)) {
+    port = -1;
+  }
+  if (port < 0) throw Error(ErrorCode::io_error, "cannot listen on " + config.host + ":" + std::to_string(config.port));
+
+  std::thread stopper([&] {
+    int signal = 0;
+    sigwait(&stop_signals, &signal);
+    log(std::string("received ") + (signal == SIGTERM ? "SIGTERM" : "SIGINT") + ": draining");
+    api.set_draining();
+    jobs.shutdown(std::chrono::seconds(config.shutdown_grace));
+    server.stop();
+  });
+  log("listening on http://" + config.host + ":" + std::to_string(port) + " (data dir " + config.data_dir + ")");
+  server.listen_after_bind();
+  // listen_after_bind returns after stop(); a failure to serve without a
+  // signal still has to end the stopper thread.
+  if (server.is_running() || stopper.joinable()) {
+    pthread_kill(stopper.native_handle(), SIGTERM);
+    stopper.join();
+  }
+  log("stopped");
+  return 0;
+}
+
+}  // namespace voxd::cli

@@ -1,0 +1,144 @@
+#include "server/http/server_config.h"
+
+#include <cstdlib>
+#include <functional>
+#include <sstream>
+
+#include "server/cli/cli_args.h"
+
+namespace voxd::server {
+namespace {
+
+using cli::UsageError;
+
+struct Option {
+  const char* flag;
+  const char* help;
+  std::function<void(ServeConfig&, const std::string&, const std::string&)> set;  // (config, value, source)
+  std::function<std::string(const ServeConfig&)> show;
+};
+
+std::uint64_t to_u64(const std::string& v, const std::string& source, std::uint64_t lo, std::uint64_t hi) {
+  try {
+    std::size_t pos = 0;
+    const unsigned long long n = std::stoull(v, &pos);
+    if (pos == v.size() && n >= lo && n <= hi && v.find('-') == std::string::npos) return n;
+  } catch (const std::exception&) {
+  }
+  throw UsageError(source + " expects an integer between " + std::to_string(lo) + " and " + std::to_string(hi) +
+                   ", got '" + v + "'");
+}
+
+std::vector<std::string> to_list(const std::string& v) {
+  std::vector<std::string> out;
+  std::stringstream ss(v);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+const std::vector<Option>& options() {
+  static const std::vector<Option> opts = {
+      {"host", "address to listen on", [](ServeConfig& c, const std::string& v, const std::string&) { c.host = v; },
+       [](const ServeConfig& c) { return c.host; }},
+      {"port", "TCP port; 0 picks a free one",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.port = static_cast<int>(to_u64(v, s, 0, 65535)); },
+       [](const ServeConfig& c) { return std::to_string(c.port); }},
+      {"workers", "voxelization worker threads; 0 = one per core",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.workers = static_cast<int>(to_u64(v, s, 0, 1024)); },
+       [](const ServeConfig& c) { return std::to_string(c.workers); }},
+      {"queue-size", "jobs waiting for a worker before 429",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.queue_size = to_u64(v, s, 1, 1000000); },
+       [](const ServeConfig& c) { return std::to_string(c.queue_size); }},
+      {"data-dir", "job records and results", [](ServeConfig& c, const std::string& v, const std::string&) { c.data_dir = v; },
+       [](const ServeConfig& c) { return c.data_dir; }},
+      {"max-upload-bytes", "largest request body (413 above)",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_upload_bytes = to_u64(v, s, 1, std::uint64_t{1} << 40); },
+       [](const ServeConfig& c) { return std::to_string(c.max_upload_bytes); }},
+      {"max-triangles", "largest mesh (422 above)",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_triangles = to_u64(v, s, 1, std::uint64_t{1} << 32); },
+       [](const ServeConfig& c) { return std::to_string(c.max_triangles); }},
+      {"max-voxels", "largest grid (422 above)",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_voxels = to_u64(v, s, 1, std::uint64_t{1} << 40); },
+       [](const ServeConfig& c) { return std::to_string(c.max_voxels); }},
+      {"max-job-memory", "bytes of volumes one job may need (422 above)",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_job_memory = to_u64(v, s, 1, std::uint64_t{1} << 44); },
+       [](const ServeConfig& c) { return std::to_string(c.max_job_memory); }},
+      {"result-ttl", "seconds finished jobs are kept",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.result_ttl = to_u64(v, s, 1, std::uint64_t{1} << 32); },
+       [](const ServeConfig& c) { return std::to_string(c.result_ttl); }},
+      {"sync-max-voxels", "largest grid POST /v1/voxelize accepts",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.sync_max_voxels = to_u64(v, s, 1, std::uint64_t{1} << 40); },
+       [](const ServeConfig& c) { return std::to_string(c.sync_max_voxels); }},
+      {"http-threads", "threads serving HTTP requests",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.http_threads = static_cast<int>(to_u64(v, s, 1, 1024)); },
+       [](const ServeConfig& c) { return std::to_string(c.http_threads); }},
+      {"read-timeout", "seconds a request may stall while being read",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.read_timeout = static_cast<int>(to_u64(v, s, 1, 3600)); },
+       [](const ServeConfig& c) { return std::to_string(c.read_timeout); }},
+      {"write-timeout", "seconds a response may stall while being written",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.write_timeout = static_cast<int>(to_u64(v, s, 1, 3600)); },
+       [](const ServeConfig& c) { return std::to_string(c.write_timeout); }},
+      {"cors-origins", "comma-separated origins allowed by CORS (* = any)",
+       [](ServeConfig& c, const std::string& v, const std::string&) { c.cors_origins = to_list(v); },
+       [](const ServeConfig& c) { return join(c.cors_origins); }},
+      {"api-keys", "comma-separated bearer keys required on /v1 routes",
+       [](ServeConfig& c, const std::string& v, const std::string&) { c.api_keys = to_list(v); },
+       [](const ServeConfig& c) { return c.api_keys.empty() ? std::string() : std::string("(set)"); }},
+      {"log-format", "text or json",
+       [](ServeConfig& c, const std::string& v, const std::string& s) {
+         if (v != "text" && v != "json") throw UsageError(s + " must be text or json, got '" + v + "'");
+         c.log_format = v;
+       },
+       [](const ServeConfig& c) { return c.log_format; }},
+      {"shutdown-grace", "seconds running jobs get to finish on SIGTERM",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.shutdown_grace = static_cast<int>(to_u64(v, s, 0, 3600)); },
+       [](const ServeConfig& c) { return std::to_string(c.shutdown_grace); }},
+  };
+  return opts;
+}
+
+std::string env_name(const std::string& flag) {
+  std::string n = "VOXD_";
+  for (char ch : flag) n += ch == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  return n;
+}
+
+}  // namespace
+
+ServeConfig parse_serve_config(int argc, char** argv, int first) {
+  ServeConfig config;
+  std::set<std::string> valued;
+  for (const auto& o : options()) valued.insert(o.flag);
+  cli::Args args(argc, argv, first, valued, {"help"});
+  if (!args.positional().empty()) throw UsageError("serve takes no positional arguments (see voxd serve --help)");
+  for (const auto& o : options()) {
+    const std::string env = env_name(o.flag);
+    if (const char* v = std::getenv(env.c_str())) o.set(config, v, env);
+    if (auto v = args.value(o.flag)) o.set(config, *v, std::string("--") + o.flag);
+  }
+  return config;
+}
+
+std::string serve_help() {
+  std::ostringstream s;
+  s << "usage: voxd serve [options]\n\nRuns the HTTP service. Every option can also be set in the environment\n"
+       "as VOXD_<NAME> (e.g. VOXD_PORT=9000); flags win.\n\n";
+  const ServeConfig defaults;
+  for (const auto& o : options()) {
+    std::string left = std::string("  --") + o.flag + " (" + env_name(o.flag) + ")";
+    if (left.size() < 44) left.resize(44, ' ');
+    const std::string def = o.show(defaults);
+    s << left << ' ' << o.help << (def.empty() ? "" : " [default: " + def + "]") << '\n';
+  }
+  return s.str();
+}
+
+}  // namespace voxd::server

@@ -1,0 +1,37 @@
+#pragma once
+// `voxd serve` settings: flags, each also settable as VOXD_<NAME> in the
+// environment (flags win), with embedded defaults so the service starts with
+// no configuration at all.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace voxd::server {
+
+struct ServeConfig {
+  std::string host = "127.0.0.1";
+  int port = 8080;  // 0: any free port (the chosen one is logged)
+  int workers = 0;  // 0: one per core
+  std::size_t queue_size = 64;
+  std::string data_dir = "voxd-data";
+  std::uint64_t max_upload_bytes = std::uint64_t{256} << 20;
+  std::uint64_t max_triangles = 20'000'000;
+  std::uint64_t max_voxels = std::uint64_t{1} << 33;
+  std::uint64_t max_job_memory = std::uint64_t{4} << 30;
+  std::uint64_t result_ttl = 86400;       // seconds
+  std::uint64_t sync_max_voxels = 1 << 24;  // POST /v1/voxelize
+  int http_threads = 16;
+  int read_timeout = 30;   // seconds without progress before a request is dropped
+  int write_timeout = 30;
+  std::vector<std::string> cors_origins;  // "*" allows any
+  std::vector<std::string> api_keys;      // empty: no authentication
+  std::string log_format = "text";        // text | json
+  int shutdown_grace = 30;                // seconds running jobs get on SIGTERM
+};
+
+// Parses argv[first..] over the environment over the defaults. Throws
+// cli::UsageError with a message naming the flag or variable.
+ServeConfig parse_serve_config(int argc, char** argv, int first);
+std::string serve_help();
+
+}  // namespace voxd::server
