@@ -210,9 +210,8 @@ void HttpApi::install(httplib::Server& server) {
   // Wraps a handler: exceptions become problems, never crashes.
   auto answer_exception = [this](const Request& req, Response& res) {
     const Problem p = problem_from_current_exception();
-    if (p.status == 429) metrics_.count_rejected("queue_full");
-    else if (p.status == 413 || p.slug == "limit-exceeded") metrics_.count_rejected("limits");
-    else if (p.status >= 400 && p.status < 500) metrics_.count_rejected(p.slug);
+    // Rejections are counted by their problem type, the same words clients see.
+    if ((p.status >= 400 && p.status < 500) || p.status == 503) metrics_.count_rejected(p.slug);
     send_problem(res, p, req.path);
   };
   auto guarded = [answer_exception](auto handler) -> httplib::Server::Handler {
@@ -278,7 +277,7 @@ void HttpApi::install(httplib::Server& server) {
   // at once that it is too large.
   server.set_expect_100_continue_handler([this](const Request& req, Response& res) {
     if (declared_length(req).value_or(0) > config_.max_upload_bytes) {
-      metrics_.count_rejected("upload_too_large");
+      metrics_.count_rejected("upload-too-large");
       send_problem(res, upload_too_large(config_.max_upload_bytes).problem(), req.path);
       res.set_header("Connection", "close");
       return 413;
@@ -293,7 +292,7 @@ void HttpApi::install(httplib::Server& server) {
     if (res.status == 404)
       send_problem(res, make_problem(404, "not-found", "Not found", "no route " + req.method + " " + req.path), req.path);
     else if (res.status == 413) {
-      metrics_.count_rejected("upload_too_large");
+      metrics_.count_rejected("upload-too-large");
       send_problem(res, make_problem(413, "upload-too-large", "Upload too large",
                                      "the request body is over the limit of " + std::to_string(config_.max_upload_bytes) + " bytes"),
                    req.path);

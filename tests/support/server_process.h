@@ -1,0 +1,35 @@
+#pragma once
+// A real `voxd serve` child process on a loopback ephemeral port, for
+// integration tests that talk HTTP to it.
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace voxd::test {
+
+class ServerProcess {
+ public:
+  // Starts `voxd serve --host 127.0.0.1 --port 0 --data-dir DATA_DIR ARGS...`
+  // and waits until it logs the port it listens on. Its log (stdout and
+  // stderr) goes to LOG_PATH. Throws when it does not come up.
+  ServerProcess(const std::string& data_dir, const std::vector<std::string>& args = {},
+                std::vector<std::string> env = {});
+  ~ServerProcess();
+  ServerProcess(const ServerProcess&) = delete;
+  ServerProcess& operator=(const ServerProcess&) = delete;
+
+  int port() const { return port_; }
+  const std::string& log_path() const { return log_path_; }
+  std::string log() const;
+  // Sends SIGTERM and waits; returns the exit status (128+signal if killed).
+  int stop(int timeout_seconds = 60);
+  bool running() const { return pid_ > 0; }
+
+ private:
+  pid_t pid_ = -1;
+  int port_ = 0;
+  std::string log_path_;
+};
+
+}  // namespace voxd::test
