@@ -1,16 +1,30 @@
 #!/usr/bin/env bash
 # Installs every Debian 12 package voxd needs to build, test and benchmark.
 # Idempotent: only calls apt-get when something is missing. Run as root.
+#   --runtime         only what the built `voxd` needs to run (the container's
+#                     final stage); a test checks it against ldd of the binary
+#   --print-runtime   print that list and exit
 set -euo pipefail
+
+runtime_packages=(
+  libc6 libgcc-s1 libstdc++6 libcpp-httplib0.11 libdraco7 libfmt9 libspdlog1.10 libssl3 libbrotli1 zlib1g
+  libembree3-3 libpng16-16 curl
+)
+if [[ "${1:-}" == --print-runtime ]]; then
+  printf '%s\n' "${runtime_packages[@]}"
+  exit 0
+fi
 
 packages=(
   build-essential cmake pkg-config git ca-certificates curl
   libembree-dev libglm-dev libcpp-httplib-dev nlohmann-json3-dev
   libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-numpy python3-jsonschema
+  python3 python3-numpy python3-jsonschema python3-yaml
 )
-if [[ "${VOXD_INSTALL_PEERS:-0}" == 1 ]]; then
+if [[ "${1:-}" == --runtime ]]; then
+  packages=("${runtime_packages[@]}")
+elif [[ "${VOXD_INSTALL_PEERS:-0}" == 1 ]]; then
   packages+=(libopenvdb-dev libvtk9-dev libtbb-dev)
 fi
 

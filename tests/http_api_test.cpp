@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <regex>
 #include <set>
@@ -180,6 +181,29 @@ TEST_F(HttpApiTest, RawBodyUploadAsCurlSendsItIsTheSameJobAndIsAnsweredFromTheFi
   EXPECT_FALSE(other.at("cached"));
   EXPECT_NE(other.at("content_hash"), first.at("content_hash"));
   EXPECT_EQ(volume(wait_for_job(http(), other.at("id")).at("id")), cli_volume(mesh, "bunny.stl", R"({"grid":{"resolution":49}})"));
+}
+
+TEST_F(HttpApiTest, CurlAsUsersTypeItMultipartDataBinaryAndCompressed) {
+  start();
+  const auto mesh = bunny_stl();
+  const std::string params = R"({"grid":{"resolution":64,"padding":1}})";
+  write_file(dir_ + "/bunny.stl", mesh);
+  std::ofstream(dir_ + "/job.json") << params;
+  const std::string base = "http://127.0.0.1:" + std::to_string(server_->port());
+  auto r = run_process("curl -sS --fail-with-body -F mesh=@" + dir_ + "/bunny.stl -F 'params=<" + dir_ +
+                       "/job.json;type=application/json' " + base + "/v1/jobs");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  schemas_->add("JobStatus", r.out);
+  const std::string id = json::parse(r.out).at("id");
+  ASSERT_EQ(wait_for_job(http(), id).at("state"), "succeeded");
+  r = run_process("curl -sS --fail --compressed -o " + dir_ + "/curl.rle " + base + "/v1/jobs/" + id + "/volume");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(text_of(read_file(dir_ + "/curl.rle")), cli_volume(mesh, "bunny.stl", params));
+  // --data-binary with params in the query string (curl sends it as a form).
+  r = run_process("curl -sS --fail -o " + dir_ + "/sync.binvox --data-binary @" + dir_ + "/bunny.stl '" + base +
+                  "/v1/voxelize?format=binvox&params=" + url_encode(params) + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(text_of(read_file(dir_ + "/sync.binvox")), cli_volume(mesh, "bunny.stl", params, "binvox"));
 }
 
 TEST_F(HttpApiTest, EveryMeshFormatIsDetectedFromContentAndMatchesTheCli) {

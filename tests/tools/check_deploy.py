@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""Checks the deployment files against the code, since no container engine
+runs here: the Dockerfile builds with the scripts CI runs and its runtime
+stage installs every library the binary links (ldd); compose, Kubernetes and
+systemd use only settings `voxd serve --help` lists, probe the real routes,
+and give running jobs more time to stop than voxd's own shutdown grace.
+
+check_deploy.py SOURCE_DIR VOXD_BINARY
+"""
+import os
+import re
+import subprocess
+import sys
+
+import yaml
+
+source, binary = sys.argv[1], sys.argv[2]
+problems = []
+
+
+def check(ok, message):
+    if not ok:
+        problems.append(message)
+
+
+def read(rel):
+    return open(os.path.join(source, rel)).read()
+
+
+help_text = subprocess.run([binary, "serve", "--help"], capture_output=True, text=True, check=True).stdout
+known_env = set(re.findall(r"\((VOXD_[A-Z_]+)\)", help_text))
+known_flags = set(re.findall(r"(--[a-z-]+) \(VOXD_", help_text))
+check(len(known_env) >= 8, "serve --help lists too few settings")
+grace_default = int(re.search(r"--shutdown-grace.*\[default: (\d+)\]", help_text).group(1))
+
+# --- Dockerfile -------------------------------------------------------------
+docker = read("Dockerfile")
+lines = [l.strip() for l in docker.replace("\\\n", " ").splitlines() if l.strip() and not l.strip().startswith("#")]
+stages = [l for l in lines if l.startswith("FROM ")]
+check(len(stages) >= 2, "Dockerfile: needs a build stage and a runtime stage")
+check(all(re.match(r"FROM debian:12(-slim)?\b", s) for s in stages), "Dockerfile: every stage must be Debian 12")
+build_runs = " ".join(l for l in lines[: lines.index(stages[1])] if l.startswith("RUN "))
+check("./scripts/install-deps.sh" in build_runs and "./scripts/build.sh" in build_runs,
+      "Dockerfile: the build stage must run scripts/install-deps.sh and scripts/build.sh, as CI does")
+ci = read(".ci/run") + read("scripts/test.sh")
+check("scripts/test.sh" in read(".ci/run") and "scripts/build.sh" in read("scripts/test.sh"),
+      "CI must run scripts/test.sh, which builds with scripts/build.sh")
+runtime = lines[lines.index(stages[1]):]
+check(any("install-deps.sh --runtime" in l for l in runtime), "Dockerfile: the runtime stage must install with --runtime")
+copied = [l for l in runtime if l.startswith("COPY --from=build")]
+check(copied and copied[0].split()[2] == "/src/build/server/voxd", "Dockerfile: copy build/server/voxd from the build stage")
+check(os.path.relpath(binary, source).endswith("server/voxd"), "the binary checked is not build/server/voxd")
+users = [l.split()[1] for l in runtime if l.startswith("USER ")]
+check(users and users[-1].split(":")[0] not in ("root", "0"), "Dockerfile: must run as a non-root user")
+health = [l for l in runtime if l.startswith("HEALTHCHECK")]
+check(health and "/healthz" in health[0], "Dockerfile: HEALTHCHECK must probe /healthz")
+env = dict(re.findall(r"(VOXD_[A-Z_]+)=(\S+)", " ".join(l for l in runtime if l.startswith("ENV "))))
+for name in env:
+    check(name in known_env, f"Dockerfile: {name} is not a voxd setting")
+expose = [l.split()[1] for l in runtime if l.startswith("EXPOSE ")]
+check(expose == [env.get("VOXD_PORT")], "Dockerfile: EXPOSE must match VOXD_PORT")
+check(env.get("VOXD_HOST") == "0.0.0.0", "Dockerfile: listen on all interfaces inside the container")
+check(f"127.0.0.1:{env.get('VOXD_PORT')}/healthz" in health[0] if health else False, "Dockerfile: HEALTHCHECK port")
+
+# The runtime packages cover every shared library the binary needs.
+listed = set(subprocess.run([os.path.join(source, "scripts/install-deps.sh"), "--print-runtime"],
+                            capture_output=True, text=True, check=True).stdout.split())
+ldd = subprocess.run(["ldd", binary], capture_output=True, text=True, check=True).stdout
+for lib in re.findall(r"=> (/\S+)", ldd):
+    real = os.path.realpath(lib)
+    owner = None
+    for candidate in (real, lib, "/usr" + lib if not lib.startswith("/usr") else lib[4:]):
+        r = subprocess.run(["dpkg", "-S", candidate], capture_output=True, text=True)
+        if r.returncode == 0:
+            owner = r.stdout.split(":")[0]
+            break
+    if "asan" in lib or "ubsan" in lib:
+        continue  # sanitizer builds link their runtimes; the image is a Release build
+    check(owner is not None, f"no Debian package owns {lib}")
+    if owner:
+        check(owner in listed, f"runtime stage misses {owner} (for {os.path.basename(lib)}): add it to install-deps.sh")
+
+# --- compose -----------------------------------------------------------------
+compose = yaml.safe_load(read("deploy/compose.yaml"))
+svc = compose["services"]["voxd"]
+check(svc["build"]["dockerfile"] == "Dockerfile" and os.path.normpath(os.path.join(source, "deploy", svc["build"]["context"])) == os.path.normpath(source),
+      "compose: must build the repository's Dockerfile")
+for name in svc.get("environment", {}):
+    check(name in known_env, f"compose: {name} is not a voxd setting")
+check(any("/readyz" in part or "/healthz" in part for part in svc["healthcheck"]["test"]), "compose: healthcheck must probe voxd")
+check(any(v.endswith(":/var/lib/voxd") for v in svc["volumes"]), "compose: the data dir must be a volume")
+grace = int(svc.get("environment", {}).get("VOXD_SHUTDOWN_GRACE", grace_default))
+check(int(svc["stop_grace_period"].rstrip("s")) > grace, "compose: stop_grace_period must exceed VOXD_SHUTDOWN_GRACE")
+
+# --- Kubernetes --------------------------------------------------------------
+docs = [d for d in yaml.safe_load_all(read("deploy/kubernetes/voxd.yaml")) if d]
+kinds = {d["kind"]: d for d in docs}
+check({"Deployment", "Service"} <= set(kinds), "kubernetes: needs a Deployment and a Service")
+pod = kinds["Deployment"]["spec"]["template"]["spec"]
+container = pod["containers"][0]
+kenv = {e["name"]: e.get("value") for e in container.get("env", [])}
+for name in kenv:
+    check(name in known_env, f"kubernetes: {name} is not a voxd setting")
+port = container["ports"][0]
+check(str(port["containerPort"]) == kenv.get("VOXD_PORT"), "kubernetes: containerPort must match VOXD_PORT")
+check(container["readinessProbe"]["httpGet"]["path"] == "/readyz", "kubernetes: readiness probe must be /readyz")
+check(container["livenessProbe"]["httpGet"]["path"] == "/healthz", "kubernetes: liveness probe must be /healthz")
+check({"cpu", "memory"} <= set(container["resources"]["limits"]), "kubernetes: cpu and memory limits")
+check(pod["terminationGracePeriodSeconds"] > int(kenv.get("VOXD_SHUTDOWN_GRACE", grace_default)),
+      "kubernetes: terminationGracePeriodSeconds must exceed VOXD_SHUTDOWN_GRACE")
+check(pod["securityContext"].get("runAsNonRoot") is True, "kubernetes: runAsNonRoot")
+mem_limit = container["resources"]["limits"]["memory"]
+units = {"Gi": 1 << 30, "Mi": 1 << 20}
+limit_bytes = int(mem_limit[:-2]) * units[mem_limit[-2:]]
+check(int(kenv.get("VOXD_MAX_JOB_MEMORY", 0)) < limit_bytes, "kubernetes: VOXD_MAX_JOB_MEMORY must be under the memory limit")
+svc_ports = kinds["Service"]["spec"]["ports"]
+check(svc_ports[0]["targetPort"] in (port.get("name"), port["containerPort"]), "kubernetes: Service must target the container port")
+check(kinds["Service"]["spec"]["selector"] == kinds["Deployment"]["spec"]["selector"]["matchLabels"], "kubernetes: Service selector")
+
+# --- systemd -----------------------------------------------------------------
+unit = read("deploy/systemd/voxd.service")
+exec_start = re.search(r"^ExecStart=(.*)$", unit, re.M).group(1).split()
+check(exec_start[:2] == ["/usr/local/bin/voxd", "serve"], "systemd: ExecStart must run voxd serve")
+for flag in (a.split("=")[0] for a in exec_start[2:] if a.startswith("--")):
+    check(flag in known_flags, f"systemd: {flag} is not a voxd serve flag")
+for name in re.findall(r"(VOXD_[A-Z_]+)=", unit):
+    check(name in known_env, f"systemd: {name} is not a voxd setting")
+check(re.search(r"^KillSignal=SIGTERM$", unit, re.M), "systemd: stop with SIGTERM")
+stop = int(re.search(r"^TimeoutStopSec=(\d+)$", unit, re.M).group(1))
+unit_grace = int(re.search(r"VOXD_SHUTDOWN_GRACE=(\d+)", unit).group(1))
+check(stop > unit_grace, "systemd: TimeoutStopSec must exceed VOXD_SHUTDOWN_GRACE")
+check("DynamicUser=yes" in unit or re.search(r"^User=(?!root)", unit, re.M), "systemd: must not run as root")
+
+if problems:
+    print("deploy files:\n  " + "\n  ".join(problems))
+    sys.exit(1)
+print(f"deploy files: Dockerfile ({len(stages)} stages), compose, kubernetes ({len(docs)} objects), systemd consistent with voxd")
