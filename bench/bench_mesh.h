@@ -13,4 +13,12 @@ inline Mesh make_benchmark_mesh() {
   return m;
 }
 
+// The service benchmark's small job: the same shape with 10,000 triangles,
+// the size of a simple part a CAD plugin sends for a quick answer.
+inline Mesh make_small_benchmark_mesh() {
+  Mesh m = test::make_torus({0, 0, 0}, 1.0, 0.45, 100, 50);
+  rotate_mesh(m, rotation_from_axis_angle({1.0, 0.7, 0.2}, 37.0));
+  return m;
+}
+
 }  // namespace voxd::bench

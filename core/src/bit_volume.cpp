@@ -3,18 +3,31 @@
 #include <sys/mman.h>
 
 #include <atomic>
+#include <algorithm>
 #include <bit>
+#include <cstdlib>
 #include <string>
 
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 
 namespace voxd {
+namespace {
+constexpr std::size_t kHeapMaxBytes = std::size_t{1} << 20;
+}  // namespace
 
 BitVolume::BitVolume(const Grid& grid) : grid_(grid), row_words_((grid.dims.x + 63) / 64) {
   if (grid.dims.x <= 0 || grid.dims.y <= 0 || grid.dims.z <= 0)
     throw Error(ErrorCode::invalid_argument, "grid dims must be positive");
   const std::size_t bytes = word_count() * sizeof(std::uint64_t);
+  if (bytes < kHeapMaxBytes) {
+    // Small volumes (the service's quick jobs) come from the heap: an mmap and
+    // munmap per job costs system calls and cross-core TLB flushes.
+    void* h = std::calloc(std::max<std::size_t>(bytes, 1), 1);
+    if (!h) throw Error(ErrorCode::limit_exceeded, "cannot allocate the voxel volume");
+    words_ = std::unique_ptr<std::uint64_t[], Unmap>(static_cast<std::uint64_t*>(h), Unmap{bytes});
+    return;
+  }
   void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
   if (p == MAP_FAILED)
     throw Error(ErrorCode::limit_exceeded,
@@ -26,13 +39,21 @@ BitVolume::BitVolume(const Grid& grid) : grid_(grid), row_words_((grid.dims.x + 
 }
 
 void BitVolume::Unmap::operator()(std::uint64_t* p) const {
-  if (p) ::munmap(p, bytes);
+  if (!p) return;
+  if (bytes < kHeapMaxBytes) std::free(p);
+  else ::munmap(p, bytes);
+}
+
+// Slabs per parallel chunk: at least 2 MiB of words, so small volumes stay on
+// the calling thread instead of paying for threads.
+static std::int64_t slabs_per_chunk(std::size_t slab_words) {
+  return std::max<std::int64_t>(16, static_cast<std::int64_t>((std::size_t{1} << 18) / std::max<std::size_t>(slab_words, 1)));
 }
 
 std::uint64_t BitVolume::count() const {
   std::atomic<std::uint64_t> total{0};
   const std::size_t slab = slab_words();
-  parallel_for(0, grid_.dims.z, 16, 0, [&](std::int64_t k0, std::int64_t k1) {
+  parallel_for(0, grid_.dims.z, slabs_per_chunk(slab), 0, [&](std::int64_t k0, std::int64_t k1) {
     const std::uint64_t* w = this->slab(k0);
     std::uint64_t sum = 0;
     for (std::size_t i = 0, n = slab * static_cast<std::size_t>(k1 - k0); i < n; ++i)
@@ -45,7 +66,7 @@ std::uint64_t BitVolume::count() const {
 void BitVolume::merge_or(const BitVolume& other) {
   if (other.grid_.dims != grid_.dims) throw Error(ErrorCode::invalid_argument, "merge_or: grids differ");
   const std::size_t slab = slab_words();
-  parallel_for(0, grid_.dims.z, 16, 0, [&](std::int64_t k0, std::int64_t k1) {
+  parallel_for(0, grid_.dims.z, slabs_per_chunk(slab), 0, [&](std::int64_t k0, std::int64_t k1) {
     std::uint64_t* dst = this->slab(k0);
     const std::uint64_t* src = other.slab(k0);
     for (std::size_t i = 0, n = slab * static_cast<std::size_t>(k1 - k0); i < n; ++i) dst[i] |= src[i];

@@ -52,12 +52,19 @@ inline void prefix_xor_row(std::uint64_t* row, std::int64_t first, std::int64_t 
   if (carry != 0 || last == words - 1) row[words - 1] &= last_word_mask;  // bits past dims.x stay zero
 }
 
+// A job this small takes about a millisecond on one core: starting threads
+// costs a noticeable part of that, and in the service other jobs keep the
+// other cores busy, so it runs on the calling thread.
+bool small_job(const Mesh& mesh, const Grid& grid) {
+  return grid.voxel_count() <= (std::uint64_t{1} << 21) && mesh.triangles.size() <= (std::size_t{1} << 16);
+}
+
 }  // namespace
 
 ParityVoxelizer::ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads)
     : grid_(grid),
       axes_(axes_for_ray(ray_axis)),
-      threads_(threads > 0 ? threads : default_thread_count()),
+      threads_(small_job(mesh, grid) ? 1 : threads > 0 ? threads : default_thread_count()),
       fixed_(mesh, grid) {
   const std::int64_t rows = grid.dims[axes_.v];
   // Enough chunks to balance threads, few enough that triangles rarely straddle.
