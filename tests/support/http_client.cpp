@@ -49,33 +49,39 @@ httplib::Result post_raw(httplib::Client& client, const std::string& path, const
   return client.Post(target.c_str(), reinterpret_cast<const char*>(mesh.data()), mesh.size(), content_type.c_str());
 }
 
-nlohmann::json wait_for_state(httplib::Client& client, const std::string& id, const std::string& state, int seconds) {
+namespace {
+
+// Polls GET /v1/jobs/ID until `done(job)`; throws after `seconds`.
+template <class Done>
+nlohmann::json poll_job(httplib::Client& client, const std::string& id, int seconds, Done done, const std::string& what) {
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
   std::string last;
   while (std::chrono::steady_clock::now() < until) {
     auto res = client.Get(("/v1/jobs/" + id).c_str());
     if (!res) throw std::runtime_error("GET /v1/jobs/" + id + " failed: " + httplib::to_string(res.error()));
     if (res->status != 200) throw std::runtime_error("GET /v1/jobs/" + id + " answered " + std::to_string(res->status) + ": " + res->body);
-    const auto job = nlohmann::json::parse(res->body);
+    auto job = nlohmann::json::parse(res->body);
     last = job.at("state");
-    if (last == state) return job;
+    if (done(job)) return job;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  throw std::runtime_error("job " + id + " did not reach " + state + " (last: " + last + ")");
+  throw std::runtime_error("job " + id + " did not " + what + " within " + std::to_string(seconds) + " s (last state: " + last + ")");
+}
+
+}  // namespace
+
+nlohmann::json wait_for_state(httplib::Client& client, const std::string& id, const std::string& state, int seconds) {
+  return poll_job(client, id, seconds, [&](const nlohmann::json& job) { return job.at("state") == state; }, "become " + state);
 }
 
 nlohmann::json wait_for_job(httplib::Client& client, const std::string& id, int seconds) {
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
-  while (std::chrono::steady_clock::now() < until) {
-    auto res = client.Get(("/v1/jobs/" + id).c_str());
-    if (!res) throw std::runtime_error("GET /v1/jobs/" + id + " failed: " + httplib::to_string(res.error()));
-    if (res->status != 200) throw std::runtime_error("GET /v1/jobs/" + id + " answered " + std::to_string(res->status) + ": " + res->body);
-    auto job = nlohmann::json::parse(res->body);
-    const std::string state = job.at("state");
-    if (state == "succeeded" || state == "failed" || state == "cancelled") return job;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  throw std::runtime_error("job " + id + " did not end within " + std::to_string(seconds) + " s");
+  return poll_job(
+      client, id, seconds,
+      [](const nlohmann::json& job) {
+        const std::string state = job.at("state");
+        return state == "succeeded" || state == "failed" || state == "cancelled";
+      },
+      "end");
 }
 
 void SchemaCollector::add(const std::string& component, const std::string& body) {
