@@ -65,6 +65,26 @@ check(f"127.0.0.1:{env.get('VOXD_PORT')}/healthz" in health[0] if health else Fa
 # The runtime packages cover every shared library the binary needs.
 listed = set(subprocess.run([os.path.join(source, "scripts/install-deps.sh"), "--print-runtime"],
                             capture_output=True, text=True, check=True).stdout.split())
+
+
+def dependency_closure(packages):
+    """The listed packages and everything apt installs with them (Depends and
+    Pre-Depends of the installed packages, recursively)."""
+    seen, todo = set(), list(packages)
+    while todo:
+        p = todo.pop()
+        if p in seen:
+            continue
+        seen.add(p)
+        r = subprocess.run(["dpkg-query", "-W", "-f=${Depends}, ${Pre-Depends}", p], capture_output=True, text=True)
+        for alternative in r.stdout.split(","):
+            name = alternative.split("|")[0].strip().split(" ")[0].split(":")[0]
+            if name:
+                todo.append(name)
+    return seen
+
+
+installed_with_runtime = dependency_closure(listed)
 ldd = subprocess.run(["ldd", binary], capture_output=True, text=True, check=True).stdout
 for lib in re.findall(r"=> (/\S+)", ldd):
     real = os.path.realpath(lib)
@@ -78,7 +98,7 @@ for lib in re.findall(r"=> (/\S+)", ldd):
         continue  # sanitizer builds link their runtimes; the image is a Release build
     check(owner is not None, f"no Debian package owns {lib}")
     if owner:
-        check(owner in listed, f"runtime stage misses {owner} (for {os.path.basename(lib)}): add it to install-deps.sh")
+        check(owner in installed_with_runtime, f"runtime stage misses {owner} (for {os.path.basename(lib)}): add it to install-deps.sh")
 
 # --- compose -----------------------------------------------------------------
 compose = yaml.safe_load(read("deploy/compose.yaml"))
