@@ -1,0 +1,37 @@
+#pragma once
+// Connected solid parts and enclosed voids of a voxel model. Manufacturing
+// users ask "is this one part?" and "is there trapped powder, resin or
+// porosity?". Digital topology needs complementary connectivities so a thin
+// diagonal wall neither leaks nor merges: solids are 26-connected (voxels
+// touching by a face, an edge or a corner belong together) and empty space is
+// 6-connected (a void leaking only through an edge or a corner is still
+// enclosed: powder cannot pass through a zero-width gap).
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "voxd/bit_volume.h"
+
+namespace voxd {
+
+struct VoxelRegion {
+  std::uint64_t voxels = 0;
+  glm::i64vec3 bbox_min{0}, bbox_max{0};  // voxel indices, inclusive
+  glm::dvec3 centroid{0.0};               // mean voxel index (add 0.5 for the centre's offset)
+};
+
+struct ComponentReport {
+  std::vector<VoxelRegion> parts;  // largest first
+  std::vector<VoxelRegion> voids;  // empty regions not connected to the grid's outside, largest first
+};
+
+// Runs are labelled row by row with a union-find over runs, so memory is
+// proportional to the number of runs, not voxels. Empty voxels on the grid's
+// border are connected to the outside.
+ComponentReport find_components(const BitVolume& volume);
+
+// Model-space centre of a region's centroid.
+glm::dvec3 region_centroid_model(const VoxelRegion& region, const Grid& grid);
+
+}  // namespace voxd
