@@ -1,5 +1,7 @@
 #include "server/job_pipeline.h"
 
+#include "voxd/mass_properties.h"
+
 #include <chrono>
 #include <string>
 
@@ -91,6 +93,9 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
     rotate_mesh(job.mesh, job.rotation);
     result.timings.add("transform", clock.lap());
   }
+  // Exact mass properties in the frame the voxels are in, for the analysis's
+  // side-by-side comparison (cheap: one pass over the triangles).
+  if (with_report) result.mesh_mass = mesh_mass_properties(job.mesh);
   VoxelizeOptions options;
   options.mode = job.params.mode;
   options.inside = job.params.inside;

@@ -14,6 +14,7 @@
 
 #include "api/job_params.h"
 #include "voxd/bit_volume.h"
+#include "voxd/mass_properties.h"
 #include "voxd/mesh_decode.h"
 #include "voxd/mesh_report.h"
 #include "voxd/progress.h"
@@ -50,6 +51,7 @@ struct VoxelJobResult {
   MeshFormat format = MeshFormat::unknown;
   std::uint64_t triangles = 0;
   std::optional<MeshReport> report;  // when requested: it costs a weld
+  std::optional<MassProperties> mesh_mass;  // with the report; in the voxels' (rotated) frame
   glm::dmat3 rotation{1.0};
   Grid grid;
   BitVolume volume;

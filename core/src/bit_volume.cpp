@@ -73,4 +73,10 @@ void BitVolume::merge_or(const BitVolume& other) {
   });
 }
 
+BitVolume BitVolume::clone() const {
+  BitVolume copy(grid_);
+  std::copy(data(), data() + word_count(), copy.data());
+  return copy;
+}
+
 }  // namespace voxd

@@ -16,6 +16,7 @@ constexpr const char* kUsage = R"(voxd: voxelization engine and service
 usage:
   voxd inspect MESH                    mesh report as JSON
   voxd voxelize MESH -o OUT [options]  voxelize to rle / binvox / raw
+  voxd analyze MESH -o DIR [options]   manufacturing analysis into DIR (analysis.json)
   voxd serve [options]                 the HTTP service (voxd serve --help)
   voxd --version
 
@@ -37,6 +38,7 @@ int run(int argc, char** argv) {
     }
     if (command == "inspect") return inspect_command(argc, argv);
     if (command == "voxelize") return voxelize_command(argc, argv);
+    if (command == "analyze") return analyze_command(argc, argv);
     if (command == "serve") return serve_command(argc, argv);
     throw UsageError("unknown command '" + command + "' (try voxd --help)");
   } catch (const UsageError& e) {

@@ -9,6 +9,7 @@
 #include "api/result_json.h"
 #include "server/cli/cli.h"
 #include "server/cli/cli_args.h"
+#include "server/cli/cli_params.h"
 #include "server/cli/mapped_file.h"
 #include "server/job_pipeline.h"
 #include "voxd/byte_sink.h"
@@ -45,69 +46,6 @@ Flags override the matching fields of --params. A summary (grid, filled
 voxels, volume, time per stage) is printed on standard error.
 )";
 
-json load_params(const Args& args) {
-  auto text = args.value("params");
-  if (!text) return json::object();
-  std::string body = *text;
-  if (!body.empty() && body[0] == '@') body = read_text_file(body.substr(1));
-  try {
-    return json::parse(body);
-  } catch (const json::parse_error& e) {
-    throw UsageError(std::string("--params is not valid JSON: ") + e.what());
-  }
-}
-
-// Flags are applied onto the JSON document so one validator reports errors
-// for both, with JSON paths.
-void apply_flags(const Args& args, json& params) {
-  if (!params.is_object()) return;  // the validator reports it
-  auto grid_flag = [&](const char* flag) { return args.value(flag); };
-  const bool any_grid = grid_flag("resolution") || grid_flag("voxel-size") || grid_flag("origin") ||
-                        grid_flag("dims") || grid_flag("padding");
-  if (any_grid) {
-    json& grid = params["grid"];
-    if (!grid.is_object()) grid = json::object();
-    auto integer = [](const std::string& flag, const std::string& v) {
-      try {
-        std::size_t pos = 0;
-        const long long n = std::stoll(v, &pos);
-        if (pos != v.size()) throw std::invalid_argument(v);
-        return n;
-      } catch (const std::exception&) {
-        throw UsageError("--" + flag + " expects an integer, got '" + v + "'");
-      }
-    };
-    if (auto v = grid_flag("resolution")) {
-      grid.erase("voxel_size");
-      grid.erase("origin");
-      grid.erase("dims");
-      grid["resolution"] = integer("resolution", *v);
-    }
-    if (auto v = grid_flag("voxel-size")) {
-      grid.erase("resolution");
-      grid["voxel_size"] = parse_number_list(*v, 1, "voxel-size")[0];
-    }
-    if (auto v = grid_flag("origin")) {
-      grid.erase("resolution");
-      grid.erase("padding");
-      grid["origin"] = parse_number_list(*v, 3, "origin");
-    }
-    if (auto v = grid_flag("dims")) {
-      grid.erase("resolution");
-      grid.erase("padding");
-      const auto d = parse_number_list(*v, 3, "dims");
-      grid["dims"] = json::array();
-      for (double x : d) {
-        if (x != static_cast<double>(static_cast<long long>(x))) throw UsageError("--dims expects integers");
-        grid["dims"].push_back(static_cast<long long>(x));
-      }
-    }
-    if (auto v = grid_flag("padding")) grid["padding"] = integer("padding", *v);
-  }
-  if (auto v = args.value("mode")) params["mode"] = *v;
-  if (auto v = args.value("inside")) params["inside"] = *v;
-}
-
 std::string format_seconds(double s) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3f s", s);
@@ -130,7 +68,7 @@ int voxelize_command(int argc, char** argv) {
   if (!out_path || out_path->empty()) throw UsageError("voxelize needs -o OUT (see voxd voxelize --help)");
 
   json params_json = load_params(args);
-  apply_flags(args, params_json);
+  apply_param_flags(args, params_json);
   const api::JobParams params = api::parse_job_params(params_json);
 
   std::optional<VolumeFormat> format;

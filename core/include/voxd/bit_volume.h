@@ -46,6 +46,8 @@ class BitVolume {
   std::uint64_t count() const;
   // Voxel-wise OR / AND with a volume of the same grid.
   void merge_or(const BitVolume& other);
+  // A deep copy (volumes are move-only so a copy is always deliberate).
+  BitVolume clone() const;
 
  private:
   struct Unmap {

@@ -1,0 +1,102 @@
+#include "api/analysis_json.h"
+
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+namespace voxd::api {
+namespace {
+
+using nlohmann::json;
+
+json vec(glm::dvec3 v) { return json::array({v.x, v.y, v.z}); }
+
+json region_json(const VoxelRegion& r, const Grid& g) {
+  const double h = g.voxel_size;
+  return {{"voxels", r.voxels},
+          {"volume", static_cast<double>(r.voxels) * h * h * h},
+          {"centroid", vec(region_centroid_model(r, g))},
+          {"bbox_min", vec(g.origin + glm::dvec3(r.bbox_min) * h)},
+          {"bbox_max", vec(g.origin + glm::dvec3(r.bbox_max + glm::i64vec3(1)) * h)}};
+}
+
+json regions_json(const std::vector<VoxelRegion>& regions, const Grid& g) {
+  json items = json::array();
+  std::uint64_t voxels = 0;
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    voxels += regions[i].voxels;
+    if (i < kMaxListedRegions) items.push_back(region_json(regions[i], g));
+  }
+  const double h = g.voxel_size;
+  return {{"count", regions.size()}, {"total_voxels", voxels}, {"total_volume", static_cast<double>(voxels) * h * h * h},
+          {"items", items}};
+}
+
+double relative(double voxel, double exact) { return exact != 0 ? (voxel - exact) / std::abs(exact) : 0.0; }
+
+}  // namespace
+
+json to_json(const MassProperties& p) {
+  json inertia = json::array();
+  for (int r = 0; r < 3; ++r) inertia.push_back(json::array({p.inertia[0][r], p.inertia[1][r], p.inertia[2][r]}));
+  return {{"volume", p.volume}, {"centroid", vec(p.centroid)}, {"inertia", inertia},
+          {"bbox_min", vec(p.bbox.min)}, {"bbox_max", vec(p.bbox.max)}};
+}
+
+json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std::optional<MeshReport>& mesh,
+                      const std::optional<MassProperties>& mesh_mass) {
+  const double h = grid.voxel_size;
+  json mass = {{"voxels", to_json(report.voxels)}};
+  if (mesh && mesh->watertight && mesh_mass) {
+    json m = to_json(*mesh_mass);
+    m["available"] = true;
+    m["surface_area"] = mesh->surface_area;
+    mass["mesh"] = m;
+    // How far the voxel model is from the exact part: the volume, the centroid
+    // (as a fraction of the voxel size) and the inertia tensor (relative,
+    // Frobenius norm).
+    double diff = 0, norm = 0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        diff += std::pow(report.voxels.inertia[a][b] - mesh_mass->inertia[a][b], 2);
+        norm += std::pow(mesh_mass->inertia[a][b], 2);
+      }
+    mass["difference"] = {{"volume_relative", relative(report.voxels.volume, mesh_mass->volume)},
+                          {"centroid_voxels", glm::length(report.voxels.centroid - mesh_mass->centroid) / h},
+                          {"inertia_relative", norm > 0 ? std::sqrt(diff / norm) : 0.0}};
+  } else {
+    std::string reason = "no mesh report for this job";
+    if (mesh)
+      reason = "the mesh is not closed (" + std::to_string(mesh->boundary_edges) + " boundary edges, " +
+               std::to_string(mesh->nonmanifold_edges) +
+               " non-manifold edges): its exact volume, centroid and inertia are undefined; the voxel values describe the "
+               "voxelized solid";
+    mass["mesh"] = {{"available", false}, {"reason", reason}};
+    mass["difference"] = nullptr;
+  }
+  json layers = json::array();
+  for (std::uint64_t n : report.skin.voxels_per_layer) layers.push_back(n);
+  json hot_spots = json::array();
+  for (std::size_t i = 0; i < report.skin.innermost.size() && i < kMaxListedRegions; ++i)
+    hot_spots.push_back(region_json(report.skin.innermost[i], grid));
+  json out = {
+      {"unit", "model units (the mesh's own)"},
+      {"voxel_size", h},
+      {"grid", {{"origin", vec(grid.origin)}, {"dims", json::array({grid.dims.x, grid.dims.y, grid.dims.z})}}},
+      {"mass_properties", mass},
+      {"parts", regions_json(report.components.parts, grid)},
+      {"voids", regions_json(report.components.voids, grid)},
+      {"skin", {{"connectivity", 6},
+                {"layers", layers},
+                {"max_depth_layers", report.skin.max_depth},
+                {"max_depth", static_cast<double>(report.skin.max_depth) * h},
+                {"hot_spots", hot_spots}}},
+      {"cleanup", report.cleanup ? json{{"isolated", report.cleanup->isolated},
+                                        {"lines", report.cleanup->lines},
+                                        {"sheets", report.cleanup->sheets}}
+                                 : json(nullptr)},
+  };
+  return out;
+}
+
+}  // namespace voxd::api

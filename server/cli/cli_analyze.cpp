@@ -1,0 +1,88 @@
+// `voxd analyze`: the job's voxelization followed by the manufacturing
+// analysis, written into a directory as the HTTP API serves it.
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "api/analysis_json.h"
+#include "api/job_params.h"
+#include "server/cli/cli.h"
+#include "server/cli/cli_args.h"
+#include "server/cli/cli_params.h"
+#include "server/cli/mapped_file.h"
+#include "server/job_pipeline.h"
+#include "voxd/analysis.h"
+#include "voxd/error.h"
+
+namespace voxd::cli {
+namespace {
+
+constexpr const char* kUsage = R"(usage: voxd analyze MESH -o DIR [options]
+
+Voxelizes MESH with the job parameters, then analyses the voxel model and
+writes DIR/analysis.json: mass properties from the mesh (when it is closed)
+and from the voxels side by side, connected parts, enclosed voids, skin
+removal layers and hot spots. Lengths are in the mesh's model units.
+
+  --params JSON|@FILE    job parameters, as for voxd voxelize and the HTTP API
+  --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ, --padding P,
+  --mode M, --inside T   as for voxd voxelize
+  --cleanup              remove isolated voxels and one-voxel lines first
+  --cleanup-sheets       also remove one-voxel-thick sheets
+  --threads N            worker threads (default: all cores)
+)";
+
+}  // namespace
+
+int analyze_command(int argc, char** argv) {
+  std::set<std::string> valued(std::begin(kParamFlags), std::end(kParamFlags));
+  valued.insert({"output", "threads"});
+  Args args(argc, argv, 2, valued, {"cleanup", "cleanup-sheets", "help"});
+  if (args.has("help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  if (args.positional().size() != 1) throw UsageError("analyze takes exactly one mesh file (see voxd analyze --help)");
+  const auto out_dir = args.value("output");
+  if (!out_dir || out_dir->empty()) throw UsageError("analyze needs -o DIR (see voxd analyze --help)");
+  nlohmann::json params_json = load_params(args);
+  apply_param_flags(args, params_json);
+  const api::JobParams params = api::parse_job_params(params_json);
+  int threads = 0;
+  if (auto t = args.value("threads")) {
+    try {
+      threads = std::stoi(*t);
+    } catch (const std::exception&) {
+      threads = -1;
+    }
+    if (threads < 1 || threads > 1024) throw UsageError("--threads must be between 1 and 1024");
+  }
+
+  const std::string& mesh_path = args.positional()[0];
+  MappedFile file(mesh_path);
+  JobLimits limits;
+  limits.max_voxels = std::uint64_t{1} << 33;
+  VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, /*with_report=*/true, nullptr, threads);
+
+  AnalysisOptions options;
+  options.threads = threads;
+  if (args.has("cleanup") || args.has("cleanup-sheets")) options.cleanup = CleanupOptions{true, true, args.has("cleanup-sheets")};
+  const AnalysisReport report = analyze_volume(result.volume, options);
+  nlohmann::json doc = api::analysis_to_json(report, result.grid, result.report, result.mesh_mass);
+
+  std::filesystem::create_directories(*out_dir);
+  const std::string path = *out_dir + "/analysis.json";
+  {
+    std::ofstream out(path + ".partial");
+    out << doc.dump(2) << '\n';
+    if (!out) throw Error(ErrorCode::io_error, "cannot write " + path);
+  }
+  std::filesystem::rename(path + ".partial", path);
+  std::cerr << "analysis: " << report.components.parts.size() << " part(s), " << report.components.voids.size()
+            << " void(s), skin " << report.skin.max_depth << " layers deep; wrote " << path << '\n';
+  return 0;
+}
+
+}  // namespace voxd::cli

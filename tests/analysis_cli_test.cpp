@@ -1,0 +1,78 @@
+// `voxd analyze` as a real process: analysis.json with exact answers for a
+// hollow box, an open mesh said to be open, and the published schema.
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "support/run_process.h"
+#include "support/test_meshes.h"
+
+namespace voxd {
+namespace {
+
+using nlohmann::json;
+
+class AnalyzeCli : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = test::make_temp_dir("voxd-analyze"); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  json analyze(const std::string& mesh, const std::string& flags) {
+    const auto r = test::run_process(std::string(VOXD_BINARY) + " analyze " + mesh + " -o " + dir_ + "/out " + flags);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const std::string path = dir_ + "/out/analysis.json";
+    const auto schema = test::run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/validate_json.py " +
+                                          std::string(VOXD_SOURCE_DIR) + "/proto-schemas/analysis.schema.json " + path);
+    EXPECT_EQ(schema.exit_code, 0) << schema.out << schema.err;
+    std::ifstream in(path);
+    return json::parse(in);
+  }
+  std::string dir_;
+};
+
+TEST_F(AnalyzeCli, HollowBoxHasOnePartOneVoidAndExactMassProperties) {
+  const Mesh m = test::concat({test::make_box({1, 1, 1}, {11, 11, 11}), test::flipped(test::make_box({3, 4, 5}, {8, 9, 9}))});
+  test::write_file(dir_ + "/hollow.stl", test::to_binary_stl(m));
+  const json a = analyze(dir_ + "/hollow.stl", "--voxel-size 1 --origin 0,0,0 --dims 12,12,12");
+  EXPECT_EQ(a.at("parts").at("count"), 1);
+  EXPECT_EQ(a.at("parts").at("items").at(0).at("voxels"), 900);
+  EXPECT_EQ(a.at("voids").at("count"), 1);
+  EXPECT_EQ(a.at("voids").at("total_volume"), 100.0);
+  EXPECT_EQ(a.at("voids").at("items").at(0).at("bbox_min"), json::array({3.0, 4.0, 5.0}));
+  EXPECT_EQ(a.at("voids").at("items").at(0).at("bbox_max"), json::array({8.0, 9.0, 9.0}));
+  const json& mass = a.at("mass_properties");
+  EXPECT_TRUE(mass.at("mesh").at("available"));
+  EXPECT_NEAR(mass.at("mesh").at("volume").get<double>(), 900.0, 1e-9);
+  EXPECT_NEAR(mass.at("voxels").at("volume").get<double>(), 900.0, 1e-9);
+  // The voxels are exactly the part here: no difference but rounding.
+  EXPECT_LT(std::abs(mass.at("difference").at("volume_relative").get<double>()), 1e-12);
+  EXPECT_LT(mass.at("difference").at("inertia_relative").get<double>(), 1e-9);
+  // Every filled voxel is peeled exactly once; the outer shell alone is 488.
+  std::uint64_t peeled = 0;
+  for (const auto& n : a.at("skin").at("layers")) peeled += n.get<std::uint64_t>();
+  EXPECT_EQ(peeled, 900u);
+  EXPECT_GE(a.at("skin").at("layers").at(0).get<std::uint64_t>(), 488u);
+  EXPECT_EQ(a.at("skin").at("max_depth").get<double>(), a.at("skin").at("max_depth_layers").get<double>() * 1.0);
+}
+
+TEST_F(AnalyzeCli, AnOpenMeshSaysItIsOpenInsteadOfAVolume) {
+  const json a = analyze(std::string(VOXD_SHARED_MESHES) + "/pelvis.stl", "--resolution 48 --inside winding");
+  const json& mesh = a.at("mass_properties").at("mesh");
+  EXPECT_FALSE(mesh.at("available"));
+  EXPECT_NE(mesh.at("reason").get<std::string>().find("not closed"), std::string::npos);
+  EXPECT_TRUE(a.at("mass_properties").at("difference").is_null());
+  EXPECT_GT(a.at("mass_properties").at("voxels").at("volume").get<double>(), 0.0);
+}
+
+TEST_F(AnalyzeCli, CleanupIsReportedAndUsageErrorsExitTwo) {
+  test::write_file(dir_ + "/box.stl", test::to_binary_stl(test::make_box({0, 0, 0}, {4, 4, 4})));
+  const json a = analyze(dir_ + "/box.stl", "--resolution 8 --cleanup");
+  EXPECT_EQ(a.at("cleanup").at("isolated"), 0);
+  EXPECT_EQ(a.at("parts").at("count"), 1);
+  EXPECT_EQ(test::run_process(std::string(VOXD_BINARY) + " analyze " + dir_ + "/box.stl").exit_code, 2);
+  EXPECT_EQ(test::run_process(std::string(VOXD_BINARY) + " analyze " + dir_ + "/box.stl -o " + dir_ + "/o --resolution 0").exit_code, 2);
+}
+
+}  // namespace
+}  // namespace voxd
