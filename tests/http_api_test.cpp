@@ -536,15 +536,24 @@ TEST_F(HttpApiTest, MetricsCountJobsRequestsBytesAndStageDurations) {
   wait_for_job(http(), job.at("id"));
   const std::string vol = volume(job.at("id"));
   expect_problem(post_multipart(http(), "/v1/jobs", mesh, "b.stl", R"({"mode":1})"), 422, "invalid-params");
-  auto res = http().Get("/metrics");
-  ASSERT_TRUE(res);
-  EXPECT_EQ(res->get_header_value("Content-Type").rfind("text/plain; version=0.0.4", 0), 0u);
+  // Metrics are updated just after a job's state or a request's answer is
+  // visible (by the job listener and the request logger): poll briefly.
   std::map<std::string, double> values;
-  std::istringstream lines(res->body);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    const auto space = line.rfind(' ');
-    values[line.substr(0, space)] = std::stod(line.substr(space + 1));
+  for (int attempt = 0; attempt < 200; ++attempt) {
+    auto res = http().Get("/metrics");
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->get_header_value("Content-Type").rfind("text/plain; version=0.0.4", 0), 0u);
+    values.clear();
+    std::istringstream lines(res->body);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      const auto space = line.rfind(' ');
+      values[line.substr(0, space)] = std::stod(line.substr(space + 1));
+    }
+    if (values["voxd_stage_duration_seconds_count{stage=\"voxelize\"}"] == 1 &&
+        values["voxd_http_requests_total{method=\"POST\",route=\"/v1/jobs\",status=\"422\"}"] == 1)
+      break;
+    std::this_thread::sleep_for(10ms);
   }
   EXPECT_EQ(values["voxd_jobs{state=\"succeeded\"}"], 1);
   EXPECT_EQ(values["voxd_queue_depth"], 0);

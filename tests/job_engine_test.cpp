@@ -235,6 +235,25 @@ TEST_F(JobEngineTest, ConcurrentSubmittersAllSucceedAndStateChangesAreReported) 
   }
 }
 
+TEST_F(JobEngineTest, ADeletedJobStaysDeletedEvenIfItsWorkerWritesLate) {
+  // A client that sees "succeeded" and deletes at once races the worker's
+  // final record write; the deletion must win, also across a restart.
+  std::vector<std::string> ids;
+  {
+    JobManager m(config(2, 64));
+    for (int i = 0; i < 30; ++i) {
+      const auto s = m.submit(sphere_stl(1.0 + 0.01 * i, 1), "s.stl", json{{"grid", {{"resolution", 8}}}});
+      wait_finished(m, s.id);
+      EXPECT_EQ(m.cancel_or_delete(s.id), JobManager::RemoveResult::deleted);
+      ids.push_back(s.id);
+    }
+    m.shutdown(5s);  // every worker has finished writing
+  }
+  for (const auto& id : ids) EXPECT_FALSE(std::filesystem::exists(dir_ + "/jobs/" + id)) << id;
+  JobManager again(config());
+  for (const auto& id : ids) EXPECT_FALSE(again.get(id)) << id;
+}
+
 TEST_F(JobEngineTest, ExpiredJobsAreRemoved) {
   JobManagerConfig c = config();
   c.result_ttl = 1s;

@@ -27,6 +27,9 @@ struct RequestClock {
   std::string request_id;
 };
 thread_local RequestClock current_request;
+// Whether the current request's body was read to its end, so an error answer
+// can keep the connection open (nothing of the body is left on it).
+thread_local bool body_consumed = false;
 
 std::string new_request_id() {
   thread_local std::mt19937_64 rng{std::random_device{}()};
@@ -138,6 +141,7 @@ Submission read_submission(const Request& req, const httplib::ContentReader& rea
     s.filename = req.get_param_value("filename");
     if (read_ok) s.params = parse_params_text(req.get_param_value("params"));
   }
+  body_consumed = read_ok;
   if (!read_ok && received > max_bytes) throw upload_too_large(max_bytes);
   if (!read_ok)
     throw ProblemError(make_problem(400, "bad-request", "Bad request",
@@ -225,12 +229,13 @@ void HttpApi::install(httplib::Server& server) {
   };
   auto guarded_upload = [answer_exception](auto handler) -> httplib::Server::HandlerWithContentReader {
     return [answer_exception, handler](const Request& req, Response& res, const httplib::ContentReader& reader) {
+      body_consumed = false;
       try {
         handler(req, res, reader);
       } catch (...) {
-        // A refused upload may be left partly unread: the connection cannot
-        // carry another request.
-        res.set_header("Connection", "close");
+        // A refused upload may be left partly unread: then the connection
+        // cannot carry another request.
+        if (!body_consumed) res.set_header("Connection", "close");
         answer_exception(req, res);
       }
     };

@@ -77,6 +77,11 @@ struct Job {
   bool ephemeral = false;           // synchronous job: never stored, dropped after use
   std::shared_ptr<const BitVolume> result;  // a synchronous job's volume, for its caller
   bool stopped_by_shutdown = false;  // cancelled because the service stops
+  // Serializes this job's store writes with its removal: a worker writing the
+  // final record just after a client deleted the finished job must not bring
+  // it back on disk (and after a restart, in the API).
+  std::mutex store_mutex;
+  bool removed = false;  // guarded by store_mutex
 };
 
 struct JobManager::Impl {
@@ -136,8 +141,10 @@ struct JobManager::Impl {
     }
   }
 
-  void persist(const Job& job, const JobSnapshot& s) const {
+  void persist(Job& job, const JobSnapshot& s) const {
     if (job.ephemeral) return;
+    std::lock_guard guard(job.store_mutex);
+    if (job.removed) return;
     try {
       store.save(s);
     } catch (const std::exception& e) {
@@ -263,16 +270,22 @@ struct JobManager::Impl {
 
   std::size_t expire() {
     const auto cutoff = Clock::now() - config.result_ttl;
-    std::vector<std::string> victims;
+    std::vector<std::shared_ptr<Job>> victims;
     {
       std::lock_guard lock(mutex);
       for (const auto& [id, job] : jobs)
         if (finished(job->snap.state) && !job->snap.finished_at.empty() && parse_time(job->snap.finished_at) < cutoff)
-          victims.push_back(id);
-      for (const auto& id : victims) forget(id);
+          victims.push_back(job);
+      for (const auto& job : victims) forget(job->snap.id);
     }
-    for (const auto& id : victims) store.remove(id);
+    for (const auto& job : victims) remove_from_store(*job);
     return victims.size();
+  }
+
+  void remove_from_store(Job& job) const {
+    std::lock_guard guard(job.store_mutex);
+    job.removed = true;
+    store.remove(job.snap.id);
   }
 
   // Requires the lock.
@@ -462,11 +475,13 @@ std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit,
 
 JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
   std::optional<JobSnapshot> cancelled;
+  std::shared_ptr<Job> target;
   {
     std::lock_guard lock(impl_->mutex);
     auto it = impl_->jobs.find(id);
     if (it == impl_->jobs.end() || it->second->ephemeral) return RemoveResult::not_found;
-    Job& job = *it->second;
+    target = it->second;
+    Job& job = *target;
     if (job.snap.state == JobState::queued) {
       job.snap.state = JobState::cancelled;
       job.snap.finished_at = format_time(Clock::now());
@@ -481,12 +496,12 @@ JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
     }
   }
   if (cancelled) {
-    impl_->persist(Job{}, *cancelled);
+    impl_->persist(*target, *cancelled);
     impl_->deliver();
     impl_->finished_cv.notify_all();
     return RemoveResult::cancelled;
   }
-  impl_->store.remove(id);
+  impl_->remove_from_store(*target);
   return RemoveResult::deleted;
 }
 
