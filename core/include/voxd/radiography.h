@@ -1,0 +1,62 @@
+#pragma once
+// Thickness radiography: for every ray (voxel column) along one grid axis, the
+// shortest and longest run of filled voxels it crosses and the number of
+// filled voxels on it. Walls are measured where a part is thin (min), where it
+// is bulky (max), and how much material a straight beam passes (total), in
+// voxels, so the answer is exact for the voxel model; multiply by
+// Grid::voxel_size for model units.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "voxd/bit_volume.h"
+
+namespace voxd {
+
+// One pixel per ray, row-major (pixel (c, r) at r * width + c). The two axes
+// other than the ray axis, in x, y, z order, are column then row:
+//   axis 0 (x): column = j, row = k;  axis 1 (y): column = i, row = k;
+//   axis 2 (z): column = i, row = j.
+// 0 in all three where the ray crosses no material.
+struct ThicknessImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint32_t> min;    // shortest filled run on the ray
+  std::vector<std::uint32_t> max;    // longest filled run on the ray
+  std::vector<std::uint32_t> total;  // filled voxels on the ray
+};
+
+// Image size for a projection of `grid` along `axis`: {width, height}.
+struct ImageSize {
+  int width = 0;
+  int height = 0;
+};
+ImageSize projected_size(const Grid& grid, int axis);
+
+// Computes the three maps along `axis` (0 = x, 1 = y, 2 = z) on up to
+// `threads` threads (0 = all cores). Throws Error(invalid_argument) for another
+// axis and Error(limit_exceeded) when the image would not fit an int.
+ThicknessImage radiography(const BitVolume& volume, int axis, int threads = 0);
+
+// Summary of one map over the rays that hit material (zeros are skipped).
+struct ThicknessStats {
+  std::uint64_t rays = 0;  // pixels with a non-zero value
+  std::uint32_t min = 0;   // 0 when rays == 0, like everything below
+  std::uint32_t max = 0;
+  double mean = 0.0;
+  // Nearest-rank percentiles: the smallest value v with at least p% of the
+  // rays <= v.
+  std::uint32_t p5 = 0;
+  std::uint32_t p50 = 0;
+  std::uint32_t p95 = 0;
+  // `bins` equal-width bins over the integer values [min, max]: value v falls
+  // in bin floor((v - min) * bins / (max - min + 1)); bin b starts at
+  // min + b * bin_width. Empty when rays == 0.
+  double bin_width = 0.0;
+  std::vector<std::uint64_t> histogram;
+};
+
+// Throws Error(invalid_argument) when bins < 1.
+ThicknessStats thickness_stats(std::span<const std::uint32_t> values, int bins = 32);
+
+}  // namespace voxd
