@@ -79,6 +79,42 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
   json hot_spots = json::array();
   for (std::size_t i = 0; i < report.skin.innermost.size() && i < kMaxListedRegions; ++i)
     hot_spots.push_back(region_json(report.skin.innermost[i], grid));
+  json thickness = nullptr;
+  if (report.thickness) {
+    const ThicknessAnalysis& t = *report.thickness;
+    auto regions = [&](const std::vector<ThicknessRegion>& list, const char* extreme) {
+      json items = json::array();
+      for (std::size_t i = 0; i < list.size() && i < kMaxListedRegions; ++i) {
+        const ThicknessRegion& r = list[i];
+        items.push_back({{"voxels", r.voxel_count},
+                         {"volume", static_cast<double>(r.voxel_count) * h * h * h},
+                         {"centroid", vec(grid.origin + (r.centroid + glm::dvec3(0.5)) * h)},
+                         {"bbox_min", vec(grid.origin + glm::dvec3(r.bbox_min) * h)},
+                         {"bbox_max", vec(grid.origin + glm::dvec3(r.bbox_max + glm::i64vec3(1)) * h)},
+                         {extreme, static_cast<double>(r.extreme_thickness) * h}});
+      }
+      return json{{"count", list.size()}, {"items", items}};
+    };
+    json histogram = json::array();
+    for (std::uint64_t n : t.stats.histogram) histogram.push_back(n);
+    thickness = {
+        {"method", "local thickness (Hildebrand & Ruegsegger 1997): diameter of the largest inscribed sphere containing each voxel"},
+        {"error_bound", thickness_error_statement(h)},
+        {"voxels", t.stats.voxel_count},
+        {"mean", t.stats.mean * h},
+        {"std", t.stats.std_dev * h},
+        {"min", t.stats.min * h},
+        {"max", t.stats.max * h},
+        {"histogram", {{"min", t.stats.min * h}, {"bin_width", t.stats.bin_width() * h}, {"counts", histogram}}},
+        {"min_wall", t.min_wall_voxels > 0 ? json(t.min_wall_voxels * h) : json(nullptr)},
+        {"max_wall", t.max_wall_voxels > 0 ? json(t.max_wall_voxels * h) : json(nullptr)},
+        {"thin_regions", regions(t.thin_regions, "min_thickness")},
+        {"thick_regions", regions(t.thick_regions, "max_thickness")},
+        {"verdict", t.min_wall_voxels > 0 || t.max_wall_voxels > 0
+                        ? json(t.thin_regions.empty() && t.thick_regions.empty() ? "pass" : "fail")
+                        : json(nullptr)},
+    };
+  }
   json out = {
       {"unit", "model units (the mesh's own)"},
       {"voxel_size", h},
@@ -91,6 +127,7 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
                 {"max_depth_layers", report.skin.max_depth},
                 {"max_depth", static_cast<double>(report.skin.max_depth) * h},
                 {"hot_spots", hot_spots}}},
+      {"thickness", thickness},
       {"cleanup", report.cleanup ? json{{"isolated", report.cleanup->isolated},
                                         {"lines", report.cleanup->lines},
                                         {"sheets", report.cleanup->sheets}}

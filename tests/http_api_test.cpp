@@ -653,6 +653,107 @@ TEST_F(HttpApiTest, EveryRequestAndJobStateIsLoggedAndJsonLogsAreJson) {
   EXPECT_EQ(states, (std::set<std::string>{"queued", "running", "succeeded"})) << server_->log();
 }
 
+// Decodes a PNG with the independent reader (tests/tools/read_png.py).
+json read_png(const std::string& bytes, const std::string& dir) {
+  write_file(dir + "/image.png", bytes_of(bytes));
+  const auto r = run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_png.py " + dir + "/image.png");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return json::parse(r.out);
+}
+
+TEST_F(HttpApiTest, AnalysisOfAHollowBoxFindsItsVoidItsThinWallsAndIsKept) {
+  start();
+  // Walls 2 to 4 voxels thick around a 5 x 5 x 4 cavity, on a unit grid.
+  const Mesh m = concat({make_box({1, 1, 1}, {11, 11, 11}), flipped(make_box({3, 4, 5}, {8, 9, 9}))});
+  const json job = submit(to_binary_stl(m), R"({"grid":{"voxel_size":1,"origin":[0,0,0],"dims":[12,12,12]}})");
+  const std::string id = job.at("id");
+  ASSERT_EQ(wait_for_job(http(), id).at("state"), "succeeded");
+  auto first = http().Get(("/v1/jobs/" + id + "/analysis?min_wall=2.5").c_str());
+  const json a = expect_json(first, 200, "Analysis");
+  EXPECT_EQ(first->get_header_value("X-Voxd-Cache"), "miss");
+  EXPECT_EQ(a.at("parts").at("count"), 1);
+  EXPECT_EQ(a.at("voids").at("count"), 1);
+  EXPECT_EQ(a.at("voids").at("total_volume"), 100.0);
+  EXPECT_TRUE(a.at("mass_properties").at("mesh").at("available"));
+  EXPECT_NEAR(a.at("mass_properties").at("mesh").at("volume").get<double>(), 900.0, 1e-9);
+  const json& t = a.at("thickness");
+  EXPECT_EQ(t.at("min"), 2.0);  // the 2-voxel walls, exactly (even widths are exact)
+  EXPECT_EQ(t.at("verdict"), "fail");
+  EXPECT_GE(t.at("thin_regions").at("count").get<int>(), 1);
+  EXPECT_FALSE(t.at("error_bound").get<std::string>().empty());
+  // Kept: the same answer from the job's directory.
+  auto again = http().Get(("/v1/jobs/" + id + "/analysis?min_wall=2.5").c_str());
+  EXPECT_EQ(again->get_header_value("X-Voxd-Cache"), "hit");
+  EXPECT_EQ(again->body, first->body);
+  EXPECT_EQ(expect_json(http().Get(("/v1/jobs/" + id + "/analysis?min_wall=1.5").c_str()), 200, "Analysis")
+                .at("thickness").at("verdict"), "pass");
+  EXPECT_TRUE(expect_json(http().Get(("/v1/jobs/" + id + "/analysis?thickness=false").c_str()), 200, "Analysis")
+                  .at("thickness").is_null());
+  expect_problem(http().Get(("/v1/jobs/" + id + "/analysis?min_wall=-1").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + id + "/analysis?cleanup=all").c_str()), 400, "invalid-query");
+}
+
+TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
+  start();
+  // Box over voxels x 4..13, y 2..7, z 6..21 of a 0.5 grid.
+  const json job = submit(to_binary_stl(make_box({2, 1, 3}, {7, 4, 11})),
+                          R"({"grid":{"voxel_size":0.5,"origin":[0,0,0],"dims":[20,12,30]}})");
+  const std::string id = job.at("id");
+  ASSERT_EQ(wait_for_job(http(), id).at("state"), "succeeded");
+  auto res = http().Get(("/v1/jobs/" + id + "/radiography?axis=z&measure=total&format=png16&unit=model").c_str());
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_EQ(res->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(res->get_header_value("X-Voxd-Scale"), "1 pixel value = 0.5 model units");
+  json png = read_png(res->body, dir_);
+  EXPECT_EQ(png.at("width"), 20);
+  EXPECT_EQ(png.at("height"), 12);
+  EXPECT_EQ(png.at("bit_depth"), 16);
+  EXPECT_EQ(png.at("text").at("voxd:scale"), "1 pixel value = 0.5 model units");
+  for (int j = 0; j < 12; ++j)
+    for (int i = 0; i < 20; ++i) {
+      const bool inside = i >= 4 && i < 14 && j >= 2 && j < 8;
+      ASSERT_EQ(png.at("pixels").at(j * 20 + i), inside ? 16 : 0) << i << "," << j;
+    }
+  // Along x: image columns are y, rows are z.
+  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=x&measure=max").c_str())->body, dir_);
+  EXPECT_EQ(png.at("width"), 12);
+  EXPECT_EQ(png.at("height"), 30);
+  EXPECT_EQ(png.at("pixels").at(10 * 12 + 3), 10);
+  // False colour for people, statistics for programs.
+  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=y&format=png").c_str())->body, dir_);
+  EXPECT_EQ(png.at("color_type"), 2);
+  EXPECT_GT(png.at("height").get<int>(), 30);  // the legend strip below the map
+  const json stats = expect_json(http().Get(("/v1/jobs/" + id + "/radiography?axis=y&format=json&unit=model").c_str()), 200,
+                                 "RadiographyStats");
+  EXPECT_EQ(stats.at("rays"), 10 * 16);
+  EXPECT_EQ(stats.at("min"), 3.0);  // 6 voxels of 0.5
+  EXPECT_EQ(stats.at("max"), 3.0);
+  // Section through the box at model z = 5 (voxel layer 10), and by index.
+  auto sec = http().Get(("/v1/jobs/" + id + "/section?axis=z&coordinate=5.2").c_str());
+  ASSERT_EQ(sec->status, 200) << sec->body;
+  png = read_png(sec->body, dir_);
+  EXPECT_EQ(png.at("text").at("voxd:index"), "10");
+  std::uint64_t filled = 0;
+  for (const auto& v : png.at("pixels")) filled += v.get<int>() == 255;
+  EXPECT_EQ(filled, 60u);
+  EXPECT_EQ(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=10").c_str())->body, sec->body);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2").c_str())->body, dir_);
+  for (const auto& v : png.at("pixels")) ASSERT_EQ(v, 0);
+  // Bad queries, unknown jobs, unfinished jobs, wrong methods.
+  expect_problem(http().Get(("/v1/jobs/" + id + "/radiography?axis=w").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + id + "/radiography?measure=average").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + id + "/section?axis=z").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=30").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + id + "/section?axis=z&coordinate=99").c_str()), 400, "invalid-query");
+  expect_problem(http().Get("/v1/jobs/0123456789abcdef0123456789abcdef/radiography"), 404, "not-found");
+  expect_problem(http().Delete(("/v1/jobs/" + id + "/section").c_str()), 405, "method-not-allowed");
+  const json slow = submit(bunny_stl(), kSlowParams);
+  wait_for_state(http(), slow.at("id"), "running");
+  expect_problem(http().Get(("/v1/jobs/" + slow.at("id").get<std::string>() + "/analysis").c_str()), 409, "job-not-finished");
+  http().Delete(("/v1/jobs/" + slow.at("id").get<std::string>()).c_str());
+}
+
 TEST(ServeCommand, HelpListsEverySettingWithItsDefaultAndBadSettingsAreRefused) {
   const auto help = run_process(std::string(VOXD_BINARY) + " serve --help");
   EXPECT_EQ(help.exit_code, 0);

@@ -24,11 +24,16 @@ constexpr const char* kUsage = R"(usage: voxd analyze MESH -o DIR [options]
 Voxelizes MESH with the job parameters, then analyses the voxel model and
 writes DIR/analysis.json: mass properties from the mesh (when it is closed)
 and from the voxels side by side, connected parts, enclosed voids, skin
-removal layers and hot spots. Lengths are in the mesh's model units.
+removal layers and hot spots, local wall thickness with thin and thick
+regions. Lengths are in the mesh's model units.
 
   --params JSON|@FILE    job parameters, as for voxd voxelize and the HTTP API
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ, --padding P,
   --mode M, --inside T   as for voxd voxelize
+  --min-wall T           report regions thinner than T (model units): thin walls
+  --max-wall T           report regions thicker than T (model units): hot spots
+  --min-region N         ignore thin/thick regions under N voxels (default 1)
+  --no-thickness         skip local wall thickness (the slowest step)
   --cleanup              remove isolated voxels and one-voxel lines first
   --cleanup-sheets       also remove one-voxel-thick sheets
   --threads N            worker threads (default: all cores)
@@ -38,8 +43,8 @@ removal layers and hot spots. Lengths are in the mesh's model units.
 
 int analyze_command(int argc, char** argv) {
   std::set<std::string> valued(std::begin(kParamFlags), std::end(kParamFlags));
-  valued.insert({"output", "threads"});
-  Args args(argc, argv, 2, valued, {"cleanup", "cleanup-sheets", "help"});
+  valued.insert({"output", "threads", "min-wall", "max-wall", "min-region"});
+  Args args(argc, argv, 2, valued, {"cleanup", "cleanup-sheets", "no-thickness", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -66,8 +71,25 @@ int analyze_command(int argc, char** argv) {
   limits.max_voxels = std::uint64_t{1} << 33;
   VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, /*with_report=*/true, nullptr, threads);
 
+  auto positive = [&](const char* flag) -> double {
+    const auto v = args.value(flag);
+    if (!v) return 0.0;
+    const double x = parse_number_list(*v, 1, flag)[0];
+    if (!(x > 0)) throw UsageError(std::string("--") + flag + " must be a positive length in model units");
+    return x;
+  };
   AnalysisOptions options;
   options.threads = threads;
+  options.thickness = !args.has("no-thickness");
+  options.min_wall_voxels = positive("min-wall") / result.grid.voxel_size;
+  options.max_wall_voxels = positive("max-wall") / result.grid.voxel_size;
+  if (auto n = args.value("min-region")) {
+    try {
+      options.min_region_voxels = std::stoull(*n);
+    } catch (const std::exception&) {
+      throw UsageError("--min-region expects a number of voxels");
+    }
+  }
   if (args.has("cleanup") || args.has("cleanup-sheets")) options.cleanup = CleanupOptions{true, true, args.has("cleanup-sheets")};
   const AnalysisReport report = analyze_volume(result.volume, options);
   nlohmann::json doc = api::analysis_to_json(report, result.grid, result.report, result.mesh_mass);

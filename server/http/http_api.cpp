@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "api/result_json.h"
+#include "server/http/analysis_routes.h"
 #include "server/http/problem.h"
 #include "server/http/volume_stream.h"
 #include "server/jobs/job_record.h"
@@ -399,6 +400,9 @@ void HttpApi::install(httplib::Server& server) {
     stream_volume(res, std::move(volume), v.format, v.options, accepts_gzip(req), id + file_extension(v.format), &metrics_);
   }));
   allow_only(job_path + "/volume", "GET");
+
+  for (const std::string& pattern : install_analysis_routes(server, jobs_, job_path, [guarded](PlainHandler h) { return guarded(h); }))
+    allow_only(pattern, "GET");
 
   server.Post("/v1/voxelize", guarded_upload([this](const Request& req, Response& res, const httplib::ContentReader& reader) {
     const VolumeRequest v = read_volume_request(req);

@@ -215,6 +215,7 @@ struct JobManager::Impl {
         s.state = JobState::succeeded;
         s.progress = 1.0;
         s.mesh = r.report;
+        s.mesh_mass = r.mesh_mass;
         for (auto& t : r.timings.stages)
           if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
             s.timings.push_back(t);
@@ -503,6 +504,27 @@ JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
   }
   impl_->remove_from_store(*target);
   return RemoveResult::deleted;
+}
+
+std::optional<std::string> JobManager::load_artifact(const std::string& id, const std::string& key) const {
+  return impl_->store.load_artifact(id, key);
+}
+
+void JobManager::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) {
+  std::shared_ptr<Job> job;
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto it = impl_->jobs.find(id);
+    if (it == impl_->jobs.end() || it->second->ephemeral) return;
+    job = it->second;
+  }
+  std::lock_guard guard(job->store_mutex);
+  if (job->removed) return;  // deleted meanwhile: do not bring its directory back
+  try {
+    impl_->store.save_artifact(id, key, bytes);
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
+  }
 }
 
 std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {

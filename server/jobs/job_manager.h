@@ -15,6 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "voxd/mass_properties.h"
+
 #include "api/job_params.h"
 #include "server/job_pipeline.h"
 #include "voxd/bit_volume.h"
@@ -42,6 +44,7 @@ struct JobSnapshot {
   std::string mesh_format;
   std::uint64_t triangles = 0;
   std::optional<MeshReport> mesh;  // set once the worker made it
+  std::optional<MassProperties> mesh_mass;  // exact, voxel frame; kept in the record, not in the status JSON
   Grid grid;                       // resolved at submission
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
   std::optional<std::uint64_t> filled_voxels;           // when succeeded
@@ -126,6 +129,12 @@ class JobManager {
   std::shared_ptr<const BitVolume> run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
                                             const nlohmann::json& params_json, JobSnapshot* snapshot,
                                             std::uint64_t max_voxels = 0);
+
+  // Derived results of a finished job (analysis JSON, images), kept beside
+  // its volume so they are computed once and expire with it. `key` is a file
+  // name made by the caller from the request ([A-Za-z0-9._-]).
+  std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const;
+  void save_artifact(const std::string& id, const std::string& key, const std::string& bytes);
 
   JobCounts counts() const;
   bool accepting() const;

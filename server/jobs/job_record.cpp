@@ -129,6 +129,17 @@ JobSnapshot job_from_json(const json& r) {
   job.finished_at = time_from(r.at("finished_at"));
   job.params = r.at("params");
   if (!r.at("mesh").is_null()) job.mesh = report_from_json(r.at("mesh"));
+  if (r.contains("mesh_mass")) {
+    const json& m = r.at("mesh_mass");
+    MassProperties p;
+    p.volume = m.at("volume");
+    p.centroid = vec3_from(m.at("centroid"));
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 3; ++col) p.inertia[col][row] = m.at("inertia").at(row).at(col).get<double>();
+    p.bbox.min = vec3_from(m.at("bbox_min"));
+    p.bbox.max = vec3_from(m.at("bbox_max"));
+    job.mesh_mass = p;
+  }
   job.mesh_format = r.at("mesh_format");
   job.triangles = r.at("triangles");
   job.grid = grid_from_json(r.at("grid"));

@@ -1,4 +1,7 @@
 #include "server/jobs/job_store.h"
+#include "api/analysis_json.h"
+
+#include <sstream>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -69,8 +72,23 @@ std::vector<JobSnapshot> JobStore::load_all() const {
 
 void JobStore::save(const JobSnapshot& job) const {
   fs::create_directories(job_dir(job.id));
-  const std::string text = to_json(job).dump();
+  nlohmann::json record = to_json(job);
+  if (job.mesh_mass) record["mesh_mass"] = api::to_json(*job.mesh_mass);
+  const std::string text = record.dump();
   write_atomically(job_dir(job.id) / "record.json", [&](ByteSink& sink) { sink.write(text.data(), text.size()); });
+}
+
+std::optional<std::string> JobStore::load_artifact(const std::string& id, const std::string& key) const {
+  std::ifstream in(job_dir(id) / "artifacts" / key, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void JobStore::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const {
+  fs::create_directories(job_dir(id) / "artifacts");
+  write_atomically(job_dir(id) / "artifacts" / key, [&](ByteSink& sink) { sink.write(bytes.data(), bytes.size()); });
 }
 
 void JobStore::save_volume(const std::string& id, const BitVolume& volume) const {

@@ -4,6 +4,7 @@
 // written to a temporary name, flushed to disk and renamed, so a crash or a
 // kill never leaves a half-written record or result behind.
 #include <filesystem>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,6 +20,8 @@ class JobStore {
 
   // Every readable record; unreadable ones are logged and skipped.
   std::vector<JobSnapshot> load_all() const;
+  std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const;
+  void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const;
   void save(const JobSnapshot& job) const;
   void save_volume(const std::string& id, const BitVolume& volume) const;
   // Shares a finished result with a job created from an identical submission:

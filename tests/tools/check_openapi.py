@@ -19,6 +19,12 @@ openapi_path, job_params_path = sys.argv[1], sys.argv[2]
 doc = json.load(open(openapi_path))
 job_params = json.load(open(job_params_path))
 store = {job_params["$id"]: job_params}
+# The other published schemas beside the document, by their $id.
+schema_dir = os.path.dirname(os.path.abspath(job_params_path))
+for name in os.listdir(schema_dir):
+    if name.endswith(".schema.json"):
+        other = json.load(open(os.path.join(schema_dir, name)))
+        store[other["$id"]] = other
 # The document's relative $ref "job-params.schema.json" resolves beside it, to
 # the job-params schema's $id.
 BASE_URI = job_params["$id"].rsplit("/", 1)[0] + "/openapi.json"

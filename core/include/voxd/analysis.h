@@ -8,13 +8,28 @@
 #include "voxd/components.h"
 #include "voxd/mass_properties.h"
 #include "voxd/progress.h"
+#include "voxd/local_thickness.h"
 #include "voxd/skin_removal.h"
+#include "voxd/thickness_regions.h"
 
 namespace voxd {
 
 struct AnalysisOptions {
   std::optional<CleanupOptions> cleanup;  // none: analyse the volume as voxelized
+  bool thickness = true;                  // local wall thickness (the costliest step)
+  // Thin- and thick-wall thresholds in voxels (0 = not checked), and the
+  // smallest region reported (smaller ones are sampling noise).
+  double min_wall_voxels = 0.0;
+  double max_wall_voxels = 0.0;
+  std::uint64_t min_region_voxels = 1;
+  int histogram_bins = 32;
   int threads = 0;
+};
+
+struct ThicknessAnalysis {
+  ThicknessStatistics stats;  // in voxels
+  double min_wall_voxels = 0.0, max_wall_voxels = 0.0;
+  std::vector<ThicknessRegion> thin_regions, thick_regions;  // largest first
 };
 
 struct AnalysisReport {
@@ -22,6 +37,7 @@ struct AnalysisReport {
   MassProperties voxels;
   ComponentReport components;
   PeelSummary skin;
+  std::optional<ThicknessAnalysis> thickness;
 };
 
 // `volume` is not modified; clean-up works on a copy.

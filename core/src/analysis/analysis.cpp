@@ -21,6 +21,21 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
   report.components = find_components(v);
   step(0.6);
   report.skin = summarize_peeling(peel_depth(v, options.threads));
+  step(0.7);
+  if (options.thickness) {
+    const DenseVolume<float> map = local_thickness(v, options.threads, control);
+    ThicknessAnalysis t;
+    t.stats = thickness_statistics(map, options.histogram_bins);
+    t.min_wall_voxels = options.min_wall_voxels;
+    t.max_wall_voxels = options.max_wall_voxels;
+    if (options.min_wall_voxels > 0)
+      t.thin_regions = find_thickness_regions(map, ThicknessRegionKind::thin, static_cast<float>(options.min_wall_voxels),
+                                              options.min_region_voxels);
+    if (options.max_wall_voxels > 0)
+      t.thick_regions = find_thickness_regions(map, ThicknessRegionKind::thick, static_cast<float>(options.max_wall_voxels),
+                                               options.min_region_voxels);
+    report.thickness = std::move(t);
+  }
   step(1.0);
   return report;
 }
