@@ -37,6 +37,18 @@ TEST_F(AnalyzeCli, HollowBoxHasOnePartOneVoidAndExactMassProperties) {
   const json a = analyze(dir_ + "/hollow.stl", "--voxel-size 1 --origin 0,0,0 --dims 12,12,12");
   EXPECT_EQ(a.at("parts").at("count"), 1);
   EXPECT_EQ(a.at("parts").at("items").at(0).at("voxels"), 900);
+  // The images beside it; the z radiograph's total is exact per ray: 10
+  // voxels of wall, minus 4 where a ray crosses the cavity.
+  for (const char* name : {"radiography-x-min.png", "radiography-y-max.png", "radiography-z-total.png",
+                           "radiography-z-max-colour.png", "section-x.png", "section-z.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir_ + "/out/" + name)) << name;
+  const auto png = test::run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_png.py " + dir_ +
+                                     "/out/radiography-z-total.png");
+  ASSERT_EQ(png.exit_code, 0) << png.err;
+  const json image = json::parse(png.out);
+  EXPECT_EQ(image.at("pixels").at(5 * 12 + 5), 10 - 4);  // (x 5, y 5) crosses the cavity (z 5..8)
+  EXPECT_EQ(image.at("pixels").at(2 * 12 + 2), 10);      // (x 2, y 2): wall only
+  EXPECT_EQ(image.at("pixels").at(0), 0);
   EXPECT_EQ(a.at("voids").at("count"), 1);
   EXPECT_EQ(a.at("voids").at("total_volume"), 100.0);
   EXPECT_EQ(a.at("voids").at("items").at(0).at("bbox_min"), json::array({3.0, 4.0, 5.0}));

@@ -14,6 +14,8 @@
 #include "server/cli/mapped_file.h"
 #include "server/job_pipeline.h"
 #include "voxd/analysis.h"
+#include "voxd/analysis_images.h"
+#include "voxd/byte_sink.h"
 #include "voxd/error.h"
 
 namespace voxd::cli {
@@ -22,7 +24,9 @@ namespace {
 constexpr const char* kUsage = R"(usage: voxd analyze MESH -o DIR [options]
 
 Voxelizes MESH with the job parameters, then analyses the voxel model and
-writes DIR/analysis.json: mass properties from the mesh (when it is closed)
+writes DIR/analysis.json and images (radiography-{x,y,z}-{min,max,total}.png:
+16-bit, one pixel value = one voxel, scale in the PNG's tEXt;
+radiography-*-max-colour.png; section-{x,y,z}.png through the middle): mass properties from the mesh (when it is closed)
 and from the voxels side by side, connected parts, enclosed voids, skin
 removal layers and hot spots, local wall thickness with thin and thick
 regions. Lengths are in the mesh's model units.
@@ -102,8 +106,28 @@ int analyze_command(int argc, char** argv) {
     if (!out) throw Error(ErrorCode::io_error, "cannot write " + path);
   }
   std::filesystem::rename(path + ".partial", path);
+  // The images the HTTP API serves: per axis, the exact 16-bit radiographs
+  // (min, max, total), a false-colour max map, and the middle section.
+  std::size_t images = 0;
+  auto write_png = [&](const std::string& name, const std::vector<std::uint8_t>& bytes) {
+    const std::string file = *out_dir + "/" + name;
+    FileSink sink(file + ".partial");
+    sink.write(bytes.data(), bytes.size());
+    sink.close();
+    std::filesystem::rename(file + ".partial", file);
+    ++images;
+  };
+  const PngScale scale{result.grid.voxel_size, "model units"};
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string a(1, "xyz"[axis]);
+    const ThicknessImage image = radiography(result.volume, axis, threads);
+    for (RadiographyMeasure m : {RadiographyMeasure::min, RadiographyMeasure::max, RadiographyMeasure::total})
+      write_png("radiography-" + a + "-" + to_string(m) + ".png", radiography_png(image, axis, m, false, scale));
+    write_png("radiography-" + a + "-max-colour.png", radiography_png(image, axis, RadiographyMeasure::max, true, scale));
+    write_png("section-" + a + ".png", section_png(result.volume, axis, result.grid.dims[axis] / 2));
+  }
   std::cerr << "analysis: " << report.components.parts.size() << " part(s), " << report.components.voids.size()
-            << " void(s), skin " << report.skin.max_depth << " layers deep; wrote " << path << '\n';
+            << " void(s), skin " << report.skin.max_depth << " layers deep; wrote " << path << " and " << images << " images\n";
   return 0;
 }
 

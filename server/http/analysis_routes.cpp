@@ -11,10 +11,8 @@
 #include "server/http/problem.h"
 #include "server/jobs/job_manager.h"
 #include "voxd/analysis.h"
-#include "voxd/byte_sink.h"
-#include "voxd/colour_map.h"
+#include "voxd/analysis_images.h"
 #include "voxd/error.h"
-#include "voxd/png_image.h"
 #include "voxd/radiography.h"
 #include "voxd/section.h"
 
@@ -146,11 +144,11 @@ std::vector<std::string> install_analysis_routes(httplib::Server& server, JobMan
     const std::string key = std::string("radiography-") + "xyz"[axis] + "-" + measure + "-" + format + "-" + unit;
     answer_artifact(jobs, id, key, format == "json" ? "application/json" : "image/png", res, [&] {
       const ThicknessImage image = radiography(*job.volume, axis);
-      const std::vector<std::uint32_t>& values = measure == "min" ? image.min : measure == "max" ? image.max : image.total;
-      const std::vector<PngText> about = {{"voxd:measure", measure + " thickness along " + std::string(1, "xyz"[axis])},
-                                          {"voxd:job", id}};
+      const RadiographyMeasure m = measure == "min" ? RadiographyMeasure::min
+                                   : measure == "max" ? RadiographyMeasure::max
+                                                      : RadiographyMeasure::total;
       if (format == "json") {
-        const ThicknessStats s = thickness_stats(values, 32);
+        const ThicknessStats s = thickness_stats(values_of(image, m), 32);
         json histogram = json::array();
         for (std::uint64_t n : s.histogram) histogram.push_back(n);
         const double k = scale.per_value;
@@ -161,17 +159,8 @@ std::vector<std::string> install_analysis_routes(httplib::Server& server, JobMan
                     {"histogram", {{"min", s.min * k}, {"bin_width", s.bin_width * k}, {"counts", histogram}}}}
             .dump();
       }
-      VectorSink out;
-      if (format == "png16") {
-        write_png_grey16(image.width, image.height, values, scale, about, out);
-      } else {
-        ColourMapOptions options;
-        options.scale = scale;
-        ColourMap map = render_thickness_map(image.width, image.height, values, options);
-        map.text.insert(map.text.end(), about.begin(), about.end());
-        write_png_rgb8(map.image, map.text, out);
-      }
-      return std::string(out.data.begin(), out.data.end());
+      const auto png = radiography_png(image, axis, m, format == "png", scale, {{"voxd:job", id}});
+      return std::string(png.begin(), png.end());
     });
   }));
 
@@ -195,17 +184,8 @@ std::vector<std::string> install_analysis_routes(httplib::Server& server, JobMan
                           std::string(1, "xyz"[axis]));
     const std::string key = std::string("section-") + "xyz"[axis] + "-" + std::to_string(index) + ".png";
     answer_artifact(jobs, id, key, "image/png", res, [&] {
-      const GreyImage8 image = cross_section(*job.volume, axis, index);
-      const double plane = g.origin[axis] + (static_cast<double>(index) + 0.5) * g.voxel_size;
-      VectorSink out;
-      write_png_grey8(image.width, image.height, image.pixels,
-                      {{"voxd:axis", std::string(1, "xyz"[axis])},
-                       {"voxd:index", std::to_string(index)},
-                       {"voxd:plane", number_key(plane) + " model units (voxel centres)"},
-                       {"voxd:voxel_size", number_key(g.voxel_size) + " model units per pixel"},
-                       {"voxd:job", id}},
-                      out);
-      return std::string(out.data.begin(), out.data.end());
+      const auto png = section_png(*job.volume, axis, index, {{"voxd:job", id}});
+      return std::string(png.begin(), png.end());
     });
   }));
   return {analysis, radiography_path, section_path};
