@@ -59,15 +59,7 @@ int analyze_command(int argc, char** argv) {
   nlohmann::json params_json = load_params(args);
   apply_param_flags(args, params_json);
   const api::JobParams params = api::parse_job_params(params_json);
-  int threads = 0;
-  if (auto t = args.value("threads")) {
-    try {
-      threads = std::stoi(*t);
-    } catch (const std::exception&) {
-      threads = -1;
-    }
-    if (threads < 1 || threads > 1024) throw UsageError("--threads must be between 1 and 1024");
-  }
+  const int threads = thread_count(args);
 
   const std::string& mesh_path = args.positional()[0];
   MappedFile file(mesh_path);

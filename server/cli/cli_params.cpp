@@ -69,4 +69,18 @@ void apply_param_flags(const Args& args, json& params) {
   if (auto v = args.value("inside")) params["inside"] = *v;
 }
 
+int thread_count(const Args& args) {
+  const auto t = args.value("threads");
+  if (!t) return 0;
+  int threads = -1;
+  try {
+    std::size_t pos = 0;
+    threads = std::stoi(*t, &pos);
+    if (pos != t->size()) threads = -1;
+  } catch (const std::exception&) {
+  }
+  if (threads < 1 || threads > 1024) throw UsageError("--threads must be between 1 and 1024");
+  return threads;
+}
+
 }  // namespace voxd::cli

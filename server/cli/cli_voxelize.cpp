@@ -85,15 +85,7 @@ int voxelize_command(int argc, char** argv) {
     if (*p == "bits") encode_options.raw_packing = RawPacking::bits;
     else if (*p != "bytes") throw UsageError("--raw-packing must be bytes or bits, got '" + *p + "'");
   }
-  int threads = 0;
-  if (auto t = args.value("threads")) {
-    try {
-      threads = std::stoi(*t);
-    } catch (const std::exception&) {
-      threads = -1;
-    }
-    if (threads < 1 || threads > 1024) throw UsageError("--threads must be between 1 and 1024");
-  }
+  const int threads = thread_count(args);
 
   const std::string& mesh_path = args.positional()[0];
   MappedFile file(mesh_path);
