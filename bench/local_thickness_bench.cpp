@@ -1,9 +1,15 @@
 // Distance transform and local thickness of the benchmark mesh (a thick
 // tilted torus) voxelized at 256^3 and 512^3: the wall thickness analysis a
-// part review runs after voxelizing. Counters: filled voxels.
+// part review runs after voxelizing. Also two machined parts from shared/
+// meshes (a hex nut and a screw: sharp edges and thread crests keep voxels
+// unpainted until the smallest balls, the slow case of the method) at 512^3.
+// Counters: filled voxels.
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
+
 #include "bench_mesh.h"
+#include "voxd/mesh_decode.h"
 #include "voxd/distance_transform.h"
 #include "voxd/grid.h"
 #include "voxd/local_thickness.h"
@@ -39,6 +45,27 @@ void BM_LocalThickness(benchmark::State& state) {
   state.counters["filled"] = static_cast<double>(v.count());
 }
 BENCHMARK(BM_LocalThickness)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_LocalThicknessPart(benchmark::State& state, const char* file) {
+  const std::filesystem::path path = std::filesystem::path(VOXD_SHARED_MESHES) / file;
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError("shared/meshes not found");
+    return;
+  }
+  const std::vector<std::uint8_t> bytes = test::read_file(path.string());
+  const Mesh m = decode_mesh(bytes, file);
+  GridRequest r;
+  r.resolution = state.range(0);
+  r.padding = 1;
+  const BitVolume v = voxelize_parity(m, resolve_grid(r, bounds(m)), 0, 0, nullptr);
+  for (auto _ : state) {
+    auto t = local_thickness(v);
+    benchmark::DoNotOptimize(t.values().data());
+  }
+  state.counters["filled"] = static_cast<double>(v.count());
+}
+BENCHMARK_CAPTURE(BM_LocalThicknessPart, hex_nut, "M3_hex_nut.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_LocalThicknessPart, screw, "M3x10_screw.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace voxd::bench

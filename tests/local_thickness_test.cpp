@@ -54,10 +54,8 @@ DenseVolume<float> brute_force_thickness(const BitVolume& v) {
   return out;
 }
 
-void expect_equals_brute_force(const BitVolume& v, int threads = 0) {
-  const DenseVolume<float> got = local_thickness(v, threads);
-  const DenseVolume<float> want = brute_force_thickness(v);
-  const auto d = v.grid().dims;
+void expect_equals(const DenseVolume<float>& got, const DenseVolume<float>& want) {
+  const auto d = want.grid().dims;
   std::int64_t mismatches = 0;
   for (std::int64_t k = 0; k < d.z; ++k)
     for (std::int64_t j = 0; j < d.y; ++j)
@@ -67,6 +65,10 @@ void expect_equals_brute_force(const BitVolume& v, int threads = 0) {
                         << want.at(i, j, k);
         }
   EXPECT_EQ(mismatches, 0);
+}
+
+void expect_equals_brute_force(const BitVolume& v, int threads = 0) {
+  expect_equals(local_thickness(v, threads), brute_force_thickness(v));
 }
 
 // Union of random balls and boxes, with a sprinkle of flipped voxels: thick
@@ -114,6 +116,35 @@ TEST(LocalThickness, EqualsBruteForceOnVoxelizedTorusAndSphere) {
       voxelize(test::make_torus({0.2, -0.3, 0.1}, 8.0, 3.3, 48, 24), unit_grid(26, 26, 12, {-13, -13, -6}), {}));
   expect_equals_brute_force(
       voxelize(test::make_icosphere({0.4, 0.1, -0.2}, 9.2, 4), unit_grid(21, 21, 21, {-10.5, -10.5, -10.5}), {}));
+}
+
+// The painting has a dense phase (rows), a sparse phase (kd-tree of the
+// leftovers behind a coarse reach bound) and gathers the centres range by
+// range. The defaults hardly use some of these paths on test-sized volumes, so
+// each is forced here, alone and mixed, and must give the brute-force answer.
+TEST(LocalThickness, EveryPaintingPathEqualsBruteForce) {
+  struct Path {
+    const char* name;
+    LocalThicknessTuning tuning;
+  };
+  const Path paths[] = {
+      {"dense phase only", {0, 0, 4096}},
+      {"sparse phase only, bound rebuilt after every walk", {INT64_MAX, 0, 1}},
+      {"sparse phase only, bound never rebuilt", {INT64_MAX, 0, INT64_MAX}},
+      {"one centre per gathered range", {-1, 1, 4096}},
+      {"switch mid-way, small ranges, frequent rebuilds", {1500, 97, 3}},
+  };
+  std::vector<BitVolume> shapes;
+  for (std::uint32_t seed = 11; seed <= 13; ++seed) shapes.push_back(random_shape(unit_grid(31, 27, 23), seed));
+  shapes.push_back(
+      voxelize(test::make_torus({0.2, -0.3, 0.1}, 9.0, 4.1, 48, 24), unit_grid(30, 30, 12, {-15, -15, -6}), {}));
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    const DenseVolume<float> want = brute_force_thickness(shapes[s]);
+    for (const Path& p : paths) {
+      SCOPED_TRACE(testing::Message() << "shape " << s << ", " << p.name);
+      expect_equals(local_thickness(shapes[s], 2, nullptr, p.tuning), want);
+    }
+  }
 }
 
 TEST(LocalThickness, PlatesReportTheirThickness) {

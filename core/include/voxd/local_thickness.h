@@ -17,23 +17,30 @@
 // A sphere voxelized with radius R voxels reports about 2R at its centre. See
 // thickness_error_bound() for what this means against the mesh.
 //
-// Method: the distance ridge (the centres whose ball is not contained in the
-// ball of a 26-neighbour) carries every maximal ball, so only ridge balls are
-// painted. Balls are painted largest first, and each voxel is written once:
-// per row, a skip list jumps over voxels already holding a larger value, so
-// the cost is the ridge's ball rows plus the voxel count, not the sum of the
-// ball volumes. Threads own disjoint z-slabs and paint each ball's discs in
-// their slabs.
+// Method. Every filled voxel c is a ball centre (no ridge pruning: on walls
+// tilted to the grid a ball is almost never contained in a single
+// neighbour's, so a "distance ridge" keeps ~90% of the voxels anyway).
+// Centres are taken largest ball first and each ball paints only the voxels
+// that have no value yet; the first ball to reach a voxel is the largest
+// that contains it, so the result is the maximum by construction. What makes
+// it fast is stopping early and skipping work, never approximating:
+//  - painting ends when no voxel is left without a value. On thick parts the
+//    largest few percent of the balls cover almost everything, so the rest of
+//    the centres are never sorted: they are gathered range by range from a
+//    histogram of the distance values, only when the painting asks for more;
+//  - dense phase: a bit per voxel still to paint plus a count per row, so a
+//    ball's rows with nothing left cost one comparison; threads own disjoint
+//    z-slabs;
+//  - sparse phase (few voxels left: sharp edges, thin tips, the lattice
+//    fringe of round walls): the leftovers go into a kd-tree with counts, and
+//    a ball is first checked against a lower bound of its distance to the
+//    nearest leftover (a distance transform of a 4x coarser grid), so a ball
+//    that cannot reach one costs a single lookup, and one that can costs a
+//    walk of the subtrees its box reaches.
+// Measured in docs/benchmarks.md (bench/local_thickness_bench.cpp).
 //
-// Known limit (measured, bench/local_thickness_bench.cpp): a 26-neighbour
-// ball only contains a ball when the distance grows by a full step along that
-// neighbour direction, which on walls tilted to the grid almost never happens,
-// so the ridge keeps ~90% of the filled voxels and the cost is about
-// (filled voxels) x (rows per ball): 18 s for the 256^3 benchmark torus on 2
-// cores, far from interactive at 512^3. Exact but slow on thick parts.
-//
-// Memory: the float result, the uint32 distance transform (reused for the
-// skip lists) and 16 bytes per ridge voxel.
+// Memory: the float result, the uint32 distance transform, a bit per voxel,
+// and 16 bytes per centre of the range being painted.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -47,6 +54,17 @@ namespace voxd {
 // `threads` 0 = all cores. `control` may be null; when given, progress goes
 // from 0 to 1 and cancellation (Error(cancelled)) is honoured.
 DenseVolume<float> local_thickness(const BitVolume& solid, int threads = 0, JobControl* control = nullptr);
+
+// When the painting changes strategy. Only the speed depends on these, never
+// the result: the tests run every path against a brute-force evaluation. The
+// defaults are what the service uses.
+struct LocalThicknessTuning {
+  std::int64_t sparse_from = -1;         // leftover voxels that start the sparse phase; -1: max(4096, voxels / 256)
+  std::uint64_t first_range = 0;         // centres gathered first; 0: max(2^20, voxels / 64); doubles each time
+  std::int64_t reach_rebuild_queries = 4096;  // tree walks before the reach bound may be rebuilt
+};
+DenseVolume<float> local_thickness(const BitVolume& solid, int threads, JobControl* control,
+                                   const LocalThicknessTuning& tuning);
 
 // Statistics over the filled voxels (thickness > 0) of a local thickness map.
 struct ThicknessStatistics {
