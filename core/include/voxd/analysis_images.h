@@ -6,7 +6,10 @@
 #include <vector>
 
 #include "voxd/bit_volume.h"
+#include "voxd/colour_map.h"
+#include "voxd/dense_volume.h"
 #include "voxd/png_image.h"
+#include "voxd/preview.h"
 #include "voxd/radiography.h"
 
 namespace voxd {
@@ -23,5 +26,27 @@ std::vector<std::uint8_t> radiography_png(const ThicknessImage& image, int axis,
 // 8-bit section through voxel layer `index` along `axis`, with its plane and
 // pixel size in tEXt.
 std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index, std::vector<PngText> text = {});
+// The same section coloured by local thickness (map in voxels on the same
+// grid): filled pixels in the ramp colour of round(t * 8) over the whole
+// map's range, empty ones white, legend strip below with labels in model
+// units (as preview_png). A null map gives the grey section.
+std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index,
+                                      const DenseVolume<float>* thickness, std::vector<PngText> text = {});
+
+// Shaded preview (voxd/preview.h) as 8-bit RGB. Without `thickness`: the part
+// in kPreviewPartColour times the shade, background white. With `thickness`
+// (local thickness map in voxels on the same grid, 0 = empty; see
+// voxd/local_thickness.h) each visible voxel takes the thickness ramp colour
+// of round(t * 8) (voxd/colour_map.h; range = smallest and largest non-zero
+// value of the whole map, so hidden voxels count; legend strip under the
+// image, labels in model units: PngScale{voxel_size / 8, "model units"})
+// times the shade; legend rows stay unshaded, and a visible voxel the map
+// gives no thickness keeps kPreviewPartColour. tEXt: voxd:view, voxd:right,
+// voxd:up, voxd:voxel_size, voxd:lighting, the colour map's chunks when
+// coloured, then `text`. Throws Error(invalid_argument) when the map's dims
+// differ from the volume's or the volume has a zero dimension.
+inline constexpr Rgb kPreviewPartColour{176, 190, 210};  // steel blue-grey
+std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
+                                      std::vector<PngText> text = {}, int threads = 0);
 
 }  // namespace voxd

@@ -1,9 +1,12 @@
 #include "voxd/analysis_images.h"
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
 
 #include "voxd/byte_sink.h"
 #include "voxd/colour_map.h"
+#include "voxd/error.h"
 #include "voxd/section.h"
 
 namespace voxd {
@@ -48,8 +51,49 @@ std::vector<std::uint8_t> radiography_png(const ThicknessImage& image, int axis,
   return std::move(out.data);
 }
 
+namespace {
+
+std::string signed_axis(int axis, bool positive) { return std::string(positive ? "+" : "-") + "xyz"[axis]; }
+
+// Thickness map values (voxels, float) as the colour map's integers: eighths
+// of a voxel, fine enough that the ramp never shows the rounding.
+std::uint32_t eighths(float t) {
+  if (!(t > 0.0f)) return 0;
+  return std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::lround(static_cast<double>(t) * 8.0)));
+}
+
+void shade_into(std::uint8_t* px, Rgb c, float shade) {
+  px[0] = static_cast<std::uint8_t>(std::lround(c.r * shade));
+  px[1] = static_cast<std::uint8_t>(std::lround(c.g * shade));
+  px[2] = static_cast<std::uint8_t>(std::lround(c.b * shade));
+}
+
+// The colour map options for a local thickness map: labels in model units,
+// ramp over the whole map's non-zero range.
+ColourMapOptions thickness_colours(const DenseVolume<float>& thickness, double voxel_size) {
+  ColourMapOptions options;
+  options.scale = PngScale{voxel_size / 8.0, "model units"};
+  for (const float t : thickness.values()) {
+    const std::uint32_t q = eighths(t);
+    if (q == 0) continue;
+    options.range_min = std::min(options.range_min.value_or(q), q);
+    options.range_max = std::max(options.range_max.value_or(q), q);
+  }
+  return options;
+}
+
+}  // namespace
+
 std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index, std::vector<PngText> text) {
+  return section_png(volume, axis, index, nullptr, std::move(text));
+}
+
+std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index,
+                                      const DenseVolume<float>* thickness, std::vector<PngText> text) {
   const Grid& g = volume.grid();
+  if (thickness && thickness->grid().dims != g.dims) {
+    throw Error(ErrorCode::invalid_argument, "section: the thickness map's grid does not match the volume's");
+  }
   const GreyImage8 image = cross_section(volume, axis, index);
   const double plane = g.origin[axis] + (static_cast<double>(index) + 0.5) * g.voxel_size;
   text.insert(text.begin(), {{"voxd:axis", std::string(1, "xyz"[axis])},
@@ -57,7 +101,77 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
                              {"voxd:plane", number(plane) + " model units (voxel centres)"},
                              {"voxd:voxel_size", number(g.voxel_size) + " model units per pixel"}});
   VectorSink out;
-  write_png_grey8(image.width, image.height, image.pixels, text, out);
+  if (!thickness) {
+    write_png_grey8(image.width, image.height, image.pixels, text, out);
+    return std::move(out.data);
+  }
+  // Each filled pixel in the ramp colour of its voxel's thickness, over the
+  // whole map's range so every section of a part shares one legend.
+  ColourMapOptions options = thickness_colours(*thickness, g.voxel_size);
+  const int c_axis = axis == 0 ? 1 : 0, r_axis = axis == 2 ? 1 : 2;
+  std::vector<std::uint32_t> values(image.pixels.size(), 0);
+  for (int r = 0; r < image.height; ++r)
+    for (int c = 0; c < image.width; ++c) {
+      if (image.pixels[static_cast<std::size_t>(r) * image.width + c] == 0) continue;
+      std::int64_t ijk[3];
+      ijk[axis] = index;
+      ijk[c_axis] = c;
+      ijk[r_axis] = r;
+      values[static_cast<std::size_t>(r) * image.width + c] = eighths(thickness->at(ijk[0], ijk[1], ijk[2]));
+    }
+  ColourMap map = render_thickness_map(image.width, image.height, values, options);
+  map.text.insert(map.text.begin(), text.begin(), text.end());
+  write_png_rgb8(map.image, map.text, out);
+  return std::move(out.data);
+}
+
+std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
+                                      std::vector<PngText> text, int threads) {
+  const Grid& g = volume.grid();
+  if (thickness && thickness->grid().dims != g.dims) {
+    throw Error(ErrorCode::invalid_argument, "preview: the thickness map's grid does not match the volume's");
+  }
+  const PreviewImage preview = render_preview(volume, view, threads);
+  const ViewBasis basis = view_basis(view);
+  std::vector<PngText> chunks = {
+      {"voxd:view", to_string(view)},
+      {"voxd:right", signed_axis(basis.right_axis, basis.right_positive)},
+      {"voxd:up", signed_axis(basis.up_axis, basis.up_positive)},
+      {"voxd:voxel_size", number(g.voxel_size) + " model units per pixel"},
+      {"voxd:lighting",
+       "Orthographic view of the first filled voxel on each ray, normals from its 26 neighbours (Patil & Ravi) "
+       "smoothed over 3x3 pixels, lit from the viewer's upper left: shade = 0.2 + 0.8 max(0, n.L), up to 20% darker "
+       "with depth."}};
+  const std::size_t pixels = preview.voxel.size();
+  RgbImage image;
+  if (!thickness) {
+    image.width = preview.width;
+    image.height = preview.height;
+    image.pixels.assign(pixels * 3, 255);
+    for (std::size_t p = 0; p < pixels; ++p) {
+      if (preview.voxel[p] >= 0) shade_into(&image.pixels[3 * p], kPreviewPartColour, preview.shade[p]);
+    }
+  } else {
+    // Range over the whole map, not the visible voxels: the legend then
+    // matches the thickness report and the other views of the same part.
+    const ColourMapOptions options = thickness_colours(*thickness, g.voxel_size);
+    std::vector<std::uint32_t> values(pixels, 0);
+    for (std::size_t p = 0; p < pixels; ++p) {
+      if (preview.voxel[p] >= 0) values[p] = eighths(thickness->values()[static_cast<std::size_t>(preview.voxel[p])]);
+    }
+    ColourMap map = render_thickness_map(preview.width, preview.height, values, options);
+    image = std::move(map.image);
+    for (std::size_t p = 0; p < pixels; ++p) {  // the map rows only: the legend keeps its true colours
+      if (preview.voxel[p] < 0) continue;
+      std::uint8_t* px = &image.pixels[3 * p];
+      const Rgb c = values[p] == 0 ? kPreviewPartColour : Rgb{px[0], px[1], px[2]};
+      shade_into(px, c, preview.shade[p]);
+    }
+    chunks.insert(chunks.end(), map.text.begin(), map.text.end());
+  }
+  chunks.insert(chunks.end(), text.begin(), text.end());
+  VectorSink out;
+  write_png_rgb8(image, chunks, out);
   return std::move(out.data);
 }
 

@@ -1,0 +1,64 @@
+#pragma once
+// Shaded preview of a voxel model: an orthographic view along a grid axis,
+// each pixel showing the first filled voxel the viewing ray meets, lit with a
+// surface normal estimated from that voxel's neighbour configuration (Patil &
+// Ravi: the empty voxels among the 26 neighbours point away from the solid,
+// so the sum of their unit offsets approximates the outward normal).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "voxd/bit_volume.h"
+
+namespace voxd {
+
+// Orthographic view along an axis. "+z": camera on the +z side of the part looking towards -z (sees the top).
+struct View {
+  int axis = 2;
+  bool from_positive = true;
+};
+// "+x", "-x", "+y", "-y", "+z", "-z" (and "x", "y", "z" meaning +); anything else nullopt.
+std::optional<View> parse_view(std::string_view text);
+// "+z" etc. Throws Error(invalid_argument) for an axis outside 0..2.
+std::string to_string(View v);
+
+// Image axes of a view: columns run along `right`, rows run from `up` (row 0 =
+// largest coordinate along up) downwards. Right-handed (right x up points at
+// the camera), so the image is never mirrored:
+//   +z: right +x, up +y   -z: right -x, up +y
+//   +x: right +y, up +z   -x: right -y, up +z
+//   +y: right -x, up +z   -y: right +x, up +z
+struct ViewBasis {
+  int right_axis;
+  bool right_positive;
+  int up_axis;
+  bool up_positive;
+};
+// Throws Error(invalid_argument) for an axis outside 0..2.
+ViewBasis view_basis(View v);
+
+struct PreviewImage {
+  int width = 0, height = 0;        // width = dims[right_axis], height = dims[up_axis]
+  std::vector<std::int64_t> voxel;  // per pixel (row-major): linear index i + nx*(j + ny*k) of the visible voxel, -1 = background
+  std::vector<float> shade;         // per pixel: lighting factor in [0, 1]; 0 for background
+  std::vector<glm::vec3> normal;    // per pixel: unit normal used for lighting (world axes), zero for background
+};
+
+// Normals: the neighbour-configuration normal of each visible voxel (the
+// camera direction when its empty neighbours cancel out), averaged over the
+// 3x3 pixels whose visible voxels lie within 2 voxels in depth of the centre's
+// (so silhouettes do not blend with what is behind them).
+// Lighting: L = normalize(-f + 0.5 up - 0.35 right), f the viewing direction
+// (light from the viewer's upper left); shade = (0.2 + 0.8 max(0, n.L)) *
+// (1 - 0.2 t), t in [0, 1] the depth between the nearest (0) and the farthest
+// (1) visible voxel of the image.
+// `threads` 0 = all cores; the result does not depend on it. Throws
+// Error(invalid_argument) for an axis outside 0..2 and Error(limit_exceeded)
+// for an image over INT_MAX pixels.
+PreviewImage render_preview(const BitVolume& volume, View view, int threads = 0);
+
+}  // namespace voxd
