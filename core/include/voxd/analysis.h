@@ -24,6 +24,10 @@ struct AnalysisOptions {
   std::uint64_t min_region_voxels = 1;
   int histogram_bins = 32;
   int threads = 0;
+  // The local thickness of `volume` when the caller has it already (the
+  // service keeps one per job); ignored with clean-up, which changes the
+  // volume and so its thickness.
+  const DenseVolume<float>* thickness_map = nullptr;
 };
 
 struct ThicknessAnalysis {

@@ -45,6 +45,14 @@ void write_binvox(const BitVolume& volume, ByteSink& sink);
 void write_binvox(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
 void write_raw(const BitVolume& volume, RawPacking packing, ByteSink& sink);
 
+// Float volumes (distances, local thickness): voxd RLE with value_type f32,
+// raw little-endian float32 (x fastest, then y, then z), and NRRD (a text
+// header then the raw data; opens in ParaView, 3D Slicer, ITK), whose header
+// places voxel centres in model space and names the quantity in `content`.
+void write_rle(const DenseVolume<float>& volume, ByteSink& sink);
+void write_raw(const DenseVolume<float>& volume, ByteSink& sink);
+void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink);
+
 // What a reader may allocate for the decoded volume. Readers validate the
 // whole input before allocating, so a lying header cannot make them allocate;
 // this bounds what a valid but huge input may cost (Error(limit_exceeded)).

@@ -23,7 +23,9 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
   report.skin = summarize_peeling(peel_depth(v, options.threads));
   step(0.7);
   if (options.thickness) {
-    const DenseVolume<float> map = local_thickness(v, options.threads, control);
+    std::optional<DenseVolume<float>> computed;
+    if (options.cleanup || !options.thickness_map) computed = local_thickness(v, options.threads, control);
+    const DenseVolume<float>& map = computed ? *computed : *options.thickness_map;
     ThicknessAnalysis t;
     t.stats = thickness_statistics(map, options.histogram_bins);
     t.min_wall_voxels = options.min_wall_voxels;

@@ -116,7 +116,30 @@ void encode_u8_slab(const DenseVolume<std::uint8_t>& volume, std::int64_t k, Byt
   }
 }
 
+// f32 slab payload: (varint run length, 4 little-endian bytes) pairs of
+// maximal runs of equal bit patterns (the spec compares bytes, not values).
+void encode_f32_slab(const DenseVolume<float>& volume, std::int64_t k, ByteBuffer& out) {
+  const float* values = volume.slab(k);
+  const std::size_t n = volume.slab_size();
+  for (std::size_t i = 0; i < n;) {
+    const std::uint32_t bits = std::bit_cast<std::uint32_t>(values[i]);
+    std::size_t j = i + 1;
+    while (j < n && std::bit_cast<std::uint32_t>(values[j]) == bits) ++j;
+    out.put_varint(j - i);
+    for (int b = 0; b < 4; ++b) out.put_byte(static_cast<std::uint8_t>(bits >> (8 * b)));
+    i = j;
+  }
+}
+
 }  // namespace
+
+void write_rle(const DenseVolume<float>& volume, ByteSink& sink) {
+  encode::require_voxels(volume, "RLE writer");
+  write_header(volume.grid(), encode::RleValueType::f32, sink);
+  write_slab_blocks(
+      volume.grid().dims.z, volume.slab_size() * sizeof(float),
+      [&volume](std::int64_t k, ByteBuffer& out) { encode_f32_slab(volume, k, out); }, sink);
+}
 
 void write_rle(const BitVolume& volume, ByteSink& sink) {
   encode::require_voxels(volume.grid(), "RLE writer");
