@@ -212,7 +212,7 @@ JobParams parse_job_params(const json& params) {
   Validator val;
   JobParams out;
   if (!val.is_object(params, "")) throw InvalidParams(std::move(val.errors));
-  val.allow_keys(params, "", {"grid", "mode", "inside", "rotation", "orient"});
+  val.allow_keys(params, "", {"grid", "mode", "inside", "rotation", "orient", "analyses"});
   if (params.contains("grid")) parse_grid(val, params.at("grid"), out);
   if (params.contains("rotation")) parse_rotation(val, params.at("rotation"), out);
   if (auto o = val.one_of(params, "", "orient", {"none", "auto"})) out.orient_auto = *o == "auto";
@@ -220,6 +220,13 @@ JobParams parse_job_params(const json& params) {
     out.mode = *m == "solid" ? VoxelMode::solid : *m == "surface" ? VoxelMode::surface : VoxelMode::solid_and_surface;
   if (auto i = val.one_of(params, "", "inside", {"parity", "vote", "winding"}))
     out.inside = *i == "parity" ? InsideTest::parity : *i == "vote" ? InsideTest::vote : InsideTest::winding;
+  if (params.contains("analyses")) {
+    try {
+      out.analyses = parse_analyses(params.at("analyses"));
+    } catch (const InvalidParams& e) {
+      val.errors.insert(val.errors.end(), e.errors().begin(), e.errors().end());
+    }
+  }
   if (!val.errors.empty()) throw InvalidParams(std::move(val.errors));
   return out;
 }

@@ -3,10 +3,12 @@
 // CLI and the HTTP API, parsed into engine types.
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <glm/mat3x3.hpp>
 #include <nlohmann/json_fwd.hpp>
 
+#include "api/analysis_request.h"
 #include "voxd/grid.h"
 #include "voxd/voxelize.h"
 
@@ -18,6 +20,8 @@ struct JobParams {
   bool orient_auto = false;
   VoxelMode mode = VoxelMode::solid;
   InsideTest inside = InsideTest::parity;
+  // Analyses the worker prepares once the volume exists (api/analysis_request.h).
+  std::vector<AnalysisRequest> analyses;
 };
 
 // Validates and converts. Unknown keys, wrong types and out-of-range values

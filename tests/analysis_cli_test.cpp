@@ -1,6 +1,7 @@
 // `voxd analyze` as a real process: analysis.json with exact answers for a
 // hollow box, an open mesh said to be open, and the published schema.
 #include <filesystem>
+#include <cstring>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -66,6 +67,53 @@ TEST_F(AnalyzeCli, HollowBoxHasOnePartOneVoidAndExactMassProperties) {
   EXPECT_EQ(peeled, 900u);
   EXPECT_GE(a.at("skin").at("layers").at(0).get<std::uint64_t>(), 488u);
   EXPECT_EQ(a.at("skin").at("max_depth").get<double>(), a.at("skin").at("max_depth_layers").get<double>() * 1.0);
+}
+
+// The files the service serves for a job, and the job JSON's analyses, with
+// the same bytes as the service's worker would keep (the HTTP tests check the
+// routes; here the CLI's own copies must agree with them and with the part).
+TEST_F(AnalyzeCli, WritesPreviewsTheThicknessVolumeAndTheRequestedAnalyses) {
+  // A plate 4 voxels thick on a unit grid: thickness 4 everywhere.
+  test::write_file(dir_ + "/plate.stl", test::to_binary_stl(test::make_box({1, 1, 1}, {19, 19, 5})));
+  const std::string params = R"({"grid":{"voxel_size":1,"origin":[0,0,0],"dims":[20,20,6]},
+      "analyses":[{"kind":"thickness","format":"raw","unit":"voxels"},{"kind":"preview","view":"-y"},
+                  {"kind":"radiography","axis":"z","format":"json"}]})";
+  {
+    std::ofstream out(dir_ + "/params.json");
+    out << params;
+  }
+  const json a = analyze(dir_ + "/plate.stl", "--params @" + dir_ + "/params.json");
+  EXPECT_EQ(a.at("thickness").at("min"), 4.0);
+  EXPECT_EQ(a.at("thickness").at("max"), 4.0);
+  for (const char* view : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
+    for (const char* suffix : {".png", "-thickness.png"}) {
+      const std::string file = dir_ + "/out/preview-from" + view + suffix;
+      const auto png = test::run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_png.py " + file + " --checksum");
+      ASSERT_EQ(png.exit_code, 0) << file << png.err;
+      EXPECT_EQ(json::parse(png.out).at("text").at("voxd:view"), view);
+    }
+  }
+  for (const char* name : {"section-x-thickness.png", "section-y-thickness.png", "section-z-thickness.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir_ + "/out/" + name)) << name;
+  // thickness.nrrd: model units (= voxels here), 4 inside the plate.
+  const auto nrrd = test::read_file(dir_ + "/out/thickness.nrrd");
+  const std::string text(nrrd.begin(), nrrd.end());
+  const std::size_t data = text.find("\n\n") + 2;
+  ASSERT_EQ(nrrd.size() - data, 20u * 20 * 6 * 4);
+  float v = 0;
+  std::memcpy(&v, nrrd.data() + data + 4 * (10 + 20 * (10 + 20 * 3)), 4);
+  EXPECT_EQ(v, 4.0f);
+  std::memcpy(&v, nrrd.data() + data, 4);
+  EXPECT_EQ(v, 0.0f);
+  // The requested analyses, named by their keys: the raw thickness equals
+  // the NRRD's data, and the radiography statistics see the 4-voxel plate.
+  const auto raw = test::read_file(dir_ + "/out/analyses/thickness_format-raw__unit-voxels.raw");
+  EXPECT_EQ(raw, std::vector<std::uint8_t>(nrrd.begin() + static_cast<std::ptrdiff_t>(data), nrrd.end()));
+  EXPECT_TRUE(std::filesystem::exists(dir_ + "/out/analyses/preview_view-my__colour-none.png"));
+  std::ifstream stats_file(dir_ + "/out/analyses/radiography_axis-z__measure-max__format-json__unit-voxels.json");
+  const json stats = json::parse(stats_file);
+  EXPECT_EQ(stats.at("max"), 4.0);
+  EXPECT_EQ(stats.at("rays"), 18 * 18);
 }
 
 TEST_F(AnalyzeCli, AnOpenMeshSaysItIsOpenInsteadOfAVolume) {

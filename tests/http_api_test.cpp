@@ -9,11 +9,13 @@
 #include <zlib.h>
 
 #include <atomic>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -752,6 +754,167 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
   wait_for_state(http(), slow.at("id"), "running");
   expect_problem(http().Get(("/v1/jobs/" + slow.at("id").get<std::string>() + "/analysis").c_str()), 409, "job-not-finished");
   http().Delete(("/v1/jobs/" + slow.at("id").get<std::string>()).c_str());
+}
+
+// The NRRD header's fields and the float32 data after the blank line.
+struct Nrrd {
+  std::map<std::string, std::string> fields;
+  std::vector<float> data;
+};
+Nrrd parse_nrrd(const std::string& bytes) {
+  Nrrd n;
+  const std::size_t end = bytes.find("\n\n");
+  EXPECT_NE(end, std::string::npos);
+  EXPECT_EQ(bytes.rfind("NRRD0004\n", 0), 0u);
+  std::istringstream lines(bytes.substr(0, end));
+  for (std::string line; std::getline(lines, line);) {
+    const auto colon = line.find(": ");
+    if (line.empty() || line[0] == '#' || colon == std::string::npos) continue;
+    n.fields[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  n.data.resize((bytes.size() - end - 2) / 4);
+  std::memcpy(n.data.data(), bytes.data() + end + 2, n.data.size() * 4);
+  return n;
+}
+
+TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
+  start();
+  // A plate 4 voxels thick (z voxels 1..4) over x, y voxels 1..18, voxel 0.5
+  // (wide enough for the images' legend strip).
+  const json job = submit(to_binary_stl(make_box({0.5, 0.5, 0.5}, {9.5, 9.5, 2.5})),
+                          R"({"grid":{"voxel_size":0.5,"origin":[0,0,0],"dims":[20,20,6]}})");
+  const std::string id = job.at("id");
+  ASSERT_EQ(wait_for_job(http(), id).at("state"), "succeeded");
+  auto voxel = [](int i, int j, int k) { return static_cast<std::size_t>(i + 20 * (j + 20 * k)); };
+
+  // The thickness volume: NRRD in model units by default. A plate of even
+  // thickness reports it exactly (4 voxels = 2 model units) at every voxel.
+  auto res = http().Get(("/v1/jobs/" + id + "/thickness").c_str());
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_EQ(res->get_header_value("Content-Type"), "application/x-nrrd");
+  EXPECT_EQ(res->get_header_value("X-Voxd-Dims"), "20 20 6");
+  EXPECT_EQ(res->get_header_value("X-Voxd-Unit"), "model units");
+  EXPECT_EQ(res->get_header_value("X-Voxd-Cache"), "miss");
+  const Nrrd nrrd = parse_nrrd(res->body);
+  EXPECT_EQ(nrrd.fields.at("type"), "float");
+  EXPECT_EQ(nrrd.fields.at("sizes"), "20 20 6");
+  EXPECT_EQ(nrrd.fields.at("space directions"), "(0.5,0,0) (0,0.5,0) (0,0,0.5)");
+  EXPECT_EQ(nrrd.fields.at("space origin"), "(0.25,0.25,0.25)");
+  EXPECT_EQ(nrrd.fields.at("endian"), "little");
+  ASSERT_EQ(nrrd.data.size(), 20u * 20 * 6);
+  for (int k = 0; k < 6; ++k)
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 20; ++i) {
+        const bool in = i >= 1 && i <= 18 && j >= 1 && j <= 18 && k >= 1 && k <= 4;
+        // Voxels within 2 of the rim are still covered by a centred ball.
+        ASSERT_EQ(nrrd.data[voxel(i, j, k)], in ? 2.0f : 0.0f) << i << "," << j << "," << k;
+      }
+  EXPECT_EQ(http().Get(("/v1/jobs/" + id + "/thickness").c_str())->get_header_value("X-Voxd-Cache"), "hit");
+  auto raw = http().Get(("/v1/jobs/" + id + "/thickness?format=raw&unit=voxels").c_str());
+  ASSERT_EQ(raw->body.size(), 20u * 20 * 6 * 4);
+  float v = 0;
+  std::memcpy(&v, raw->body.data() + voxel(5, 5, 2) * 4, 4);
+  EXPECT_EQ(v, 4.0f);
+  // RLE (value_type f32), decoded by the independent reader.
+  auto rle = http().Get(("/v1/jobs/" + id + "/thickness?format=rle").c_str());
+  write_file(dir_ + "/t.rle", bytes_of(rle->body));
+  const auto decoded = run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_rle.py " + dir_ +
+                                   "/t.rle " + dir_ + "/t.f32");
+  ASSERT_EQ(decoded.exit_code, 0) << decoded.err;
+  const auto* nrrd_bytes = reinterpret_cast<const std::uint8_t*>(nrrd.data.data());
+  EXPECT_EQ(read_file(dir_ + "/t.f32"), std::vector<std::uint8_t>(nrrd_bytes, nrrd_bytes + nrrd.data.size() * 4));
+  expect_problem(http().Get(("/v1/jobs/" + id + "/thickness?format=vtk").c_str()), 400, "invalid-query");
+
+  // Preview from +z ('+' escaped, and unescaped, which a query decodes to a
+  // space): the plate's footprint, shaded, on white.
+  auto pre = http().Get(("/v1/jobs/" + id + "/preview?view=%2Bz").c_str());
+  ASSERT_EQ(pre->status, 200) << pre->body;
+  EXPECT_EQ(pre->get_header_value("Content-Type"), "image/png");
+  json png = read_png(pre->body, dir_);
+  EXPECT_EQ(png.at("width"), 20);
+  EXPECT_EQ(png.at("height"), 20);
+  EXPECT_EQ(png.at("color_type"), 2);
+  EXPECT_EQ(png.at("text").at("voxd:view"), "+z");
+  EXPECT_EQ(http().Get(("/v1/jobs/" + id + "/preview?view=+z").c_str())->body, pre->body);
+  const json& px = png.at("pixels");
+  auto white = [&](int c, int r) {
+    const std::size_t p = 3 * static_cast<std::size_t>(r * 20 + c);
+    return px.at(p) == 255 && px.at(p + 1) == 255 && px.at(p + 2) == 255;
+  };
+  EXPECT_TRUE(white(0, 0));
+  EXPECT_FALSE(white(5, 5));
+  int part = 0;
+  for (int r = 0; r < 20; ++r)
+    for (int c = 0; c < 20; ++c) part += !white(c, r);
+  EXPECT_EQ(part, 18 * 18);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/preview?view=-x&colour=thickness").c_str())->body, dir_);
+  EXPECT_EQ(png.at("width"), 20);
+  EXPECT_GT(png.at("height").get<int>(), 6);  // the legend under the 20 x 6 view
+  expect_problem(http().Get(("/v1/jobs/" + id + "/preview?view=up").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + id + "/preview?angle=30").c_str()), 400, "invalid-query");
+
+  // Section coloured by thickness: RGB with a legend, grey without.
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2&colour=thickness").c_str())->body, dir_);
+  EXPECT_EQ(png.at("color_type"), 2);
+  EXPECT_GT(png.at("height").get<int>(), 20);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2").c_str())->body, dir_);
+  EXPECT_EQ(png.at("color_type"), 0);
+}
+
+TEST_F(HttpApiTest, AnalysesInTheJobJsonArePreparedByTheWorkerAndServedAsKept) {
+  start();
+  const json job = submit(to_binary_stl(make_box({1, 1, 1}, {9, 9, 4})),
+                          R"({"grid":{"voxel_size":1,"origin":[0,0,0],"dims":[10,10,6]},
+                              "analyses":[{"kind":"analysis","min_wall":4.5},
+                                          {"kind":"preview","view":"-x","colour":"thickness"},
+                                          {"kind":"section","axis":"z","index":99},
+                                          {"kind":"thickness","format":"raw","unit":"voxels"},
+                                          {"kind":"radiography","axis":"x","measure":"total","format":"json"}]})");
+  const std::string id = job.at("id");
+  ASSERT_EQ(job.at("analyses").size(), 5u);
+  EXPECT_EQ(job.at("analyses").at(0).at("state"), "pending");
+  const json done = wait_for_job(http(), id);
+  ASSERT_EQ(done.at("state"), "succeeded");
+  schemas_->add("JobStatus", done.dump());
+  const json& a = done.at("analyses");
+  ASSERT_EQ(a.size(), 5u);
+  EXPECT_EQ(a.at(0).at("url"), "/v1/jobs/" + id + "/analysis?cleanup=none&thickness=true&min_wall=4.5");
+  EXPECT_EQ(a.at(1).at("url"), "/v1/jobs/" + id + "/preview?view=-x&colour=thickness");
+  EXPECT_EQ(a.at(2).at("state"), "failed");
+  EXPECT_NE(a.at(2).at("error").get<std::string>().find("index must be an integer from 0 to 5"), std::string::npos)
+      << a.dump();
+  for (int i : {0, 1, 3, 4}) {
+    SCOPED_TRACE(a.at(i).dump());
+    EXPECT_EQ(a.at(i).at("state"), "ready");
+    EXPECT_TRUE(a.at(i).at("error").is_null());
+    auto res = http().Get(a.at(i).at("url").get<std::string>().c_str());
+    ASSERT_EQ(res->status, 200) << res->body;
+    EXPECT_EQ(res->get_header_value("X-Voxd-Cache"), "hit");  // the worker's bytes
+  }
+  // The worker's analysis is the route's: a 3-voxel plate (reported as 4,
+  // see voxd/local_thickness.h) fails a 4.5-unit minimum wall.
+  const json analysis = expect_json(http().Get(a.at(0).at("url").get<std::string>().c_str()), 200, "Analysis");
+  EXPECT_EQ(analysis.at("thickness").at("verdict"), "fail");
+  const json stats = expect_json(http().Get(a.at(4).at("url").get<std::string>().c_str()), 200, "RadiographyStats");
+  EXPECT_EQ(stats.at("max"), 8.0);
+  // Its record survives a restart.
+  server_->stop();
+  start();
+  EXPECT_EQ(expect_json(http().Get(("/v1/jobs/" + id).c_str()), 200, "JobStatus").at("analyses"), a);
+
+  // Bad analyses are refused at submission, each with its JSON pointer.
+  json p = expect_problem(post_multipart(http(), "/v1/jobs", to_binary_stl(make_box({1, 1, 1}, {2, 2, 2})), "b.stl",
+                                         R"({"analyses":[{"kind":"radiography","axis":"w"},{"kind":"hologram"},
+                                                         {"kind":"section","axis":"z"},{"kind":"preview","zoom":2}]})"),
+                          422, "invalid-params");
+  std::set<std::string> paths;
+  for (const auto& e : p.at("errors")) paths.insert(e.at("path"));
+  EXPECT_EQ(paths, (std::set<std::string>{"/analyses/0/axis", "/analyses/1/kind", "/analyses/2/index", "/analyses/3/zoom"}))
+      << p.dump();
+  p = expect_problem(post_multipart(http(), "/v1/voxelize", to_binary_stl(make_box({1, 1, 1}, {2, 2, 2})), "b.stl",
+                                    R"({"analyses":[{"kind":"preview"}]})"),
+                     422, "invalid-params");
+  EXPECT_EQ(p.at("errors").at(0).at("path"), "/analyses");
 }
 
 TEST(ServeCommand, HelpListsEverySettingWithItsDefaultAndBadSettingsAreRefused) {

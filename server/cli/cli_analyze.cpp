@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -13,10 +15,14 @@
 #include "server/cli/cli_params.h"
 #include "server/cli/mapped_file.h"
 #include "server/job_pipeline.h"
+#include "server/jobs/job_analyses.h"
 #include "voxd/analysis.h"
 #include "voxd/analysis_images.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
+#include "voxd/local_thickness.h"
+#include "voxd/preview.h"
+#include "voxd/volume_format.h"
 
 namespace voxd::cli {
 namespace {
@@ -24,12 +30,23 @@ namespace {
 constexpr const char* kUsage = R"(usage: voxd analyze MESH -o DIR [options]
 
 Voxelizes MESH with the job parameters, then analyses the voxel model and
-writes DIR/analysis.json and images (radiography-{x,y,z}-{min,max,total}.png:
-16-bit, one pixel value = one voxel, scale in the PNG's tEXt;
-radiography-*-max-colour.png; section-{x,y,z}.png through the middle): mass properties from the mesh (when it is closed)
-and from the voxels side by side, connected parts, enclosed voids, skin
-removal layers and hot spots, local wall thickness with thin and thick
-regions. Lengths are in the mesh's model units.
+writes into DIR what the HTTP API serves for a job:
+  analysis.json          mass properties from the mesh (when it is closed) and
+                         from the voxels side by side, connected parts,
+                         enclosed voids, skin removal layers and hot spots,
+                         local wall thickness with thin and thick regions
+  radiography-{x,y,z}-{min,max,total}.png
+                         16-bit, one pixel value = one voxel (scale in tEXt)
+  radiography-{x,y,z}-max-colour.png   false colour with a legend
+  section-{x,y,z}.png    the middle layer; section-*-thickness.png coloured
+                         by local thickness
+  preview-from{+x,-x,+y,-y,+z,-z}.png  shaded views; preview-*-thickness.png
+                         coloured by local thickness
+  thickness.nrrd         the local-thickness volume (float32, model units)
+  analyses/KEY.EXT       each entry of the job JSON's "analyses" array, the
+                         bytes its /v1/jobs/{id}/KIND route answers
+Lengths are in the mesh's model units. The thickness files need the local
+thickness (not with --no-thickness or --cleanup*).
 
   --params JSON|@FILE    job parameters, as for voxd voxelize and the HTTP API
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ, --padding P,
@@ -87,6 +104,12 @@ int analyze_command(int argc, char** argv) {
     }
   }
   if (args.has("cleanup") || args.has("cleanup-sheets")) options.cleanup = CleanupOptions{true, true, args.has("cleanup-sheets")};
+  // One local thickness map for the report, the images and the volume.
+  std::optional<DenseVolume<float>> map;
+  if (options.thickness && !options.cleanup) {
+    map = local_thickness(result.volume, threads);
+    options.thickness_map = &*map;
+  }
   const AnalysisReport report = analyze_volume(result.volume, options);
   nlohmann::json doc = api::analysis_to_json(report, result.grid, result.report, result.mesh_mass);
 
@@ -117,6 +140,59 @@ int analyze_command(int argc, char** argv) {
       write_png("radiography-" + a + "-" + to_string(m) + ".png", radiography_png(image, axis, m, false, scale));
     write_png("radiography-" + a + "-max-colour.png", radiography_png(image, axis, RadiographyMeasure::max, true, scale));
     write_png("section-" + a + ".png", section_png(result.volume, axis, result.grid.dims[axis] / 2));
+    if (map) write_png("section-" + a + "-thickness.png", section_png(result.volume, axis, result.grid.dims[axis] / 2, &*map));
+  }
+  for (const char* name : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
+    const View view = *parse_view(name);
+    write_png(std::string("preview-from") + name + ".png", preview_png(result.volume, view, nullptr, {}, threads));
+    if (map) write_png(std::string("preview-from") + name + "-thickness.png", preview_png(result.volume, view, &*map, {}, threads));
+  }
+  if (map) {
+    DenseVolume<float> model_units = *map;
+    for (float& v : model_units.values()) v *= static_cast<float>(result.grid.voxel_size);
+    const std::string file = *out_dir + "/thickness.nrrd";
+    FileSink sink(file + ".partial");
+    write_nrrd(model_units, "local thickness (model units)", sink);
+    sink.close();
+    std::filesystem::rename(file + ".partial", file);
+  }
+  // The job JSON's analyses, computed as the service's worker does, with
+  // this run's thickness map.
+  if (!params.analyses.empty()) {
+    std::map<std::string, std::string> kept;
+    if (map && !options.cleanup) {
+      kept["thickness-map.f32"] = std::string(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float));
+    }
+    const server::ArtifactAccess artifacts{
+        [&kept](const std::string& key) -> std::optional<std::string> {
+          auto it = kept.find(key);
+          if (it == kept.end()) return std::nullopt;
+          return it->second;
+        },
+        [&kept](const std::string& key, const std::string& bytes) { kept[key] = bytes; }};
+    server::JobSnapshot job;
+    job.id = "cli";
+    job.grid = result.grid;
+    job.mesh = result.report;
+    job.mesh_mass = result.mesh_mass;
+    std::filesystem::create_directories(*out_dir + "/analyses");
+    for (std::size_t i = 0; i < params.analyses.size(); ++i) {
+      const api::AnalysisRequest& request = params.analyses[i];
+      std::string bytes;
+      try {
+        bytes = server::job_analysis(request, job, result.volume, artifacts).bytes;
+      } catch (const server::AnalysisRejected& e) {
+        throw Error(ErrorCode::invalid_argument, "analyses/" + std::to_string(i) + ": " + e.what());
+      }
+      const std::string type = request.content_type();
+      const char* ext = type == "application/json" ? ".json" : type == "image/png" ? ".png"
+                        : type == "application/x-nrrd" ? ".nrrd" : type == "application/vnd.voxd.rle" ? ".rle" : ".raw";
+      const std::string file = *out_dir + "/analyses/" + request.artifact_key() + ext;
+      FileSink sink(file + ".partial");
+      sink.write(bytes.data(), bytes.size());
+      sink.close();
+      std::filesystem::rename(file + ".partial", file);
+    }
   }
   std::cerr << "analysis: " << report.components.parts.size() << " part(s), " << report.components.voids.size()
             << " void(s), skin " << report.skin.max_depth << " layers deep; wrote " << path << " and " << images << " images\n";

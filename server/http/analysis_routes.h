@@ -1,7 +1,9 @@
 #pragma once
 // Result routes of the manufacturing analysis under /v1/jobs/{id}/…:
-// analysis (JSON), radiography and section (PNG or JSON). Each is computed on
-// first request from the job's stored volume and kept beside it.
+// analysis (JSON), radiography (PNG or JSON), section and preview (PNG),
+// thickness (the local-thickness volume). Each is computed on first request
+// from the job's stored volume, unless the worker prepared it already (the
+// job JSON's "analyses"), and kept beside it (server/jobs/job_analyses.h).
 #include <functional>
 #include <string>
 #include <vector>

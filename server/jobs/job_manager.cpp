@@ -13,6 +13,7 @@
 
 #include "api/param_error.h"
 #include "server/jobs/content_hash.h"
+#include "server/jobs/job_analyses.h"
 #include "server/jobs/job_record.h"
 #include "server/jobs/job_store.h"
 #include "voxd/error.h"
@@ -185,6 +186,52 @@ struct JobManager::Impl {
     return s;
   }
 
+  // The analyses the job JSON asked for, computed now and kept as the
+  // routes would keep them. A request the grid cannot answer fails alone;
+  // cancellation stops the job.
+  nlohmann::json prepare_analyses(Job& job, const std::vector<api::AnalysisRequest>& requests, const VoxelJobResult& r,
+                        const BitVolume& volume) {
+    nlohmann::json status = analyses_status(requests, job.snap.id, "pending");
+    if (requests.empty()) return status;
+    JobSnapshot view;
+    {
+      std::lock_guard lock(mutex);
+      view = job.snap;
+    }
+    view.mesh = r.report;
+    view.mesh_mass = r.mesh_mass;
+    const std::string id = view.id;
+    const ArtifactAccess artifacts{
+        [this, id](const std::string& key) { return store.load_artifact(id, key); },
+        [this, &job, id](const std::string& key, const std::string& bytes) {
+          std::lock_guard guard(job.store_mutex);
+          if (job.removed) return;
+          try {
+            store.save_artifact(id, key, bytes);
+          } catch (const std::exception& e) {
+            spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
+          }
+        }};
+    for (std::size_t i = 0; i < requests.size(); ++i) {
+      const double n = static_cast<double>(requests.size());
+      job.control.set_span(0.5 + 0.5 * static_cast<double>(i) / n, 0.5 + 0.5 * static_cast<double>(i + 1) / n);
+      job.control.set_progress(0.0);
+      try {
+        job_analysis(requests[i], view, volume, artifacts, &job.control);
+        status[i]["state"] = "ready";
+      } catch (const AnalysisRejected& e) {
+        status[i]["state"] = "failed";
+        status[i]["error"] = e.what();
+      } catch (const Error& e) {
+        if (e.code() == ErrorCode::cancelled) throw;
+        status[i]["state"] = "failed";
+        status[i]["error"] = e.what();
+      }
+    }
+    job.control.set_span(0.0, 1.0);
+    return status;
+  }
+
   void work() {
     for (;;) {
       std::shared_ptr<Job> job;
@@ -207,11 +254,16 @@ struct JobManager::Impl {
       JobSnapshot done;
       std::shared_ptr<const BitVolume> volume;
       try {
+        const std::vector<api::AnalysisRequest> analyses = prepared.params.analyses;
+        // With analyses to prepare, voxelizing is the first half of the bar.
+        if (!analyses.empty()) job->control.set_span(0.0, 0.5);
         VoxelJobResult r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
         volume = std::make_shared<const BitVolume>(std::move(r.volume));
         if (!job->ephemeral) store.save_volume(job->snap.id, *volume);
+        nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, *volume);
         std::lock_guard lock(mutex);
         JobSnapshot& s = job->snap;
+        if (!analyses.empty()) s.analyses = std::move(analyses_done);
         s.state = JobState::succeeded;
         s.progress = 1.0;
         s.mesh = r.report;
@@ -371,6 +423,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
       s.params = params_json;
       s.cached = true;
       s.timings.clear();
+      s.analyses = analyses_status(params.analyses, s.id, "on_request");
       try {
         store.share_volume(original->id, s.id);
         store.save(s);
@@ -390,6 +443,9 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
     }
   }
 
+  if (ephemeral && !params.analyses.empty())
+    throw api::InvalidParams(std::vector<api::FieldError>{
+        {"/analyses", "synchronous voxelization answers with the volume only; submit to POST /v1/jobs for analyses"}});
   PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, config.limits);
   if (max_voxels > 0 && prepared.grid.voxel_count() > max_voxels)
     throw Error(ErrorCode::limit_exceeded, "the grid has " + std::to_string(prepared.grid.voxel_count()) +
@@ -414,6 +470,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   s.grid = prepared.grid;
   s.timings = prepared.timings.stages;
   s.content_hash = hash;
+  s.analyses = analyses_status(params.analyses, s.id, "pending");
   job->prepared = std::move(prepared);
   // Recorded before a worker can see it, so the final record always wins.
   persist(*job, s);

@@ -51,6 +51,10 @@ struct JobSnapshot {
   std::optional<JobFailure> failure;                    // when failed
   std::string content_hash;  // SHA-256 of mesh bytes + canonical params JSON (hex)
   bool cached = false;       // answered from an identical earlier job's result
+  // The job JSON's "analyses", one entry each: {"request", "url", "state",
+  // "error"}; state pending -> ready | failed, or on_request for a job
+  // answered from an earlier one's result (computed when first asked).
+  nlohmann::json analyses = nlohmann::json::array();
 };
 
 struct JobManagerConfig {

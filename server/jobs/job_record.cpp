@@ -99,6 +99,7 @@ json to_json(const JobSnapshot& job) {
   json timings = json::object();
   for (const auto& [stage, seconds] : job.timings) timings[stage] = seconds;
   out["timings"] = timings;
+  out["analyses"] = job.analyses;
   if (job.filled_voxels) {
     out["filled_voxels"] = *job.filled_voxels;
     out["filled_volume"] = static_cast<double>(*job.filled_voxels) * job.grid.voxel_volume();
@@ -151,6 +152,7 @@ JobSnapshot job_from_json(const json& r) {
     job.failure = JobFailure{type.rfind(prefix, 0) == 0 ? type.substr(prefix.size()) : type,
                              r.at("error").at("title"), r.at("error").at("detail")};
   }
+  if (r.contains("analyses") && r.at("analyses").is_array()) job.analyses = r.at("analyses");
   job.cached = r.at("cached");
   job.content_hash = r.at("content_hash");
   return job;

@@ -1,0 +1,297 @@
+#include "api/analysis_request.h"
+
+#include <charconv>
+#include <cmath>
+#include <initializer_list>
+
+#include "api/param_error.h"
+
+namespace voxd::api {
+namespace {
+
+using nlohmann::json;
+
+std::string number_text(double x) {
+  char buf[32];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
+  (void)ec;
+  return std::string(buf, end);
+}
+
+struct FieldReader {
+  const Fields& fields;
+  std::string prefix;
+  std::vector<FieldError> errors;
+  std::vector<std::string> used;
+
+  const std::string* find(const std::string& name) {
+    const std::string* found = nullptr;
+    for (const auto& [k, v] : fields) {
+      if (k != name) continue;
+      if (found) {
+        errors.push_back({prefix + "/" + name, "given more than once"});
+        return nullptr;
+      }
+      found = &v;
+    }
+    if (found) used.push_back(name);
+    return found;
+  }
+
+  std::string choice(const std::string& name, std::initializer_list<const char*> allowed, const char* fallback) {
+    const std::string* v = find(name);
+    if (!v) return fallback;
+    std::string list;
+    for (const char* a : allowed) {
+      if (*v == a) return *v;
+      list += list.empty() ? a : std::string(", ") + a;
+    }
+    errors.push_back({prefix + "/" + name, "must be one of " + list + ", got '" + *v + "'"});
+    return fallback;
+  }
+
+  std::optional<double> positive(const std::string& name) {
+    const std::string* v = find(name);
+    if (!v) return std::nullopt;
+    double x = 0;
+    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
+    if (ec != std::errc() || end != v->data() + v->size() || !std::isfinite(x) || x <= 0) {
+      errors.push_back({prefix + "/" + name, "must be a positive length in model units, got '" + *v + "'"});
+      return std::nullopt;
+    }
+    return x;
+  }
+
+  std::optional<double> finite(const std::string& name) {
+    const std::string* v = find(name);
+    if (!v) return std::nullopt;
+    double x = 0;
+    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
+    if (ec != std::errc() || end != v->data() + v->size() || !std::isfinite(x)) {
+      errors.push_back({prefix + "/" + name, "must be a number, got '" + *v + "'"});
+      return std::nullopt;
+    }
+    return x;
+  }
+
+  std::optional<std::int64_t> count(const std::string& name) {
+    const std::string* v = find(name);
+    if (!v) return std::nullopt;
+    std::int64_t x = 0;
+    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
+    if (ec != std::errc() || end != v->data() + v->size() || x < 0) {
+      errors.push_back({prefix + "/" + name, "must be a voxel layer index (an integer >= 0), got '" + *v + "'"});
+      return std::nullopt;
+    }
+    return x;
+  }
+
+  void reject_unknown() {
+    for (const auto& [k, v] : fields) {
+      bool known = false;
+      for (const auto& u : used) known = known || u == k;
+      if (!known) {
+        std::string list;
+        for (const auto& u : allowed) list += (list.empty() ? "" : ", ") + u;
+        errors.push_back({prefix + "/" + k, "unknown parameter; allowed here: " + list});
+      }
+    }
+  }
+  std::vector<std::string> allowed;
+};
+
+int axis_index(const std::string& a) { return a[0] - 'x'; }
+
+// Each one costs worker time and disk; a client that wants more asks the
+// routes afterwards.
+constexpr std::size_t kMaxAnalyses = 64;
+
+}  // namespace
+
+const char* to_string(AnalysisKind kind) {
+  switch (kind) {
+    case AnalysisKind::analysis: return "analysis";
+    case AnalysisKind::radiography: return "radiography";
+    case AnalysisKind::section: return "section";
+    case AnalysisKind::preview: return "preview";
+    case AnalysisKind::thickness: return "thickness";
+  }
+  return "?";
+}
+
+std::optional<AnalysisKind> analysis_kind_from_string(std::string_view name) {
+  for (AnalysisKind k : {AnalysisKind::analysis, AnalysisKind::radiography, AnalysisKind::section, AnalysisKind::preview,
+                         AnalysisKind::thickness})
+    if (name == to_string(k)) return k;
+  return std::nullopt;
+}
+
+AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& fields, const std::string& path_prefix) {
+  FieldReader in{fields, path_prefix, {}, {}, {}};
+  AnalysisRequest r;
+  r.kind = kind;
+  auto axis = [&] { return axis_index(in.choice("axis", {"x", "y", "z"}, "z")); };
+  switch (kind) {
+    case AnalysisKind::analysis:
+      in.allowed = {"cleanup", "thickness", "min_wall", "max_wall"};
+      r.cleanup = in.choice("cleanup", {"none", "debris", "sheets"}, "none");
+      r.thickness = in.choice("thickness", {"true", "false"}, "true") == "true";
+      r.min_wall = in.positive("min_wall");
+      r.max_wall = in.positive("max_wall");
+      if ((r.min_wall || r.max_wall) && !r.thickness)
+        in.errors.push_back({path_prefix + "/thickness", "min_wall and max_wall need the thickness analysis; drop thickness=false"});
+      break;
+    case AnalysisKind::radiography:
+      in.allowed = {"axis", "measure", "format", "unit"};
+      r.axis = axis();
+      r.measure = in.choice("measure", {"min", "max", "total"}, "max");
+      r.format = in.choice("format", {"png16", "png", "json"}, "png16");
+      r.unit = in.choice("unit", {"voxels", "model"}, "voxels");
+      break;
+    case AnalysisKind::section:
+      in.allowed = {"axis", "index", "coordinate", "colour"};
+      r.axis = axis();
+      r.index = in.count("index");
+      r.coordinate = in.finite("coordinate");
+      r.colour = in.choice("colour", {"none", "thickness"}, "none");
+      if (r.index.has_value() == r.coordinate.has_value() && in.errors.empty())
+        in.errors.push_back({path_prefix + "/index", "give exactly one of index (voxel layer) or coordinate (model units)"});
+      break;
+    case AnalysisKind::preview: {
+      in.allowed = {"view", "colour"};
+      // A '+' left unescaped in a URL query arrives as a space.
+      Fields copy = fields;
+      for (auto& [k, v] : copy)
+        if (k == "view" && v.size() == 2 && v[0] == ' ') v[0] = '+';
+      FieldReader view_in{copy, path_prefix, {}, {}, {}};
+      r.view = view_in.choice("view", {"+x", "-x", "+y", "-y", "+z", "-z"}, "+z");
+      in.errors.insert(in.errors.end(), view_in.errors.begin(), view_in.errors.end());
+      in.used.push_back("view");
+      r.colour = in.choice("colour", {"none", "thickness"}, "none");
+      break;
+    }
+    case AnalysisKind::thickness:
+      in.allowed = {"format", "unit"};
+      r.format = in.choice("format", {"nrrd", "raw", "rle"}, "nrrd");
+      r.unit = in.choice("unit", {"model", "voxels"}, "model");
+      break;
+  }
+  in.reject_unknown();
+  if (!in.errors.empty()) throw InvalidParams(std::move(in.errors));
+  return r;
+}
+
+std::string AnalysisRequest::query() const {
+  const std::string a(1, "xyz"[axis]);
+  switch (kind) {
+    case AnalysisKind::analysis: {
+      std::string q = "cleanup=" + cleanup + "&thickness=" + (thickness ? "true" : "false");
+      if (min_wall) q += "&min_wall=" + number_text(*min_wall);
+      if (max_wall) q += "&max_wall=" + number_text(*max_wall);
+      return q;
+    }
+    case AnalysisKind::radiography: return "axis=" + a + "&measure=" + measure + "&format=" + format + "&unit=" + unit;
+    case AnalysisKind::section:
+      return "axis=" + a + (index ? "&index=" + std::to_string(*index) : "&coordinate=" + number_text(*coordinate)) +
+             "&colour=" + colour;
+    case AnalysisKind::preview: return "view=" + std::string(view[0] == '+' ? "%2B" : "-") + view.substr(1) + "&colour=" + colour;
+    case AnalysisKind::thickness: return "format=" + format + "&unit=" + unit;
+  }
+  return {};
+}
+
+std::string AnalysisRequest::artifact_key() const {
+  // File-name safe: the query with its separators and signs spelled out.
+  std::string key = std::string(to_string(kind)) + "_";
+  for (char c : query()) {
+    if (c == '&') key += "__";
+    else if (c == '=') key += "-";
+    else if (c == '%') key += "p";
+    else if (c == '.' || c == '_' || (c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z')) key += c;
+    else if (c == '-') key += "m";
+    else key += "x";
+  }
+  return key;
+}
+
+const char* AnalysisRequest::content_type() const {
+  switch (kind) {
+    case AnalysisKind::analysis: return "application/json";
+    case AnalysisKind::radiography: return format == "json" ? "application/json" : "image/png";
+    case AnalysisKind::section:
+    case AnalysisKind::preview: return "image/png";
+    case AnalysisKind::thickness:
+      return format == "rle" ? "application/vnd.voxd.rle" : format == "nrrd" ? "application/x-nrrd" : "application/octet-stream";
+  }
+  return "application/octet-stream";
+}
+
+std::vector<AnalysisRequest> parse_analyses(const json& analyses) {
+  std::vector<FieldError> errors;
+  std::vector<AnalysisRequest> out;
+  if (!analyses.is_array())
+    throw InvalidParams(std::vector<FieldError>{
+        {"/analyses", "must be an array of analysis objects, got " + std::string(analyses.type_name())}});
+  if (analyses.size() > kMaxAnalyses)
+    throw InvalidParams(std::vector<FieldError>{{"/analyses", "at most " + std::to_string(kMaxAnalyses) + " analyses per job"}});
+  for (std::size_t i = 0; i < analyses.size(); ++i) {
+    const std::string path = "/analyses/" + std::to_string(i);
+    const json& a = analyses[i];
+    if (!a.is_object()) {
+      errors.push_back({path, "must be an object with a \"kind\", got " + std::string(a.type_name())});
+      continue;
+    }
+    std::optional<AnalysisKind> kind;
+    if (!a.contains("kind") || !a.at("kind").is_string() || !(kind = analysis_kind_from_string(a.at("kind").get<std::string>()))) {
+      errors.push_back({path + "/kind", "must be one of analysis, radiography, section, preview, thickness"});
+      continue;
+    }
+    Fields fields;
+    bool typed = true;
+    for (const auto& [k, v] : a.items()) {
+      if (k == "kind") continue;
+      if (v.is_string()) fields.emplace_back(k, v.get<std::string>());
+      else if (v.is_boolean()) fields.emplace_back(k, v.get<bool>() ? "true" : "false");
+      else if (v.is_number_integer()) fields.emplace_back(k, v.dump());
+      else if (v.is_number()) fields.emplace_back(k, number_text(v.get<double>()));
+      else {
+        errors.push_back({path + "/" + k, "must be a string, number or boolean, got " + std::string(v.type_name())});
+        typed = false;
+      }
+    }
+    if (!typed) continue;
+    try {
+      out.push_back(parse_analysis_request(*kind, fields, path));
+    } catch (const InvalidParams& e) {
+      errors.insert(errors.end(), e.errors().begin(), e.errors().end());
+    }
+  }
+  if (!errors.empty()) throw InvalidParams(std::move(errors));
+  return out;
+}
+
+nlohmann::json to_json(const AnalysisRequest& r) {
+  json j{{"kind", to_string(r.kind)}};
+  switch (r.kind) {
+    case AnalysisKind::analysis:
+      j["cleanup"] = r.cleanup;
+      j["thickness"] = r.thickness;
+      if (r.min_wall) j["min_wall"] = *r.min_wall;
+      if (r.max_wall) j["max_wall"] = *r.max_wall;
+      break;
+    case AnalysisKind::radiography:
+      j.update({{"axis", std::string(1, "xyz"[r.axis])}, {"measure", r.measure}, {"format", r.format}, {"unit", r.unit}});
+      break;
+    case AnalysisKind::section:
+      j["axis"] = std::string(1, "xyz"[r.axis]);
+      if (r.index) j["index"] = *r.index;
+      if (r.coordinate) j["coordinate"] = *r.coordinate;
+      j["colour"] = r.colour;
+      break;
+    case AnalysisKind::preview: j.update({{"view", r.view}, {"colour", r.colour}}); break;
+    case AnalysisKind::thickness: j.update({{"format", r.format}, {"unit", r.unit}}); break;
+  }
+  return j;
+}
+
+}  // namespace voxd::api

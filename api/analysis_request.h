@@ -1,0 +1,64 @@
+#pragma once
+// One analysis a client asks for: the query of a /v1/jobs/{id}/<kind> route,
+// or an entry of the job JSON's "analyses" array (the same names and values,
+// plus "kind"), so a result prepared by the worker up front and one computed
+// on first request are the same bytes under the same key.
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace voxd::api {
+
+enum class AnalysisKind { analysis, radiography, section, preview, thickness };
+const char* to_string(AnalysisKind kind);
+std::optional<AnalysisKind> analysis_kind_from_string(std::string_view name);
+
+struct AnalysisRequest {
+  AnalysisKind kind = AnalysisKind::analysis;
+  // analysis: clean-up before measuring, local thickness on/off, thin- and
+  // thick-wall thresholds in model units.
+  std::string cleanup = "none";  // none | debris | sheets
+  bool thickness = true;
+  std::optional<double> min_wall, max_wall;
+  // radiography, section: the axis (0 = x).
+  int axis = 2;
+  // radiography: min | max | total; png16 | png | json; voxels | model.
+  // thickness: format raw | rle | nrrd; unit model | voxels.
+  std::string measure = "max";
+  std::string format;
+  std::string unit;
+  // section: exactly one of a voxel layer index or a model coordinate.
+  std::optional<std::int64_t> index;
+  std::optional<double> coordinate;
+  // section, preview: none | thickness (colour by local thickness).
+  std::string colour = "none";
+  // preview: +x | -x | +y | -y | +z | -z.
+  std::string view = "+z";
+
+  // Every parameter of the kind, defaults included, in a fixed order, e.g.
+  // "axis=z&measure=max&format=png16&unit=voxels": the route's canonical URL
+  // query and, with the kind, the key its result is kept under.
+  std::string query() const;
+  std::string artifact_key() const;
+  // MIME type of the result.
+  const char* content_type() const;
+};
+
+// Field values as text, as they come in a URL query.
+using Fields = std::vector<std::pair<std::string, std::string>>;
+
+// Validates the fields of one request. Throws InvalidParams listing every
+// problem, each at path_prefix + "/" + field name.
+AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& fields, const std::string& path_prefix);
+
+// The job JSON's "analyses" array. Throws InvalidParams with paths such as
+// "/analyses/2/axis".
+std::vector<AnalysisRequest> parse_analyses(const nlohmann::json& analyses);
+
+nlohmann::json to_json(const AnalysisRequest& request);
+
+}  // namespace voxd::api

@@ -1,0 +1,194 @@
+#include "server/jobs/job_analyses.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include <nlohmann/json.hpp>
+
+#include "api/analysis_json.h"
+#include "voxd/analysis.h"
+#include "voxd/analysis_images.h"
+#include "voxd/byte_sink.h"
+#include "voxd/error.h"
+#include "voxd/preview.h"
+#include "voxd/radiography.h"
+#include "voxd/section.h"
+#include "voxd/volume_format.h"
+
+namespace voxd::server {
+namespace {
+
+using nlohmann::json;
+using api::AnalysisKind;
+using api::AnalysisRequest;
+
+constexpr const char* kThicknessMapKey = "thickness-map.f32";
+
+std::string to_bytes(const std::vector<std::uint8_t>& v) { return std::string(v.begin(), v.end()); }
+
+RadiographyMeasure measure_of(const AnalysisRequest& r) {
+  return r.measure == "min" ? RadiographyMeasure::min : r.measure == "max" ? RadiographyMeasure::max : RadiographyMeasure::total;
+}
+
+PngScale radiography_scale(const AnalysisRequest& r, const Grid& g) {
+  return r.unit == "model" ? PngScale{g.voxel_size, "model units"} : PngScale{1.0, "voxel"};
+}
+
+std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& volume,
+                          const ArtifactAccess& artifacts, JobControl* control) {
+  AnalysisOptions options;
+  if (r.cleanup != "none") options.cleanup = CleanupOptions{true, true, r.cleanup == "sheets"};
+  options.thickness = r.thickness;
+  options.min_wall_voxels = r.min_wall.value_or(0) / job.grid.voxel_size;
+  options.max_wall_voxels = r.max_wall.value_or(0) / job.grid.voxel_size;
+  std::optional<DenseVolume<float>> map;
+  if (r.thickness && !options.cleanup) {
+    map = job_thickness_map(volume, artifacts, control);
+    options.thickness_map = &*map;
+  }
+  const AnalysisReport report = analyze_volume(volume, options, control);
+  return api::analysis_to_json(report, job.grid, job.mesh, job.mesh_mass).dump();
+}
+
+std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& volume) {
+  const ThicknessImage image = radiography(volume, r.axis);
+  const RadiographyMeasure m = measure_of(r);
+  const PngScale scale = radiography_scale(r, job.grid);
+  if (r.format == "json") {
+    const ThicknessStats s = thickness_stats(values_of(image, m), 32);
+    json histogram = json::array();
+    for (std::uint64_t n : s.histogram) histogram.push_back(n);
+    const double k = scale.per_value;
+    return json{{"axis", std::string(1, "xyz"[r.axis])}, {"measure", r.measure}, {"unit", scale.unit},
+                {"voxel_size", job.grid.voxel_size}, {"width", image.width}, {"height", image.height}, {"rays", s.rays},
+                {"min", s.min * k}, {"max", s.max * k}, {"mean", s.mean * k},
+                {"p5", s.p5 * k}, {"p50", s.p50 * k}, {"p95", s.p95 * k},
+                {"histogram", {{"min", s.min * k}, {"bin_width", s.bin_width * k}, {"counts", histogram}}}}
+        .dump();
+  }
+  return to_bytes(radiography_png(image, r.axis, m, r.format == "png", scale, {{"voxd:job", job.id}}));
+}
+
+std::int64_t section_layer(const AnalysisRequest& r, const Grid& g) {
+  if (r.coordinate) {
+    try {
+      return section_index(g, r.axis, *r.coordinate);
+    } catch (const Error& e) {
+      throw AnalysisRejected(e.what());
+    }
+  }
+  if (*r.index >= g.dims[r.axis])
+    throw AnalysisRejected("index must be an integer from 0 to " + std::to_string(g.dims[r.axis] - 1) + " along " +
+                           std::string(1, "xyz"[r.axis]));
+  return *r.index;
+}
+
+// The thickness map in the unit asked for: voxels as computed, or model
+// units (times the voxel size).
+DenseVolume<float> thickness_in(DenseVolume<float> map, const std::string& unit) {
+  if (unit == "model") {
+    const auto h = static_cast<float>(map.grid().voxel_size);
+    for (float& v : map.values()) v *= h;
+  }
+  return map;
+}
+
+std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, const ArtifactAccess& artifacts,
+                             JobControl* control) {
+  const DenseVolume<float> map = thickness_in(job_thickness_map(volume, artifacts, control), r.unit);
+  VectorSink out;
+  if (r.format == "rle") {
+    write_rle(map, out);
+  } else if (r.format == "raw") {
+    write_raw(map, out);
+  } else {
+    write_nrrd(map, r.unit == "model" ? "local thickness (model units)" : "local thickness (voxels)", out);
+  }
+  return to_bytes(out.data);
+}
+
+}  // namespace
+
+ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id) {
+  return {[&jobs, id](const std::string& key) { return jobs.load_artifact(id, key); },
+          [&jobs, id](const std::string& key, const std::string& bytes) { jobs.save_artifact(id, key, bytes); }};
+}
+
+DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control) {
+  DenseVolume<float> map(volume.grid(), 0.0f);
+  if (auto kept = artifacts.load(kThicknessMapKey); kept && kept->size() == map.values().size() * sizeof(float)) {
+    std::memcpy(map.values().data(), kept->data(), kept->size());
+    return map;
+  }
+  map = local_thickness(volume, 0, control);
+  artifacts.save(kThicknessMapKey, std::string(reinterpret_cast<const char*>(map.values().data()),
+                                               map.values().size() * sizeof(float)));
+  return map;
+}
+
+AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& volume,
+                            const ArtifactAccess& artifacts, JobControl* control) {
+  const std::string key = r.artifact_key();
+  if (auto kept = artifacts.load(key)) return {std::move(*kept), true};
+  std::string bytes;
+  switch (r.kind) {
+    case AnalysisKind::analysis: bytes = analysis_json(r, job, volume, artifacts, control); break;
+    case AnalysisKind::radiography: bytes = radiography_result(r, job, volume); break;
+    case AnalysisKind::section: {
+      const std::int64_t layer = section_layer(r, job.grid);
+      std::optional<DenseVolume<float>> map;
+      if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
+      bytes = to_bytes(section_png(volume, r.axis, layer, map ? &*map : nullptr, {{"voxd:job", job.id}}));
+      break;
+    }
+    case AnalysisKind::preview: {
+      std::optional<DenseVolume<float>> map;
+      if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
+      bytes = to_bytes(preview_png(volume, *parse_view(r.view), map ? &*map : nullptr, {{"voxd:job", job.id}}));
+      break;
+    }
+    case AnalysisKind::thickness: bytes = thickness_volume(r, volume, artifacts, control); break;
+  }
+  artifacts.save(key, bytes);
+  return {std::move(bytes), false};
+}
+
+std::vector<std::pair<std::string, std::string>> analysis_headers(const AnalysisRequest& r, const Grid& grid) {
+  auto scale = [](double per_value, const std::string& unit) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", per_value);
+    return std::string("1 pixel value = ") + buf + " " + unit;
+  };
+  switch (r.kind) {
+    case AnalysisKind::radiography: {
+      const PngScale s = radiography_scale(r, grid);
+      return {{"X-Voxd-Scale", scale(s.per_value, s.unit)}};
+    }
+    case AnalysisKind::thickness: {
+      char dims[96];
+      std::snprintf(dims, sizeof dims, "%lld %lld %lld", static_cast<long long>(grid.dims.x),
+                    static_cast<long long>(grid.dims.y), static_cast<long long>(grid.dims.z));
+      char origin[128];
+      std::snprintf(origin, sizeof origin, "%.17g %.17g %.17g", grid.origin.x, grid.origin.y, grid.origin.z);
+      char size[40];
+      std::snprintf(size, sizeof size, "%.17g", grid.voxel_size);
+      return {{"X-Voxd-Dims", dims}, {"X-Voxd-Origin", origin}, {"X-Voxd-Voxel-Size", size},
+              {"X-Voxd-Unit", r.unit == "model" ? "model units" : "voxels"}};
+    }
+    default: return {};
+  }
+}
+
+nlohmann::json analyses_status(const std::vector<AnalysisRequest>& requests, const std::string& id, const char* state) {
+  json out = json::array();
+  for (const AnalysisRequest& r : requests)
+    out.push_back({{"request", api::to_json(r)}, {"url", analysis_url(r, id)}, {"state", state}, {"error", nullptr}});
+  return out;
+}
+
+std::string analysis_url(const AnalysisRequest& r, const std::string& id) {
+  return "/v1/jobs/" + id + "/" + to_string(r.kind) + "?" + r.query();
+}
+
+}  // namespace voxd::server

@@ -1,0 +1,59 @@
+#pragma once
+// The analyses of a succeeded job (api/analysis_request.h) as the bytes their
+// routes serve. The same functions run in the worker, for the analyses a job
+// JSON asks for up front, and in the HTTP routes, for the ones asked later,
+// and both keep the result under the request's artifact key, so a client
+// gets identical bytes either way.
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "api/analysis_request.h"
+#include "server/jobs/job_manager.h"
+#include "voxd/bit_volume.h"
+#include "voxd/dense_volume.h"
+#include "voxd/progress.h"
+
+namespace voxd::server {
+
+// Where a job's kept results live (the job store's artifacts folder).
+struct ArtifactAccess {
+  std::function<std::optional<std::string>(const std::string& key)> load;
+  std::function<void(const std::string& key, const std::string& bytes)> save;
+};
+ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id);
+
+// A request this job cannot answer (a section index beyond the grid): the
+// message says what is accepted. HTTP answers 400; a job's analyses entry
+// says "failed" with the message.
+class AnalysisRejected : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct AnalysisResult {
+  std::string bytes;
+  bool kept = false;  // answered from the kept artifact
+};
+
+// The result, from the kept artifact when there is one, else computed, kept
+// and returned. `control` (may be null) carries progress and cancellation.
+AnalysisResult job_analysis(const api::AnalysisRequest& request, const JobSnapshot& job, const BitVolume& volume,
+                            const ArtifactAccess& artifacts, JobControl* control = nullptr);
+
+// Extra response headers of a request (X-Voxd-Scale for images and volumes).
+std::vector<std::pair<std::string, std::string>> analysis_headers(const api::AnalysisRequest& request, const Grid& grid);
+
+// The URL of a request's route for job `id`, canonical query included.
+std::string analysis_url(const api::AnalysisRequest& request, const std::string& id);
+
+// The status entries of a job's requested analyses, all in `state`.
+nlohmann::json analyses_status(const std::vector<api::AnalysisRequest>& requests, const std::string& id, const char* state);
+
+// The job's local thickness map (voxels), computed once and kept.
+DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control);
+
+}  // namespace voxd::server
