@@ -131,9 +131,14 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& fields, 
   AnalysisRequest r;
   r.kind = kind;
   auto axis = [&] { return axis_index(in.choice("axis", {"x", "y", "z"}, "z")); };
+  auto peel = [&] {
+    if (auto n = in.count("peel")) r.peel = *n;
+    r.peel_metric = in.choice("peel_metric", {"faces", "euclidean"}, "faces");
+  };
   switch (kind) {
     case AnalysisKind::analysis:
-      in.allowed = {"cleanup", "thickness", "min_wall", "max_wall"};
+      in.allowed = {"cleanup", "thickness", "min_wall", "max_wall", "peel_metric"};
+      r.peel_metric = in.choice("peel_metric", {"faces", "euclidean"}, "faces");
       r.cleanup = in.choice("cleanup", {"none", "debris", "sheets"}, "none");
       r.thickness = in.choice("thickness", {"true", "false"}, "true") == "true";
       r.min_wall = in.positive("min_wall");
@@ -142,15 +147,17 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& fields, 
         in.errors.push_back({path_prefix + "/thickness", "min_wall and max_wall need the thickness analysis; drop thickness=false"});
       break;
     case AnalysisKind::radiography:
-      in.allowed = {"axis", "measure", "format", "unit"};
+      in.allowed = {"axis", "measure", "format", "unit", "peel", "peel_metric"};
       r.axis = axis();
+      peel();
       r.measure = in.choice("measure", {"min", "max", "total"}, "max");
       r.format = in.choice("format", {"png16", "png", "json"}, "png16");
       r.unit = in.choice("unit", {"voxels", "model"}, "voxels");
       break;
     case AnalysisKind::section:
-      in.allowed = {"axis", "index", "coordinate", "colour"};
+      in.allowed = {"axis", "index", "coordinate", "colour", "peel", "peel_metric"};
       r.axis = axis();
+      peel();
       r.index = in.count("index");
       r.coordinate = in.finite("coordinate");
       r.colour = in.choice("colour", {"none", "thickness"}, "none");
@@ -181,6 +188,11 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& fields, 
   return r;
 }
 
+std::string AnalysisRequest::peel_query() const {
+  // Only when peeling, so the plain requests keep their short URLs.
+  return peel > 0 ? "&peel=" + std::to_string(peel) + "&peel_metric=" + peel_metric : std::string();
+}
+
 std::string AnalysisRequest::query() const {
   const std::string a(1, "xyz"[axis]);
   switch (kind) {
@@ -188,12 +200,14 @@ std::string AnalysisRequest::query() const {
       std::string q = "cleanup=" + cleanup + "&thickness=" + (thickness ? "true" : "false");
       if (min_wall) q += "&min_wall=" + number_text(*min_wall);
       if (max_wall) q += "&max_wall=" + number_text(*max_wall);
+      if (peel_metric != "faces") q += "&peel_metric=" + peel_metric;
       return q;
     }
-    case AnalysisKind::radiography: return "axis=" + a + "&measure=" + measure + "&format=" + format + "&unit=" + unit;
+    case AnalysisKind::radiography:
+      return "axis=" + a + "&measure=" + measure + "&format=" + format + "&unit=" + unit + peel_query();
     case AnalysisKind::section:
       return "axis=" + a + (index ? "&index=" + std::to_string(*index) : "&coordinate=" + number_text(*coordinate)) +
-             "&colour=" + colour;
+             "&colour=" + colour + peel_query();
     case AnalysisKind::preview: return "view=" + std::string(view[0] == '+' ? "%2B" : "-") + view.substr(1) + "&colour=" + colour;
     case AnalysisKind::thickness: return "format=" + format + "&unit=" + unit;
   }
@@ -274,19 +288,23 @@ nlohmann::json to_json(const AnalysisRequest& r) {
   json j{{"kind", to_string(r.kind)}};
   switch (r.kind) {
     case AnalysisKind::analysis:
+      j["peel_metric"] = r.peel_metric;
       j["cleanup"] = r.cleanup;
       j["thickness"] = r.thickness;
       if (r.min_wall) j["min_wall"] = *r.min_wall;
       if (r.max_wall) j["max_wall"] = *r.max_wall;
       break;
     case AnalysisKind::radiography:
-      j.update({{"axis", std::string(1, "xyz"[r.axis])}, {"measure", r.measure}, {"format", r.format}, {"unit", r.unit}});
+      j.update({{"axis", std::string(1, "xyz"[r.axis])}, {"measure", r.measure}, {"format", r.format}, {"unit", r.unit},
+                {"peel", r.peel}, {"peel_metric", r.peel_metric}});
       break;
     case AnalysisKind::section:
       j["axis"] = std::string(1, "xyz"[r.axis]);
       if (r.index) j["index"] = *r.index;
       if (r.coordinate) j["coordinate"] = *r.coordinate;
       j["colour"] = r.colour;
+      j["peel"] = r.peel;
+      j["peel_metric"] = r.peel_metric;
       break;
     case AnalysisKind::preview: j.update({{"view", r.view}, {"colour", r.colour}}); break;
     case AnalysisKind::thickness: j.update({{"format", r.format}, {"unit", r.unit}}); break;

@@ -34,6 +34,10 @@ struct AnalysisRequest {
   // section: exactly one of a voxel layer index or a model coordinate.
   std::optional<std::int64_t> index;
   std::optional<double> coordinate;
+  // analysis: how the skin-removal layers are counted. radiography, section:
+  // the model after `peel` layers of skin removal (0 = as voxelized).
+  std::string peel_metric = "faces";  // faces | euclidean
+  std::int64_t peel = 0;
   // section, preview: none | thickness (colour by local thickness).
   std::string colour = "none";
   // preview: +x | -x | +y | -y | +z | -z.
@@ -43,6 +47,7 @@ struct AnalysisRequest {
   // "axis=z&measure=max&format=png16&unit=voxels": the route's canonical URL
   // query and, with the kind, the key its result is kept under.
   std::string query() const;
+  std::string peel_query() const;
   std::string artifact_key() const;
   // MIME type of the result.
   const char* content_type() const;

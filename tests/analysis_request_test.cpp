@@ -88,7 +88,13 @@ TEST(AnalysisRequest, JobJsonAnalysesAreTypedAndCheckedTogetherWithTheRest) {
   EXPECT_EQ(p.analyses[1].axis, 1);
   EXPECT_EQ(p.analyses[1].index, 3);
   EXPECT_EQ(p.analyses[2].view, "-y");
-  EXPECT_EQ(to_json(p.analyses[1]), json::parse(R"({"kind":"section","axis":"y","index":3,"colour":"thickness"})"));
+  EXPECT_EQ(to_json(p.analyses[1]),
+            json::parse(R"({"kind":"section","axis":"y","index":3,"colour":"thickness","peel":0,"peel_metric":"faces"})"));
+  // Peeling shows in the query only when asked for.
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::section, {{"index", "1"}, {"peel", "2"}, {"peel_metric", "euclidean"}}, "").query(),
+            "axis=z&index=1&colour=none&peel=2&peel_metric=euclidean");
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::analysis, {{"peel_metric", "euclidean"}}, "").query(),
+            "cleanup=none&thickness=true&peel_metric=euclidean");
   // A grid error and analyses errors come back in one answer.
   EXPECT_EQ(error_paths([] {
               parse_job_params(json::parse(R"({"grid":{"resolution":0},"analyses":[

@@ -742,6 +742,18 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
   EXPECT_EQ(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=10").c_str())->body, sec->body);
   png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2").c_str())->body, dir_);
   for (const auto& v : png.at("pixels")) ASSERT_EQ(v, 0);
+  // After one peel of skin the 10 x 6 section is 8 x 4; two Euclidean peels leave 6 x 2.
+  for (const auto& [query, want] : {std::pair<std::string, int>{"peel=1", 32}, {"peel=2&peel_metric=euclidean", 12}}) {
+    png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=10&" + query).c_str())->body, dir_);
+    int n = 0;
+    for (const auto& v : png.at("pixels")) n += v.get<int>() == 255;
+    EXPECT_EQ(n, want) << query;
+    EXPECT_FALSE(png.at("text").at("voxd:peeled").get<std::string>().empty());
+  }
+  // Radiography after one peel: the ray through the middle crosses 16 - 2 voxels.
+  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=z&measure=total&peel=1").c_str())->body, dir_);
+  EXPECT_EQ(png.at("pixels").at(4 * 20 + 8), 14);
+  EXPECT_EQ(png.at("pixels").at(2 * 20 + 4), 0);  // the skin's corner ray is empty now
   // Bad queries, unknown jobs, unfinished jobs, wrong methods.
   expect_problem(http().Get(("/v1/jobs/" + id + "/radiography?axis=w").c_str()), 400, "invalid-query");
   expect_problem(http().Get(("/v1/jobs/" + id + "/radiography?measure=average").c_str()), 400, "invalid-query");

@@ -1,5 +1,6 @@
 // Peel depth against a brute-force city-block distance and an explicit
 // erosion loop, with shapes whose layers are known; clean-up counts.
+#include <cstdint>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -50,6 +51,75 @@ std::vector<std::uint16_t> erode_layers(const BitVolume& v) {
     cur = std::move(next);
   }
   return layer;
+}
+
+// Euclidean peeling by its definition: the layer of a filled voxel is the
+// smallest integer r with r^2 >= its squared distance to the nearest empty
+// voxel centre (the grid's outside counting as empty, one layer out).
+TEST(SkinRemoval, EuclideanPeelDepthIsTheCeilingOfTheDistanceToTheOutside) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 10; ++trial) {
+    const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 30 + 1), static_cast<std::int64_t>(rng() % 14 + 1),
+                            static_cast<std::int64_t>(rng() % 12 + 1));
+    BitVolume v(unit_grid(dims));
+    for (std::int64_t k = 0; k < dims.z; ++k)
+      for (std::int64_t j = 0; j < dims.y; ++j)
+        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, rng() % 10 != 0);
+    const auto depth = peel_depth(v, 2, PeelMetric::euclidean);
+    for (std::int64_t k = 0; k < dims.z; ++k)
+      for (std::int64_t j = 0; j < dims.y; ++j)
+        for (std::int64_t i = 0; i < dims.x; ++i) {
+          if (!v.get(i, j, k)) {
+            ASSERT_EQ(depth.at(i, j, k), 0);
+            continue;
+          }
+          std::int64_t best = INT64_MAX;
+          for (std::int64_t c = -1; c <= dims.z; ++c)
+            for (std::int64_t b = -1; b <= dims.y; ++b)
+              for (std::int64_t a = -1; a <= dims.x; ++a) {
+                const bool outside = a < 0 || b < 0 || c < 0 || a >= dims.x || b >= dims.y || c >= dims.z;
+                if (!outside && v.get(a, b, c)) continue;
+                best = std::min(best, (a - i) * (a - i) + (b - j) * (b - j) + (c - k) * (c - k));
+              }
+          std::int64_t r = 0;
+          while (r * r < best) ++r;
+          ASSERT_EQ(depth.at(i, j, k), r) << i << "," << j << "," << k;
+        }
+  }
+}
+
+// On a wall at 45 degrees the 6-connected layers cut deeper steps than the
+// wall is thick; Euclidean layers follow the true depth.
+TEST(SkinRemoval, EuclideanLayersFollowASlantedWallFacesLayersDoNot) {
+  const Grid g = unit_grid({40, 40, 3});
+  BitVolume v(g);
+  for (std::int64_t k = 0; k < 3; ++k)
+    for (std::int64_t j = 0; j < 40; ++j)
+      for (std::int64_t i = 0; i < 40; ++i)
+        if (std::abs(i - j) <= 6) v.set(i, j, k, true);  // diagonal band ~9.2 voxels wide in x-y
+  auto depth_at_centre = [&](PeelMetric m) {
+    std::int64_t k = 1;  // the middle layer of 3: its z distance is 2
+    return static_cast<int>(peel_depth(v, 1, m).at(20, 20, k));
+  };
+  // Distance from (20,20) to the nearest empty centre in-plane: (20,27) or
+  // (27,20) at 7, or (23.5-ish) diagonally; z bounds it at 2 either way.
+  EXPECT_EQ(depth_at_centre(PeelMetric::euclidean), 2);
+  EXPECT_EQ(depth_at_centre(PeelMetric::faces), 2);
+  const Grid g2 = unit_grid({40, 40, 40});
+  BitVolume band(g2);
+  for (std::int64_t k = 0; k < 40; ++k)
+    for (std::int64_t j = 0; j < 40; ++j)
+      for (std::int64_t i = 0; i < 40; ++i)
+        if (std::abs(i - j) <= 6 && k > 0 && k < 39) band.set(i, j, k, true);
+  const auto faces = peel_depth(band, 1, PeelMetric::faces);
+  const auto euclid = peel_depth(band, 1, PeelMetric::euclidean);
+  // Centre line of the band: 7 face steps to the outside along x or y, but
+  // only 7 / sqrt(2) ~ 4.95 in straight distance to the nearest empty centre
+  // (i - j = 7 at (23.5, 16.5)-like lattice points: (24,17) is at distance
+  // sqrt(16 + 9) = 5 from (20,20)).
+  EXPECT_EQ(faces.at(20, 20, 20), 7);
+  EXPECT_EQ(euclid.at(20, 20, 20), 5);
+  EXPECT_STREQ(to_string(PeelMetric::euclidean), "euclidean");
 }
 
 TEST(SkinRemoval, PeelDepthEqualsLayerByLayerErosionOnRandomVolumes) {

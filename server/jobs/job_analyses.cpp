@@ -1,5 +1,6 @@
 #include "server/jobs/job_analyses.h"
 
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -14,6 +15,7 @@
 #include "voxd/preview.h"
 #include "voxd/radiography.h"
 #include "voxd/section.h"
+#include "voxd/skin_removal.h"
 #include "voxd/volume_format.h"
 
 namespace voxd::server {
@@ -40,6 +42,7 @@ std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, cons
   AnalysisOptions options;
   if (r.cleanup != "none") options.cleanup = CleanupOptions{true, true, r.cleanup == "sheets"};
   options.thickness = r.thickness;
+  options.peel = r.peel_metric == "euclidean" ? PeelMetric::euclidean : PeelMetric::faces;
   options.min_wall_voxels = r.min_wall.value_or(0) / job.grid.voxel_size;
   options.max_wall_voxels = r.max_wall.value_or(0) / job.grid.voxel_size;
   std::optional<DenseVolume<float>> map;
@@ -51,7 +54,16 @@ std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, cons
   return api::analysis_to_json(report, job.grid, job.mesh, job.mesh_mass).dump();
 }
 
-std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& volume) {
+// The volume after r.peel layers of skin removal, or null for none.
+std::optional<BitVolume> peeled_volume(const AnalysisRequest& r, const BitVolume& volume) {
+  if (r.peel <= 0) return std::nullopt;
+  const PeelMetric metric = r.peel_metric == "euclidean" ? PeelMetric::euclidean : PeelMetric::faces;
+  return peeled(peel_depth(volume, 0, metric), static_cast<std::uint32_t>(std::min<std::int64_t>(r.peel, UINT32_MAX)));
+}
+
+std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& original) {
+  const std::optional<BitVolume> peeled_model = peeled_volume(r, original);
+  const BitVolume& volume = peeled_model ? *peeled_model : original;
   const ThicknessImage image = radiography(volume, r.axis);
   const RadiographyMeasure m = measure_of(r);
   const PngScale scale = radiography_scale(r, job.grid);
@@ -67,7 +79,9 @@ std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job,
                 {"histogram", {{"min", s.min * k}, {"bin_width", s.bin_width * k}, {"counts", histogram}}}}
         .dump();
   }
-  return to_bytes(radiography_png(image, r.axis, m, r.format == "png", scale, {{"voxd:job", job.id}}));
+  std::vector<PngText> text = {{"voxd:job", job.id}};
+  if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + r.peel_metric + ")"});
+  return to_bytes(radiography_png(image, r.axis, m, r.format == "png", scale, text));
 }
 
 std::int64_t section_layer(const AnalysisRequest& r, const Grid& g) {
@@ -139,7 +153,10 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
       const std::int64_t layer = section_layer(r, job.grid);
       std::optional<DenseVolume<float>> map;
       if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
-      bytes = to_bytes(section_png(volume, r.axis, layer, map ? &*map : nullptr, {{"voxd:job", job.id}}));
+      const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
+      std::vector<PngText> text = {{"voxd:job", job.id}};
+      if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + r.peel_metric + ")"});
+      bytes = to_bytes(section_png(peeled_model ? *peeled_model : volume, r.axis, layer, map ? &*map : nullptr, text));
       break;
     }
     case AnalysisKind::preview: {

@@ -17,6 +17,7 @@ namespace voxd {
 struct AnalysisOptions {
   std::optional<CleanupOptions> cleanup;  // none: analyse the volume as voxelized
   bool thickness = true;                  // local wall thickness (the costliest step)
+  PeelMetric peel = PeelMetric::faces;    // skin removal layers
   // Thin- and thick-wall thresholds in voxels (0 = not checked), and the
   // smallest region reported (smaller ones are sampling noise).
   double min_wall_voxels = 0.0;
@@ -41,6 +42,7 @@ struct AnalysisReport {
   MassProperties voxels;
   ComponentReport components;
   PeelSummary skin;
+  PeelMetric peel = PeelMetric::faces;
   std::optional<ThicknessAnalysis> thickness;
 };
 

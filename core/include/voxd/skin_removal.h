@@ -15,9 +15,20 @@
 
 namespace voxd {
 
+// How a peel proceeds:
+//  - faces: 6-connected, the paper's; depth = city-block (L1) distance to the
+//    nearest empty voxel. Layers follow the grid, so corners and slanted
+//    walls peel faster than the part's true thickness suggests.
+//  - euclidean: a voxel goes in layer ceil(d), d the Euclidean distance from
+//    its centre to the nearest empty voxel centre (voxd/distance_transform.h),
+//    so every layer is one voxel size deeper whatever the wall's direction.
+enum class PeelMetric { faces, euclidean };
+const char* to_string(PeelMetric metric);
+
 // Peel depth of every voxel (0 where empty). Voxels outside the grid count as
-// empty. Exact, in three separable forward/backward sweeps; multithreaded.
-DenseVolume<std::uint16_t> peel_depth(const BitVolume& volume, int threads = 0);
+// empty. Exact: faces in three separable forward/backward sweeps, euclidean
+// from the exact distance transform; multithreaded.
+DenseVolume<std::uint16_t> peel_depth(const BitVolume& volume, int threads = 0, PeelMetric metric = PeelMetric::faces);
 
 struct PeelSummary {
   std::vector<std::uint64_t> voxels_per_layer;  // [0] = layer 1 (the skin)

@@ -1,8 +1,10 @@
 #include "voxd/skin_removal.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
+#include "voxd/distance_transform.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 
@@ -31,11 +33,27 @@ void sweep(Depth* d, std::int64_t n, std::int64_t stride) {
 
 }  // namespace
 
-DenseVolume<Depth> peel_depth(const BitVolume& volume, int threads) {
+const char* to_string(PeelMetric metric) { return metric == PeelMetric::faces ? "faces" : "euclidean"; }
+
+DenseVolume<Depth> peel_depth(const BitVolume& volume, int threads, PeelMetric metric) {
   const Grid& g = volume.grid();
   if (std::max({g.dims.x, g.dims.y, g.dims.z}) >= static_cast<std::int64_t>(kMaxDepth))
     throw Error(ErrorCode::limit_exceeded, "peel depth supports grids up to 65534 voxels along an axis");
   DenseVolume<Depth> d(g, 0);
+  if (metric == PeelMetric::euclidean) {
+    // ceil(sqrt(d2)) exactly: the smallest r with r * r >= d2.
+    const DenseVolume<std::uint32_t> d2 = squared_distance_transform(volume, threads);
+    const auto& src = d2.values();
+    auto& dst = d.values();
+    for (std::size_t i = 0; i < src.size(); ++i) {
+      if (src[i] == 0) continue;
+      auto r = static_cast<std::uint64_t>(std::sqrt(static_cast<double>(src[i])));
+      while (r * r > src[i]) --r;
+      while (r * r < src[i]) ++r;
+      dst[i] = static_cast<Depth>(r);
+    }
+    return d;
+  }
   const std::int64_t nx = g.dims.x, ny = g.dims.y, nz = g.dims.z;
   // Start: filled = "infinity" (capped), empty = 0; then sweep x, y, z.
   parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
