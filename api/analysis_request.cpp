@@ -1,22 +1,15 @@
 #include "api/analysis_request.h"
 
-#include <charconv>
 #include <cmath>
 #include <initializer_list>
 
 #include "api/param_error.h"
+#include "voxd/number_text.h"
 
 namespace voxd::api {
 namespace {
 
 using nlohmann::json;
-
-std::string number_text(double x) {
-  char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
-  (void)ec;
-  return std::string(buf, end);
-}
 
 struct FieldReader {
   const Fields& fields;

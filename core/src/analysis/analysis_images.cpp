@@ -1,26 +1,15 @@
 #include "voxd/analysis_images.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 
 #include "voxd/byte_sink.h"
 #include "voxd/colour_map.h"
+#include "voxd/number_text.h"
 #include "voxd/error.h"
 #include "voxd/section.h"
 
 namespace voxd {
-namespace {
-
-std::string number(double x) {
-  char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
-  (void)ec;
-  return std::string(buf, end);
-}
-
-}  // namespace
-
 const char* to_string(RadiographyMeasure m) {
   switch (m) {
     case RadiographyMeasure::min: return "min";
@@ -98,8 +87,8 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
   const double plane = g.origin[axis] + (static_cast<double>(index) + 0.5) * g.voxel_size;
   text.insert(text.begin(), {{"voxd:axis", std::string(1, "xyz"[axis])},
                              {"voxd:index", std::to_string(index)},
-                             {"voxd:plane", number(plane) + " model units (voxel centres)"},
-                             {"voxd:voxel_size", number(g.voxel_size) + " model units per pixel"}});
+                             {"voxd:plane", number_text(plane) + " model units (voxel centres)"},
+                             {"voxd:voxel_size", number_text(g.voxel_size) + " model units per pixel"}});
   VectorSink out;
   if (!thickness) {
     write_png_grey8(image.width, image.height, image.pixels, text, out);
@@ -137,7 +126,7 @@ std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const 
       {"voxd:view", to_string(view)},
       {"voxd:right", signed_axis(basis.right_axis, basis.right_positive)},
       {"voxd:up", signed_axis(basis.up_axis, basis.up_positive)},
-      {"voxd:voxel_size", number(g.voxel_size) + " model units per pixel"},
+      {"voxd:voxel_size", number_text(g.voxel_size) + " model units per pixel"},
       {"voxd:lighting",
        "Orthographic view of the first filled voxel on each ray, normals from its 26 neighbours (Patil & Ravi) "
        "smoothed over 3x3 pixels, lit from the viewer's upper left: shade = 0.2 + 0.8 max(0, n.L), up to 20% darker "

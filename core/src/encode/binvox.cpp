@@ -24,6 +24,7 @@
 #include "encode/byte_buffer.h"
 #include "encode/ordered_pipeline.h"
 #include "encode/volume_checks.h"
+#include "voxd/number_text.h"
 #include "voxd/parallel.h"
 #include "voxd/volume_format.h"
 
@@ -43,12 +44,6 @@ constexpr std::string_view kMagic = "#binvox";
 
 // ---------------------------------------------------------------- writing --
 
-std::string format_number(double v) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);  // shortest round-trip form
-  return std::string(buffer, result.ptr);
-}
-
 std::string make_header(const Grid& grid, std::int64_t d, int version) {
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(grid.origin[a]))
@@ -58,8 +53,8 @@ std::string make_header(const Grid& grid, std::int64_t d, int version) {
     throw Error(ErrorCode::invalid_argument, "binvox writer: voxel_size must be positive and finite");
   const std::string dim = std::to_string(d);
   return "#binvox " + std::to_string(version) + "\ndim " + dim + " " + dim + " " + dim + "\ntranslate " +
-         format_number(grid.origin.x) + " " + format_number(grid.origin.y) + " " + format_number(grid.origin.z) +
-         "\nscale " + format_number(scale) + "\ndata\n";
+         number_text(grid.origin.x) + " " + number_text(grid.origin.y) + " " + number_text(grid.origin.z) +
+         "\nscale " + number_text(scale) + "\ndata\n";
 }
 
 std::int64_t cube_dim(const Grid& grid) { return std::max({grid.dims.x, grid.dims.y, grid.dims.z}); }

@@ -1,23 +1,16 @@
 // Float volumes as raw float32 and as NRRD. (The f32 RLE writer lives with
 // the other RLE writers in rle_writer.cpp.)
 #include <bit>
-#include <charconv>
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "encode/volume_checks.h"
+#include "voxd/number_text.h"
 #include "voxd/volume_format.h"
 
 namespace voxd {
 namespace {
-
-std::string number(double x) {
-  char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
-  (void)ec;
-  return std::string(buf, end);
-}
 
 // Slab by slab, little-endian whatever the machine.
 void write_float_data(const DenseVolume<float>& volume, ByteSink& sink) {
@@ -58,9 +51,9 @@ void write_nrrd(const DenseVolume<float>& volume, std::string_view content, Byte
   header += "type: float\ndimension: 3\n";
   header += "space dimension: 3\n";
   header += "sizes: " + std::to_string(g.dims.x) + " " + std::to_string(g.dims.y) + " " + std::to_string(g.dims.z) + "\n";
-  header += "space directions: (" + number(h) + ",0,0) (0," + number(h) + ",0) (0,0," + number(h) + ")\n";
-  header += "space origin: (" + number(g.origin.x + 0.5 * h) + "," + number(g.origin.y + 0.5 * h) + "," +
-            number(g.origin.z + 0.5 * h) + ")\n";
+  header += "space directions: (" + number_text(h) + ",0,0) (0," + number_text(h) + ",0) (0,0," + number_text(h) + ")\n";
+  header += "space origin: (" + number_text(g.origin.x + 0.5 * h) + "," + number_text(g.origin.y + 0.5 * h) + "," +
+            number_text(g.origin.z + 0.5 * h) + ")\n";
   header += "kinds: domain domain domain\ncenterings: cell cell cell\nendian: little\nencoding: raw\n\n";
   sink.write(header.data(), header.size());
   write_float_data(volume, sink);

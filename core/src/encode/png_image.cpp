@@ -13,6 +13,7 @@
 #include <exception>
 #include <memory>
 
+#include "voxd/number_text.h"
 #include "voxd/error.h"
 
 namespace voxd {
@@ -139,16 +140,10 @@ std::vector<png_bytep> row_pointers(std::vector<std::uint8_t>& bytes, int height
   return rows;
 }
 
-std::string format_number(double v) {
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);  // shortest text that reads back as v
-  return std::string(buf, res.ptr);
-}
-
 }  // namespace
 
 std::vector<PngText> scale_text(const PngScale& scale) {
-  return {{"voxd:scale", "1 pixel value = " + format_number(scale.per_value) + " " + scale.unit},
+  return {{"voxd:scale", "1 pixel value = " + number_text(scale.per_value) + " " + scale.unit},
           {"voxd:unit", scale.unit}};
 }
 
