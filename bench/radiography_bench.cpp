@@ -1,13 +1,17 @@
 // Thickness radiography of the benchmark mesh voxelized into a 1024^3 grid
 // (solid, parity), along each axis: x scans words within rows, y and z transpose
-// 64x64 bit blocks across rows. Also the statistics over the 1024^2 map.
+// 64x64 bit blocks across rows. Also the statistics over the 1024^2 map and
+// the other images of a part review at the same size: the shaded preview
+// (render and PNG) and a cross-section PNG.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <string>
 
 #include "bench_mesh.h"
+#include "voxd/analysis_images.h"
 #include "voxd/grid.h"
+#include "voxd/preview.h"
 #include "voxd/radiography.h"
 #include "voxd/voxelize.h"
 
@@ -53,6 +57,32 @@ void BM_ThicknessStats(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ThicknessStats)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Preview(benchmark::State& state) {
+  const View view{static_cast<int>(state.range(0)), true};
+  for (auto _ : state) {
+    PreviewImage img = render_preview(volume(), view);
+    benchmark::DoNotOptimize(img.shade.data());
+  }
+  state.SetLabel("view " + to_string(view));
+}
+BENCHMARK(BM_Preview)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_PreviewPng(benchmark::State& state) {
+  for (auto _ : state) {
+    auto png = preview_png(volume(), View{2, true}, nullptr);
+    benchmark::DoNotOptimize(png.data());
+  }
+}
+BENCHMARK(BM_PreviewPng)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_SectionPng(benchmark::State& state) {
+  for (auto _ : state) {
+    auto png = section_png(volume(), static_cast<int>(state.range(0)), 512);
+    benchmark::DoNotOptimize(png.data());
+  }
+}
+BENCHMARK(BM_SectionPng)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace voxd::bench

@@ -204,6 +204,55 @@ TEST(LocalThickness, HollowBoxReportsItsWallThickness) {
   }
 }
 
+// A tube of wall thickness T (voxel units, walls between radii 14 and 14 + T
+// around the grid's centre line, 36 layers long): every wall voxel farther
+// than T from the open ends reports T within the stated error bound, and the
+// wall's middle reports T exactly or one more nearly everywhere. (Near the
+// ends the square rim is a convex edge: there the largest ball containing a
+// voxel is smaller by definition, as at any edge of a part.)
+TEST(LocalThickness, TubeWallReportsItsThickness) {
+  for (int wall : {4, 6, 9}) {
+    SCOPED_TRACE(testing::Message() << "wall " << wall);
+    const double ri = 14.0, ro = ri + wall;
+    const std::int64_t n = static_cast<std::int64_t>(2 * ro) + 4, first = 2, last = 37;
+    const Grid g = unit_grid(n, n, last + 3);
+    BitVolume v(g);
+    const double c = static_cast<double>(n) / 2.0;
+    auto radius = [&](std::int64_t i, std::int64_t j) {
+      const double dx = i + 0.5 - c, dy = j + 0.5 - c;
+      return std::sqrt(dx * dx + dy * dy);
+    };
+    for (std::int64_t k = first; k <= last; ++k)
+      for (std::int64_t j = 0; j < n; ++j)
+        for (std::int64_t i = 0; i < n; ++i)
+          if (radius(i, j) > ri && radius(i, j) <= ro) v.set(i, j, k, true);
+    const auto t = local_thickness(v);
+    const ThicknessErrorBound bound = thickness_error_bound();
+    std::uint64_t checked = 0, mid_exact = 0, mid = 0;
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < n; ++j)
+        for (std::int64_t i = 0; i < n; ++i) {
+          const float got = t.at(i, j, k);
+          if (!v.get(i, j, k)) {
+            ASSERT_EQ(got, 0.0f);
+            continue;
+          }
+          ASSERT_GT(got, 0.0f);
+          if (k < first + wall || k > last - wall) continue;  // the rims' convex edges
+          ++checked;
+          ASSERT_GE(got, wall - bound.below_voxels) << i << "," << j << "," << k;
+          ASSERT_LE(got, wall + bound.above_voxels) << i << "," << j << "," << k;
+          if (std::abs(radius(i, j) - (ri + ro) / 2) < 0.5) {
+            ++mid;
+            mid_exact += got >= wall - 0.5f && got <= wall + 1.5f;
+          }
+        }
+    EXPECT_GT(checked, 1000u);
+    ASSERT_GT(mid, 50u);
+    EXPECT_GE(static_cast<double>(mid_exact) / static_cast<double>(mid), 0.9) << mid_exact << " of " << mid;
+  }
+}
+
 TEST(LocalThickness, SphereCentreIsTheDiameter) {
   const double R = 10.3;
   const BitVolume v = voxelize(test::make_icosphere({0, 0, 0}, R, 4), unit_grid(25, 25, 25, {-12.5, -12.5, -12.5}), {});

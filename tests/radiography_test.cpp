@@ -166,6 +166,50 @@ TEST(Radiography, HollowBoxGivesTwoRunsThroughTheCavity) {
   });
 }
 
+// A tube along z (annulus 9 < r <= 15 around the grid's centre line, 20
+// layers): every ray along z through the wall crosses all 20 layers, rays
+// through the bore nothing; a ray along x crosses the wall twice (or once
+// where it only grazes the bore), each crossing as long as the annulus is
+// wide on that row, counted from the definition.
+TEST(Radiography, TubeGivesItsLengthAlongTheAxisAndTwoWallsAcross) {
+  const int n = 34;
+  BitVolume v(unit_grid({n, n, 24}));
+  auto wall = [&](int i, int j) {
+    const double dx = i + 0.5 - n / 2.0, dy = j + 0.5 - n / 2.0, r2 = dx * dx + dy * dy;
+    return r2 > 81.0 && r2 <= 225.0;
+  };
+  for (int k = 2; k < 22; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        if (wall(i, j)) v.set(i, j, k, true);
+  expect_pixels(radiography(v, 2), [&](int i, int j) { return wall(i, j) ? uniform(20) : Expected{}; });
+  expect_pixels(radiography(v, 0), [&](int j, int k) {
+    if (k < 2 || k >= 22) return Expected{};
+    std::vector<std::uint32_t> runs;
+    std::uint32_t run = 0;
+    for (int i = 0; i <= n; ++i) {
+      if (i < n && wall(i, j)) {
+        ++run;
+      } else if (run > 0) {
+        runs.push_back(run);
+        run = 0;
+      }
+    }
+    if (runs.empty()) return Expected{};
+    Expected e{runs[0], runs[0], 0};
+    for (std::uint32_t r : runs) {
+      e.min = std::min(e.min, r);
+      e.max = std::max(e.max, r);
+      e.total += r;
+    }
+    return e;
+  });
+  // The centre row crosses two walls of 6 voxels.
+  const ThicknessImage x = radiography(v, 0);
+  EXPECT_EQ(x.min[static_cast<std::size_t>(10 * n + n / 2)], 6u);
+  EXPECT_EQ(x.total[static_cast<std::size_t>(10 * n + n / 2)], 12u);
+}
+
 // Three steps along x, heights 2, 5 and 9 voxels in z, depth j 3..8.
 BitVolume stepped_block() {
   const Mesh steps = concat({make_box({2, 3, 2}, {6, 9, 4}), make_box({6, 3, 2}, {10, 9, 7}), make_box({10, 3, 2}, {14, 9, 11})});

@@ -37,7 +37,12 @@
 //    nearest leftover (a distance transform of a 4x coarser grid), so a ball
 //    that cannot reach one costs a single lookup, and one that can costs a
 //    walk of the subtrees its box reaches.
-// Measured in docs/benchmarks.md (bench/local_thickness_bench.cpp).
+// Cost: on round, thick parts (the benchmark torus) the largest balls leave
+// a few leftovers and the whole map takes about the distance transform's time
+// again. Sharp edges and thread crests are the slow case: their voxels are
+// only reached by the smallest balls, so the sparse phase walks most of the
+// centres (a machined nut at 512^3 takes ~10x the torus's time). Measured in
+// docs/benchmarks.md (bench/local_thickness_bench.cpp).
 //
 // Memory: the float result, the uint32 distance transform, a bit per voxel,
 // and 16 bytes per centre of the range being painted.
@@ -89,8 +94,11 @@ ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, in
 //    N within (T - 1, T + 1) (centre-inside test: a face can fall anywhere
 //    within a voxel);
 //  - the convention above reports N or N + 1 for N voxels.
-// So reported - T lies in (-1, +2) voxels. Curved features add the error of a
-// sphere centred on voxel centres (under one voxel for radii of a few voxels).
+// So reported - T lies in (-1, +2) voxels (tests: plates, a hollow box, tubes
+// of 4 to 9 voxel walls). Curved features add the error of a sphere centred
+// on voxel centres (under one voxel for radii of a few voxels). At convex
+// edges and corners the definition itself gives less than the wall: the
+// ball that spans the wall does not reach into the corner.
 struct ThicknessErrorBound {
   double below_voxels = 1.0;  // reported >= true - below_voxels
   double above_voxels = 2.0;  // reported <= true + above_voxels

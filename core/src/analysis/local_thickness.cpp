@@ -529,11 +529,12 @@ ThicknessErrorBound thickness_error_bound() { return {}; }
 
 std::string thickness_error_statement(double voxel_size) {
   const ThicknessErrorBound b = thickness_error_bound();
-  char text[400];
+  char text[512];
   std::snprintf(text, sizeof text,
-                "-%g to +%g voxels (-%g to +%g model units) against the mesh's wall thickness: the voxelization "
-                "places each face anywhere within a voxel, and a wall N voxels thick reports N (even N) or N + 1 "
-                "(odd N)",
+                "-%g to +%g voxels (-%g to +%g model units) against the mesh's wall thickness, away from convex "
+                "edges and corners (where the largest ball containing a point is smaller by definition): the "
+                "voxelization places each face anywhere within a voxel, and a wall N voxels thick reports N (even N) "
+                "or N + 1 (odd N)",
                 b.below_voxels, b.above_voxels, b.below_voxels * voxel_size, b.above_voxels * voxel_size);
   return text;
 }
