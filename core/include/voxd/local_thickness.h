@@ -17,13 +17,15 @@
 // A sphere voxelized with radius R voxels reports about 2R at its centre. See
 // thickness_error_bound() for what this means against the mesh.
 //
-// Method. Every filled voxel c is a ball centre (no ridge pruning: on walls
-// tilted to the grid a ball is almost never contained in a single
-// neighbour's, so a "distance ridge" keeps ~90% of the voxels anyway).
-// Centres are taken largest ball first and each ball paints only the voxels
-// that have no value yet; the first ball to reach a voxel is the largest
-// that contains it, so the result is the maximum by construction. What makes
-// it fast is stopping early and skipping work, never approximating:
+// Method. Every filled voxel c is a ball centre. Centres are taken largest
+// ball first and each ball paints only the voxels that have no value yet;
+// the first ball to reach a voxel is the largest that contains it, so the
+// result is the maximum by construction. What makes it fast is stopping early
+// and skipping work, never approximating:
+//  - a ball inside a 26-neighbour's (larger) ball is skipped, checked only
+//    when the ball comes up. On walls along the grid axes that drops nearly
+//    every ball off the mid-plane; on tilted walls few (the radius seldom
+//    grows a whole step per neighbour), which is why it is not a prefilter;
 //  - painting ends when no voxel is left without a value. On thick parts the
 //    largest few percent of the balls cover almost everything, so the rest of
 //    the centres are never sorted: they are gathered range by range from a
@@ -45,7 +47,9 @@
 // docs/benchmarks.md (bench/local_thickness_bench.cpp).
 //
 // Memory: the float result, the uint32 distance transform, a bit per voxel,
-// and 16 bytes per centre of the range being painted.
+// 16 bytes per centre of the range being painted, and in the sparse phase
+// about 20 bytes per leftover voxel (it starts with at most a quarter of the
+// grid's voxels left).
 #include <cstdint>
 #include <string>
 #include <vector>

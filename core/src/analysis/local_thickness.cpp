@@ -32,6 +32,42 @@ constexpr std::int64_t kSparseRowsPerVoxel = 32;
 
 inline float thickness_of(std::int64_t r2) { return static_cast<float>(2.0 * std::sqrt(static_cast<double>(r2))); }
 
+std::int64_t ceil_sqrt(std::int64_t n) {
+  const std::int64_t r = isqrt(n);
+  return r * r == n ? r : r + 1;
+}
+
+// Whether the ball at (x, y, z) with squared radius r2 lies inside the ball of
+// one of its 26 neighbours. The ball at c + e (squared radius R') contains it
+// when sqrt(R') >= sqrt(r2) + |e|, i.e. R' >= r2 + |e|^2 + 2 sqrt(r2 |e|^2)
+// (the continuous containment, sufficient for the lattice balls). Such a ball
+// is larger, so it was painted earlier and already covered every voxel of
+// this one: skipping it is exact. On walls along the grid axes this drops
+// nearly every ball but the mid-plane's; on tilted walls few, as the radius
+// seldom grows by a whole step per neighbour.
+bool inside_a_neighbour(const DenseVolume<std::uint32_t>& edt, std::int64_t x, std::int64_t y, std::int64_t z,
+                        std::int64_t r2) {
+  const glm::i64vec3 d = edt.grid().dims;
+  std::int64_t need[4] = {0, 0, 0, 0};
+  for (std::int64_t e2 = 1; e2 <= 3; ++e2) need[e2] = r2 + e2 + ceil_sqrt(4 * r2 * e2);
+  for (int dz = -1; dz <= 1; ++dz) {
+    const std::int64_t k = z + dz;
+    if (k < 0 || k >= d.z) continue;
+    for (int dy = -1; dy <= 1; ++dy) {
+      const std::int64_t j = y + dy;
+      if (j < 0 || j >= d.y) continue;
+      const std::uint32_t* row = edt.slab(k) + j * d.x;
+      for (int dx = -1; dx <= 1; ++dx) {
+        const std::int64_t i = x + dx;
+        const int e2 = dx * dx + dy * dy + dz * dz;
+        if (e2 == 0 || i < 0 || i >= d.x) continue;
+        if (row[i] >= need[e2]) return true;
+      }
+    }
+  }
+  return false;
+}
+
 // Every filled voxel is a ball centre, handed out largest squared radius
 // first. Most of the time only the largest few percent are ever needed (the
 // painting stops when no voxel is left), so the centres are not sorted all at
@@ -235,7 +271,7 @@ class LeftoverTree {
     std::uint32_t right;  // left child is the next node; 0 for a leaf
     std::uint32_t count;  // unpainted points below
   };
-  static constexpr std::uint32_t kLeaf = 8;
+  static constexpr std::uint32_t kLeaf = 16;
 
   std::uint32_t build(std::uint32_t begin, std::uint32_t end) {
     const auto id = static_cast<std::uint32_t>(nodes_.size());
@@ -400,6 +436,9 @@ DenseVolume<float> local_thickness(const BitVolume& solid, int threads, JobContr
         exhausted = true;
         break;
       }
+      std::int64_t x, y, z;
+      coordinates(c.index, x, y, z);
+      if (inside_a_neighbour(edt, x, y, z, c.r2)) continue;
       batch.push_back(c);
       const std::int64_t span = 2 * isqrt(c.r2) + 1;
       budget += span * span;
@@ -469,7 +508,7 @@ DenseVolume<float> local_thickness(const BitVolume& solid, int threads, JobContr
       while (batch.size() < kBatch && (more = centres.pop(c))) {
         std::int64_t x, y, z;
         coordinates(c.index, x, y, z);
-        if (reach->may_reach(x, y, z, c.r2)) batch.push_back(c);
+        if (reach->may_reach(x, y, z, c.r2) && !inside_a_neighbour(edt, x, y, z, c.r2)) batch.push_back(c);
       }
       parallel_for(0, static_cast<std::int64_t>(trees.size()), 1, nthreads, [&](std::int64_t t0, std::int64_t t1) {
         for (std::int64_t t = t0; t < t1; ++t) {
