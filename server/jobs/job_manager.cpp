@@ -226,6 +226,11 @@ struct JobManager::Impl {
         if (e.code() == ErrorCode::cancelled) throw;
         status[i]["state"] = "failed";
         status[i]["error"] = e.what();
+      } catch (const std::exception& e) {
+        // One analysis going wrong costs only its own entry, not the volume.
+        spdlog::error("job {}: analysis {} failed: {}", id, requests[i].artifact_key(), e.what());
+        status[i]["state"] = "failed";
+        status[i]["error"] = "the analysis failed unexpectedly; it was logged";
       }
     }
     job.control.set_span(0.0, 1.0);
