@@ -865,6 +865,31 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   expect_problem(http().Get(("/v1/jobs/" + id + "/preview?view=up").c_str()), 400, "invalid-query");
   expect_problem(http().Get(("/v1/jobs/" + id + "/preview?angle=30").c_str()), 400, "invalid-query");
 
+  // A front end asking for three thickness images of a fresh job at once
+  // gets them all from one local-thickness computation.
+  const std::string id2 = submit(to_binary_stl(make_box({0.5, 0.5, 0.5}, {9.5, 9.5, 2.5})),
+                                 R"({"grid":{"voxel_size":0.5,"origin":[0,0,0],"dims":[20,20,7]}})")
+                              .at("id");
+  ASSERT_EQ(wait_for_job(http(), id2).at("state"), "succeeded");
+  std::vector<std::thread> clients;
+  std::atomic<int> ok{0};
+  for (const char* route : {"/preview?view=-z&colour=thickness", "/section?axis=x&index=4&colour=thickness",
+                            "/thickness?format=raw", "/analysis"}) {
+    clients.emplace_back([&, route] {
+      auto client = make_client(server_->port());
+      auto r = client->Get(("/v1/jobs/" + id2 + route).c_str());
+      ok += r && r->status == 200;
+    });
+  }
+  for (auto& c : clients) c.join();
+  EXPECT_EQ(ok.load(), 4);
+  const std::string log = server_->log();
+  std::size_t computed = 0;
+  for (std::size_t at = log.find("job " + id2 + ": local thickness computed"); at != std::string::npos;
+       at = log.find("job " + id2 + ": local thickness computed", at + 1))
+    ++computed;
+  EXPECT_EQ(computed, 1u) << log;
+
   // Section coloured by thickness: RGB with a legend, grey without.
   png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2&colour=thickness").c_str())->body, dir_);
   EXPECT_EQ(png.at("color_type"), 2);

@@ -164,7 +164,7 @@ int analyze_command(int argc, char** argv) {
       kept["thickness-map.f32"] = std::string(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float));
     }
     const server::ArtifactAccess artifacts{
-        [&kept](const std::string& key) -> std::optional<std::string> {
+        "cli", [&kept](const std::string& key) -> std::optional<std::string> {
           auto it = kept.find(key);
           if (it == kept.end()) return std::nullopt;
           return it->second;

@@ -1,11 +1,16 @@
 #include "server/jobs/job_analyses.h"
 
 #include <climits>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
 
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 
 #include "api/analysis_json.h"
 #include "voxd/analysis.h"
@@ -26,6 +31,30 @@ using api::AnalysisKind;
 using api::AnalysisRequest;
 
 constexpr const char* kThicknessMapKey = "thickness-map.f32";
+
+// One mutex per (scope, key) being computed, dropped when nobody holds it.
+class KeyLocks {
+ public:
+  std::shared_ptr<std::mutex> get(const std::string& name) {
+    std::lock_guard guard(mutex_);
+    for (auto it = locks_.begin(); it != locks_.end();) it = it->second.expired() ? locks_.erase(it) : std::next(it);
+    std::shared_ptr<std::mutex> lock = locks_[name].lock();
+    if (!lock) {
+      lock = std::make_shared<std::mutex>();
+      locks_[name] = lock;
+    }
+    return lock;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<std::string, std::weak_ptr<std::mutex>> locks_;
+};
+
+std::shared_ptr<std::mutex> key_lock(const ArtifactAccess& artifacts, const std::string& key) {
+  static KeyLocks locks;
+  return locks.get(artifacts.scope + "/" + key);
+}
 
 std::string to_bytes(const std::vector<std::uint8_t>& v) { return std::string(v.begin(), v.end()); }
 
@@ -125,17 +154,22 @@ std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, 
 }  // namespace
 
 ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id) {
-  return {[&jobs, id](const std::string& key) { return jobs.load_artifact(id, key); },
+  return {id, [&jobs, id](const std::string& key) { return jobs.load_artifact(id, key); },
           [&jobs, id](const std::string& key, const std::string& bytes) { jobs.save_artifact(id, key, bytes); }};
 }
 
 DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control) {
+  const auto lock = key_lock(artifacts, kThicknessMapKey);
+  std::lock_guard guard(*lock);
   DenseVolume<float> map(volume.grid(), 0.0f);
   if (auto kept = artifacts.load(kThicknessMapKey); kept && kept->size() == map.values().size() * sizeof(float)) {
     std::memcpy(map.values().data(), kept->data(), kept->size());
     return map;
   }
+  const auto t0 = std::chrono::steady_clock::now();
   map = local_thickness(volume, 0, control);
+  spdlog::info("job {}: local thickness computed in {:.3f} s", artifacts.scope,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   artifacts.save(kThicknessMapKey, std::string(reinterpret_cast<const char*>(map.values().data()),
                                                map.values().size() * sizeof(float)));
   return map;
@@ -145,6 +179,9 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
                             const ArtifactAccess& artifacts, JobControl* control) {
   const std::string key = r.artifact_key();
   if (auto kept = artifacts.load(key)) return {std::move(*kept), true};
+  const auto lock = key_lock(artifacts, key);
+  std::lock_guard guard(*lock);
+  if (auto kept = artifacts.load(key)) return {std::move(*kept), true};  // computed while we waited
   std::string bytes;
   switch (r.kind) {
     case AnalysisKind::analysis: bytes = analysis_json(r, job, volume, artifacts, control); break;

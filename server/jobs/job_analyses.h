@@ -20,7 +20,12 @@
 namespace voxd::server {
 
 // Where a job's kept results live (the job store's artifacts folder).
+// `scope` names the job: requests for the same key of the same scope are
+// computed once at a time (a second one waits and answers the kept result),
+// so a front end asking for a preview, a section and the thickness volume at
+// once does not run three local-thickness computations side by side.
 struct ArtifactAccess {
+  std::string scope;
   std::function<std::optional<std::string>(const std::string& key)> load;
   std::function<void(const std::string& key, const std::string& bytes)> save;
 };

@@ -202,7 +202,7 @@ struct JobManager::Impl {
     view.mesh_mass = r.mesh_mass;
     const std::string id = view.id;
     const ArtifactAccess artifacts{
-        [this, id](const std::string& key) { return store.load_artifact(id, key); },
+        id, [this, id](const std::string& key) { return store.load_artifact(id, key); },
         [this, &job, id](const std::string& key, const std::string& bytes) {
           std::lock_guard guard(job.store_mutex);
           if (job.removed) return;
