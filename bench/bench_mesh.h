@@ -3,6 +3,7 @@
 // the size of a detailed scanned or CAD part), generated so every run and
 // every machine measures the same input.
 #include "support/test_meshes.h"
+#include "voxd/grid.h"
 #include "voxd/transform.h"
 
 namespace voxd::bench {
@@ -19,6 +20,21 @@ inline Mesh make_small_benchmark_mesh() {
   Mesh m = test::make_torus({0, 0, 0}, 1.0, 0.45, 100, 50);
   rotate_mesh(m, rotation_from_axis_angle({1.0, 0.7, 0.2}, 37.0));
   return m;
+}
+
+// The benchmark mesh, built once per process (it takes a second).
+inline const Mesh& benchmark_mesh() {
+  static const Mesh m = make_benchmark_mesh();
+  return m;
+}
+
+// The grid `resolution` voxels along the benchmark mesh's longest extent,
+// with `padding` empty voxels around it.
+inline Grid benchmark_grid(std::int64_t resolution, std::int64_t padding = 1) {
+  GridRequest r;
+  r.resolution = resolution;
+  r.padding = padding;
+  return resolve_grid(r, bounds(benchmark_mesh()));
 }
 
 }  // namespace voxd::bench

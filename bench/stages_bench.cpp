@@ -11,17 +11,8 @@
 namespace voxd::bench {
 namespace {
 
-const Mesh& mesh() {
-  static const Mesh m = make_benchmark_mesh();
-  return m;
-}
-
-Grid grid_at(std::int64_t resolution) {
-  GridRequest r;
-  r.resolution = resolution;
-  r.padding = 1;
-  return resolve_grid(r, bounds(mesh()));
-}
+const Mesh& mesh() { return benchmark_mesh(); }
+Grid grid_at(std::int64_t resolution) { return benchmark_grid(resolution); }
 
 void BM_ParseBinaryStl(benchmark::State& state) {
   const std::vector<std::uint8_t> stl = test::to_binary_stl(mesh());
