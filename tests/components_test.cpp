@@ -12,13 +12,7 @@
 namespace voxd {
 namespace {
 
-Grid unit_grid(glm::i64vec3 dims) {
-  Grid g;
-  g.origin = {0, 0, 0};
-  g.voxel_size = 1.0;
-  g.dims = dims;
-  return g;
-}
+using test::unit_grid;
 
 // Reference: BFS over voxels. Solid 26-connected; empty 6-connected, with
 // regions touching the border dropped.

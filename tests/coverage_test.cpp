@@ -13,11 +13,7 @@
 namespace voxd {
 namespace {
 
-Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz) {
-  Grid g;
-  g.dims = {nx, ny, nz};
-  return g;
-}
+using test::unit_grid;
 
 // Length of [lo, hi] inside the voxel [i, i + 1).
 double overlap(double lo, double hi, std::int64_t i) {

@@ -15,11 +15,7 @@
 namespace voxd {
 namespace {
 
-Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz) {
-  Grid g;
-  g.dims = {nx, ny, nz};
-  return g;
-}
+using test::unit_grid;
 
 std::uint32_t brute_force_d2(const BitVolume& v, std::int64_t i, std::int64_t j, std::int64_t k) {
   const auto d = v.grid().dims;

@@ -17,12 +17,7 @@
 namespace voxd {
 namespace {
 
-Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz, glm::dvec3 origin = glm::dvec3(0.0)) {
-  Grid g;
-  g.origin = origin;
-  g.dims = {nx, ny, nz};
-  return g;
-}
+using test::unit_grid;
 
 // thickness(v) = max { 2 sqrt(d2(c)) : c filled, |v - c|^2 <= d2(c) }, by
 // trying every centre for every voxel. d2 from the distance transform, which

@@ -22,13 +22,7 @@ using test::concat;
 using test::flipped;
 using test::make_box;
 
-Grid unit_grid(glm::i64vec3 dims) {
-  Grid g;
-  g.origin = glm::dvec3(0.0);
-  g.voxel_size = 1.0;
-  g.dims = dims;
-  return g;
-}
+using test::unit_grid;
 
 BitVolume solid(const Mesh& mesh, glm::i64vec3 dims) { return voxelize(mesh, unit_grid(dims), VoxelizeOptions{}); }
 

@@ -13,12 +13,7 @@
 namespace voxd {
 namespace {
 
-Grid unit_grid(glm::i64vec3 dims) {
-  Grid g;
-  g.voxel_size = 1.0;
-  g.dims = dims;
-  return g;
-}
+using test::unit_grid;
 
 // Peeling as the paper describes it: remove every filled voxel with an empty
 // face neighbour (or the grid's outside), layer after layer.

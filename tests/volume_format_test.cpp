@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "support/test_meshes.h"
 #include "voxd/error.h"
 #include "voxd/volume_format.h"
 
@@ -27,13 +28,7 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-Grid make_grid(glm::i64vec3 dims, glm::dvec3 origin = glm::dvec3(0.0), double voxel_size = 1.0) {
-  Grid g;
-  g.dims = dims;
-  g.origin = origin;
-  g.voxel_size = voxel_size;
-  return g;
-}
+using test::make_grid;
 
 BitVolume random_volume(const Grid& grid, std::uint32_t seed, double density = 0.5) {
   BitVolume v(grid);

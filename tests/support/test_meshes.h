@@ -7,12 +7,27 @@
 
 #include <glm/vec3.hpp>
 
+#include "voxd/grid.h"
 #include "voxd/mesh.h"
 
 namespace voxd::test {
 
 // Axis-aligned box [lo, hi], 12 triangles.
 Mesh make_box(glm::dvec3 lo, glm::dvec3 hi);
+
+// A grid of `dims` voxels of `voxel_size` from `origin`; the tests' usual
+// one is the unit grid at the model origin, voxel (i, j, k) = [i, i+1) x ...
+inline Grid make_grid(glm::i64vec3 dims, glm::dvec3 origin = glm::dvec3(0.0), double voxel_size = 1.0) {
+  Grid g;
+  g.dims = dims;
+  g.origin = origin;
+  g.voxel_size = voxel_size;
+  return g;
+}
+inline Grid unit_grid(glm::i64vec3 dims) { return make_grid(dims); }
+inline Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz, glm::dvec3 origin = glm::dvec3(0.0)) {
+  return make_grid({nx, ny, nz}, origin);
+}
 // Icosahedron subdivided `level` times, projected on a sphere (20 * 4^level triangles).
 Mesh make_icosphere(glm::dvec3 center, double radius, int level);
 // Torus around z: major radius R, minor radius r, with nu x nv quads.
