@@ -43,40 +43,27 @@ struct FieldReader {
     return fallback;
   }
 
+  // The whole text as a T that satisfies `ok`, or an error saying `wanted`.
+  template <typename T, typename Ok>
+  std::optional<T> parsed(const std::string& name, Ok ok, const char* wanted) {
+    const std::string* v = find(name);
+    if (!v) return std::nullopt;
+    T x{};
+    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
+    if (ec != std::errc() || end != v->data() + v->size() || !ok(x)) {
+      errors.push_back({prefix + "/" + name, std::string("must be ") + wanted + ", got '" + *v + "'"});
+      return std::nullopt;
+    }
+    return x;
+  }
   std::optional<double> positive(const std::string& name) {
-    const std::string* v = find(name);
-    if (!v) return std::nullopt;
-    double x = 0;
-    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
-    if (ec != std::errc() || end != v->data() + v->size() || !std::isfinite(x) || x <= 0) {
-      errors.push_back({prefix + "/" + name, "must be a positive length in model units, got '" + *v + "'"});
-      return std::nullopt;
-    }
-    return x;
+    return parsed<double>(name, [](double x) { return std::isfinite(x) && x > 0; }, "a positive length in model units");
   }
-
   std::optional<double> finite(const std::string& name) {
-    const std::string* v = find(name);
-    if (!v) return std::nullopt;
-    double x = 0;
-    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
-    if (ec != std::errc() || end != v->data() + v->size() || !std::isfinite(x)) {
-      errors.push_back({prefix + "/" + name, "must be a number, got '" + *v + "'"});
-      return std::nullopt;
-    }
-    return x;
+    return parsed<double>(name, [](double x) { return std::isfinite(x); }, "a number");
   }
-
   std::optional<std::int64_t> count(const std::string& name) {
-    const std::string* v = find(name);
-    if (!v) return std::nullopt;
-    std::int64_t x = 0;
-    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
-    if (ec != std::errc() || end != v->data() + v->size() || x < 0) {
-      errors.push_back({prefix + "/" + name, "must be a voxel layer index (an integer >= 0), got '" + *v + "'"});
-      return std::nullopt;
-    }
-    return x;
+    return parsed<std::int64_t>(name, [](std::int64_t x) { return x >= 0; }, "a voxel layer index (an integer >= 0)");
   }
 
   void reject_unknown() {
@@ -119,7 +106,11 @@ std::optional<AnalysisKind> analysis_kind_from_string(std::string_view name) {
   return std::nullopt;
 }
 
-AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& fields, const std::string& path_prefix) {
+AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, const std::string& path_prefix) {
+  // A '+' left unescaped in a URL query arrives as a space: "+z" as " z".
+  Fields fields = given;
+  for (auto& [k, v] : fields)
+    if (k == "view" && v.size() == 2 && v[0] == ' ') v[0] = '+';
   FieldReader in{fields, path_prefix, {}, {}, {}};
   AnalysisRequest r;
   r.kind = kind;
@@ -157,19 +148,11 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& fields, 
       if (r.index.has_value() == r.coordinate.has_value() && in.errors.empty())
         in.errors.push_back({path_prefix + "/index", "give exactly one of index (voxel layer) or coordinate (model units)"});
       break;
-    case AnalysisKind::preview: {
+    case AnalysisKind::preview:
       in.allowed = {"view", "colour"};
-      // A '+' left unescaped in a URL query arrives as a space.
-      Fields copy = fields;
-      for (auto& [k, v] : copy)
-        if (k == "view" && v.size() == 2 && v[0] == ' ') v[0] = '+';
-      FieldReader view_in{copy, path_prefix, {}, {}, {}};
-      r.view = view_in.choice("view", {"+x", "-x", "+y", "-y", "+z", "-z"}, "+z");
-      in.errors.insert(in.errors.end(), view_in.errors.begin(), view_in.errors.end());
-      in.used.push_back("view");
+      r.view = in.choice("view", {"+x", "-x", "+y", "-y", "+z", "-z"}, "+z");
       r.colour = in.choice("colour", {"none", "thickness"}, "none");
       break;
-    }
     case AnalysisKind::thickness:
       in.allowed = {"format", "unit"};
       r.format = in.choice("format", {"nrrd", "raw", "rle"}, "nrrd");
