@@ -173,8 +173,16 @@ class CoverageVoxelizer {
     std::sort(events.begin(), events.end());
     if (options_.sampling == CoverageSampling::uniform) {
       sample_runs(events, row);
-      return;
+    } else {
+      integrate_runs(events, row);
     }
+    // Rounding of the float sums can step a hair outside [0, 1].
+    for (std::int64_t i = 0; i < grid_.dims.x; ++i) row[i] = std::clamp(row[i], 0.0f, 1.0f);
+  }
+
+  // Exact: the inside share f is constant between events; each voxel gets
+  // the integral of f over its extent.
+  void integrate_runs(const std::vector<std::pair<double, float>>& events, float* row) const {
     double f = 0.0, prev = 0.0;
     for (const auto& [x, delta] : events) {
       if (f > 0.0 && x > prev) {
@@ -191,7 +199,6 @@ class CoverageVoxelizer {
       f += delta;
       prev = x;
     }
-    for (std::int64_t i = 0; i < grid_.dims.x; ++i) row[i] = std::clamp(row[i], 0.0f, 1.0f);
   }
 
   // The paper's point sampling: m points per voxel at (i + (p + 1/2) / m),
@@ -210,7 +217,6 @@ class CoverageVoxelizer {
       f += delta;
       prev = x;
     }
-    for (std::int64_t i = 0; i < grid_.dims.x; ++i) row[i] = std::clamp(row[i], 0.0f, 1.0f);
   }
 
   detail::FixedMesh fixed_;
