@@ -388,6 +388,28 @@ TEST(SignedDistanceField, FullEqualsBruteForceEverywhere) {
   }
 }
 
+// The nearest-triangle queries beyond the band by Embree's rtcPointQuery:
+// the same bits as the oriented-box tree, and as the brute force.
+TEST(SignedDistanceField, EmbreeQueriesEqualTheTreeAndBruteForce) {
+  const Mesh mesh = mixed_mesh();
+  const Grid g = make_grid({-7.3, -7.1, -4.2}, 0.55, 28, 27, 16);
+  SdfOptions o;
+  o.full = true;
+  o.band = 1.5;
+  SdfTuning embree;
+  embree.nearest = SdfTuning::Nearest::embree;
+  const DenseVolume<float> a = signed_distance_field(mesh, g, o), b = signed_distance_field(mesh, g, o, nullptr, embree);
+  ASSERT_EQ(a.values().size(), b.values().size());
+  EXPECT_EQ(std::memcmp(a.values().data(), b.values().data(), a.values().size() * sizeof(float)), 0);
+  std::int64_t wrong = 0;
+  for_each_voxel(g, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    const auto want = static_cast<float>(brute_distance(mesh, g.center(i, j, k)));
+    if (std::abs(b.at(i, j, k)) != want && ++wrong <= 5)
+      ADD_FAILURE() << "voxel (" << i << "," << j << "," << k << "): got " << b.at(i, j, k) << ", want " << want;
+  });
+  EXPECT_EQ(wrong, 0);
+}
+
 TEST(SignedDistanceField, ThreadCountDoesNotChangeABit) {
   const Mesh mesh = mixed_mesh();
   const Grid g = make_grid({-7.3, -7.1, -4.2}, 0.3, 50, 48, 30);

@@ -65,6 +65,17 @@ struct SdfOptions {
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control = nullptr);
 
+// Choices that change the speed, never a value: for the benchmarks and the
+// tests that hold both ways to the same bits.
+struct SdfTuning {
+  // Nearest-triangle queries beyond the band (`full`): the oriented-box
+  // hierarchy, or Embree's BVH through rtcPointQuery.
+  enum class Nearest { tree, embree };
+  Nearest nearest = Nearest::tree;
+};
+DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                                         JobControl* control, const SdfTuning& tuning);
+
 // Exact squared distance from p to the triangle (a, b, c), in double: the
 // face, edge and vertex regions of Ericson, Real-Time Collision Detection
 // 5.1.5, told apart by signed distances to the edge lines instead of the
