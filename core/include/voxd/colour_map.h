@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -66,6 +67,49 @@ int ramp_index(std::uint32_t value, std::uint32_t lo, std::uint32_t hi);
 // min > max.
 ColourMap render_thickness_map(int width, int height, std::span<const std::uint32_t> values,
                                const ColourMapOptions& options = {});
+
+// Diverging ramp for signed values (a signed distance field section),
+// computed like the thickness ramp in OKLab: blue for negative values, white
+// (255, 255, 255) exactly at zero, red for positive values. Lightness falls
+// linearly with |value| from white to the same lightness at both ends, so the
+// two halves are mirror images in brightness and equal steps look equal
+// (Moreland 2009's criteria for a cool-warm map, with a white centre).
+// kDivergingRampSize entries, index kDivergingCentre = white, 0 = most
+// negative (blue), kDivergingRampSize - 1 = most positive (red).
+inline constexpr int kDivergingRampSize = 257;
+inline constexpr int kDivergingCentre = 128;
+const std::array<Rgb, kDivergingRampSize>& diverging_ramp();
+
+// Ramp index of `value` on [-range, range]: kDivergingCentre + round(128 *
+// value / range), clamped to the ends; kDivergingCentre for 0, NaN or a range
+// that is not positive.
+int diverging_index(double value, double range);
+
+struct DivergingMapOptions {
+  double range = 1.0;           // values at the ends: -range (blue) and +range (red); must be > 0 and finite
+  std::string unit = "voxel";   // the values' unit, for the labels and tEXt
+  // The colours follow the opposite sign: positive values blue, negative red
+  // (a field that is positive inside stays blue inside). Labels keep the
+  // values' own signs, so the left end then reads +range.
+  bool positive_blue = false;
+  bool legend = true;
+};
+
+struct DivergingMap {
+  RgbImage image;  // height = map height (+ kLegendHeight with a legend)
+  // tEXt: voxd:unit, voxd:min and voxd:max (-range and +range with the
+  // unit), voxd:colours (which sign is blue), voxd:centre, voxd:legend.
+  std::vector<PngText> text;
+};
+
+// Each value in the colour of diverging_index(value, range) (negated with
+// positive_blue), NaN in the centre colour; legend strip (the same geometry
+// as the thickness legend: bar, ticks at quarters, labels at both ends and
+// "0" in the middle where they fit) when the map is at least
+// kLegendMinWidth pixels wide. Throws Error(invalid_argument) for sizes that
+// do not match or a range that is not a positive finite number.
+DivergingMap render_diverging_map(int width, int height, std::span<const float> values,
+                                  const DivergingMapOptions& options);
 
 // Writes a legend label at (x, y) (top-left) in the 3x5 pixel font: digits,
 // '.', '-', '+', 'e'. Returns the width drawn (4 pixels per character minus

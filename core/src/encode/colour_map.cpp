@@ -66,6 +66,33 @@ std::array<Rgb, 256> build_ramp() {
   return ramp;
 }
 
+// The diverging ramp: lightness L = 1 - 0.5 |t| (white at t = 0, L = 0.5 at
+// both ends), hue blue (265 deg) for t < 0 and red (25 deg) for t > 0, the
+// wanted chroma 0.19 |t|^0.75 (colour comes in quickly off white) reduced
+// only as far as sRGB requires, as in build_ramp().
+std::array<Rgb, kDivergingRampSize> build_diverging_ramp() {
+  std::array<Rgb, kDivergingRampSize> ramp{};
+  for (int i = 0; i < kDivergingRampSize; ++i) {
+    const double t = static_cast<double>(i - kDivergingCentre) / kDivergingCentre;
+    const double s = std::abs(t);
+    const double L = 1.0 - 0.5 * s;
+    const double hue = (t < 0 ? 265.0 : 25.0) * std::numbers::pi / 180.0;
+    double chroma = 0.19 * std::pow(s, 0.75);
+    if (!in_gamut(oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue)))) {
+      double lo = 0.0, hi = chroma;  // lo always in gamut (grey at L <= 1)
+      for (int step = 0; step < 40; ++step) {
+        const double mid = 0.5 * (lo + hi);
+        (in_gamut(oklab_to_linear(L, mid * std::cos(hue), mid * std::sin(hue))) ? lo : hi) = mid;
+      }
+      chroma = lo;
+    }
+    const LinearRgb c = oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue));
+    ramp[static_cast<std::size_t>(i)] = {to_srgb8(c.r), to_srgb8(c.g), to_srgb8(c.b)};
+  }
+  ramp[kDivergingCentre] = {255, 255, 255};  // OKLab's white is 1 - 1e-10 off in the published matrices
+  return ramp;
+}
+
 // 3x5 pixel glyphs, one 3-bit row per nibble, top row first, bit 2 = left column.
 struct Glyph {
   char c;
@@ -96,6 +123,41 @@ std::string format_value(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
+}
+
+// The legend strip under a map of `height` rows (img already has the
+// kLegendHeight rows): white background, the bar coloured by colour_at(x,
+// bar_w) for bar columns x = 0..bar_w, ticks at quarters, `left` and `right`
+// labels at the ends when both fit, `centre` under the middle tick when it
+// fits between them too.
+template <class ColourAt>
+void draw_legend(RgbImage& img, int height, ColourAt colour_at, const std::string& left, const std::string& right,
+                 const std::string& centre) {
+  const int width = img.width;
+  for (int y = height; y < img.height; ++y) {
+    for (int x = 0; x < width; ++x) put(img, x, y, kLegendBackground);
+  }
+  const int x0 = kLegendMargin, x1 = width - kLegendMargin - 1;  // bar columns, inclusive
+  const int bar_w = x1 - x0;
+  const int bar_top = height + kLegendMargin;
+  for (int x = x0; x <= x1; ++x) {
+    const Rgb c = colour_at(x - x0, bar_w);
+    for (int y = bar_top; y < bar_top + kLegendBarRows; ++y) put(img, x, y, c);
+  }
+  for (int q = 0; q <= 4; ++q) {
+    const int x = x0 + (q * bar_w * 2 + 4) / 8;  // round(q/4 * bar_w)
+    for (int y = bar_top + kLegendBarRows; y < bar_top + kLegendBarRows + kLegendTickRows; ++y) put(img, x, y, kLegendInk);
+  }
+  if (label_width(left) + label_width(right) + 4 <= bar_w + 1) {  // both fit with a gap
+    const int y = height + kLegendLabelRow;
+    draw_label(img, x0, y, left, kLegendInk);
+    const int right_x = x1 + 1 - label_width(right);
+    draw_label(img, right_x, y, right, kLegendInk);
+    const int centre_x = x0 + (2 * bar_w * 2 + 4) / 8 - label_width(centre) / 2;
+    if (!centre.empty() && centre_x >= x0 + label_width(left) + 2 && centre_x + label_width(centre) + 2 <= right_x) {
+      draw_label(img, centre_x, y, centre, kLegendInk);
+    }
+  }
 }
 
 }  // namespace
@@ -176,26 +238,65 @@ ColourMap render_thickness_map(int width, int height, std::span<const std::uint3
   }
   out.text.push_back({"voxd:legend", "bottom " + std::to_string(kLegendHeight) +
                                          " rows: colour ramp from voxd:min (left) to voxd:max (right), ticks at quarters"});
-  for (int y = height; y < img.height; ++y) {
-    for (int x = 0; x < width; ++x) put(img, x, y, kLegendBackground);
+  draw_legend(img, height, [&](int x, int bar_w) { return ramp[static_cast<std::size_t>((x * 255 * 2 + bar_w) / (2 * bar_w))]; },
+              label(lo * k), label(hi * k), "");
+  return out;
+}
+
+const std::array<Rgb, kDivergingRampSize>& diverging_ramp() {
+  static const std::array<Rgb, kDivergingRampSize> ramp = build_diverging_ramp();
+  return ramp;
+}
+
+int diverging_index(double value, double range) {
+  if (!(range > 0.0) || !(value == value)) return kDivergingCentre;
+  const double t = std::clamp(value / range, -1.0, 1.0);  // also clamps +-inf and a range of +inf (t = 0)
+  return kDivergingCentre + static_cast<int>(std::lround(t * kDivergingCentre));
+}
+
+DivergingMap render_diverging_map(int width, int height, std::span<const float> values,
+                                  const DivergingMapOptions& options) {
+  if (width < 0 || height < 0 || values.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
+    throw Error(ErrorCode::invalid_argument, "diverging map: " + std::to_string(values.size()) + " values given for " +
+                                                 std::to_string(width) + " x " + std::to_string(height) + " pixels");
   }
-  const int x0 = kLegendMargin, x1 = width - kLegendMargin - 1;  // bar columns, inclusive
-  const int bar_w = x1 - x0;
-  const int bar_top = height + kLegendMargin;
-  for (int x = x0; x <= x1; ++x) {
-    const Rgb c = ramp[static_cast<std::size_t>(((x - x0) * 255 * 2 + bar_w) / (2 * bar_w))];
-    for (int y = bar_top; y < bar_top + kLegendBarRows; ++y) put(img, x, y, c);
+  const double range = options.range;
+  if (!(range > 0.0) || !std::isfinite(range)) {
+    throw Error(ErrorCode::invalid_argument, "diverging map range must be a positive finite number, got " + format_value(range));
   }
-  for (int q = 0; q <= 4; ++q) {
-    const int x = x0 + (q * bar_w * 2 + 4) / 8;  // round(q/4 * bar_w)
-    for (int y = bar_top + kLegendBarRows; y < bar_top + kLegendBarRows + kLegendTickRows; ++y) put(img, x, y, kLegendInk);
+  const bool legend = options.legend && width >= kLegendMinWidth;
+  DivergingMap out;
+  RgbImage& img = out.image;
+  img.width = width;
+  img.height = height + (legend ? kLegendHeight : 0);
+  img.pixels.resize(static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height) * 3);
+  const auto& ramp = diverging_ramp();
+  const double sign = options.positive_blue ? -1.0 : 1.0;
+  for (std::size_t p = 0; p < values.size(); ++p) {
+    const Rgb c = ramp[static_cast<std::size_t>(diverging_index(sign * static_cast<double>(values[p]), range))];
+    img.pixels[3 * p] = c.r;
+    img.pixels[3 * p + 1] = c.g;
+    img.pixels[3 * p + 2] = c.b;
   }
-  const std::string min_label = label(lo * k), max_label = label(hi * k);
-  if (label_width(min_label) + label_width(max_label) + 4 <= bar_w + 1) {  // both fit with a gap
-    const int y = height + kLegendLabelRow;
-    draw_label(img, x0, y, min_label, kLegendInk);
-    draw_label(img, x1 + 1 - label_width(max_label), y, max_label, kLegendInk);
+  const std::string& unit = options.unit;
+  out.text.push_back({"voxd:unit", unit});
+  out.text.push_back({"voxd:min", format_value(-range) + " " + unit});
+  out.text.push_back({"voxd:max", format_value(range) + " " + unit});
+  out.text.push_back({"voxd:colours", options.positive_blue ? "diverging: positive blue, 0 white, negative red"
+                                                            : "diverging: negative blue, 0 white, positive red"});
+  out.text.push_back({"voxd:centre", "0 = rgb(255,255,255)"});
+  if (!legend) {
+    out.text.push_back({"voxd:legend", "none"});
+    return out;
   }
+  out.text.push_back({"voxd:legend", "bottom " + std::to_string(kLegendHeight) + " rows: colour ramp from " +
+                                         format_value(-sign * range) + " (left, blue) through 0 (white) to " +
+                                         format_value(sign * range) + " (right, red) " + unit + ", ticks at quarters"});
+  draw_legend(img, height,
+              [&](int x, int bar_w) {
+                return ramp[static_cast<std::size_t>((x * (kDivergingRampSize - 1) * 2 + bar_w) / (2 * bar_w))];
+              },
+              label(-sign * range), label(sign * range), "0");
   return out;
 }
 
