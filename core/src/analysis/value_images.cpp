@@ -1,0 +1,148 @@
+#include "voxd/value_images.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "voxd/byte_sink.h"
+#include "voxd/colour_map.h"
+#include "voxd/error.h"
+#include "voxd/number_text.h"
+#include "voxd/radiography.h"
+
+namespace voxd {
+namespace {
+
+const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
+
+template <class T>
+ValueSection<T> extract(const DenseVolume<T>& volume, int axis, std::int64_t index) {
+  const ImageSize size = projected_size(volume.grid(), axis);  // checks the axis and the size
+  const glm::i64vec3 d = volume.grid().dims;
+  if (index < 0 || index >= d[axis]) {
+    throw Error(ErrorCode::invalid_argument, std::string("section index along ") + axis_name(axis) + " is " +
+                                                 std::to_string(index) + ", outside 0.." + std::to_string(d[axis] - 1));
+  }
+  if (volume.values().size() != volume.grid().voxel_count()) {
+    throw Error(ErrorCode::invalid_argument, "section: the volume holds " + std::to_string(volume.values().size()) +
+                                                 " values for " + std::to_string(volume.grid().voxel_count()) + " voxels");
+  }
+  ValueSection<T> out;
+  out.width = size.width;
+  out.height = size.height;
+  out.values.resize(static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height));
+  T* dst = out.values.data();
+  if (axis == 2) {
+    const T* slab = volume.slab(index);
+    std::copy(slab, slab + volume.slab_size(), dst);
+  } else if (axis == 1) {  // row k = x-row (index, k)
+    for (std::int64_t k = 0; k < d.z; ++k) {
+      const T* row = &volume.at(0, index, k);
+      std::copy(row, row + d.x, dst + k * d.x);
+    }
+  } else {  // column j, row k
+    for (std::int64_t k = 0; k < d.z; ++k)
+      for (std::int64_t j = 0; j < d.y; ++j) dst[k * d.y + j] = volume.at(index, j, k);
+  }
+  return out;
+}
+
+std::vector<PngText> plane_text(const Grid& g, int axis, std::int64_t index, std::vector<PngText> chunks,
+                                const std::vector<PngText>& text) {
+  const double plane = g.origin[axis] + (static_cast<double>(index) + 0.5) * g.voxel_size;
+  chunks.insert(chunks.begin(), {{"voxd:axis", axis_name(axis)},
+                                 {"voxd:index", std::to_string(index)},
+                                 {"voxd:plane", number_text(plane) + " model units (voxel centres)"},
+                                 {"voxd:voxel_size", number_text(g.voxel_size) + " model units per pixel"}});
+  chunks.insert(chunks.end(), text.begin(), text.end());
+  return chunks;
+}
+
+const PngText kCoverageText{"voxd:coverage", "pixel = round(255 x the fraction of the voxel inside the part)"};
+
+std::vector<std::uint8_t> grey_png(const ValueSection<std::uint8_t>& s, const std::vector<PngText>& text) {
+  VectorSink out;
+  write_png_grey8(s.width, s.height, s.values, text, out);
+  return std::move(out.data);
+}
+
+void check_field(const SdfRenderInput& input) {
+  if (!input.sdf) throw Error(ErrorCode::invalid_argument, "sdf section: no signed distance field given");
+  if (!(input.units_per_voxel > 0.0) || !std::isfinite(input.units_per_voxel)) {
+    throw Error(ErrorCode::invalid_argument,
+                "sdf section: units_per_voxel must be a positive finite number, got " + number_text(input.units_per_voxel));
+  }
+}
+
+}  // namespace
+
+ValueSection<float> value_section(const DenseVolume<float>& volume, int axis, std::int64_t index) {
+  return extract(volume, axis, index);
+}
+ValueSection<std::uint8_t> value_section(const DenseVolume<std::uint8_t>& volume, int axis, std::int64_t index) {
+  return extract(volume, axis, index);
+}
+
+std::vector<std::uint8_t> coverage_section_png(const DenseVolume<std::uint8_t>& coverage, int axis, std::int64_t index,
+                                               std::vector<PngText> text) {
+  const ValueSection<std::uint8_t> s = extract(coverage, axis, index);
+  return grey_png(s, plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
+}
+
+std::vector<std::uint8_t> coverage_section_png(const DenseVolume<float>& coverage, int axis, std::int64_t index,
+                                               std::vector<PngText> text) {
+  const ValueSection<float> f = extract(coverage, axis, index);
+  ValueSection<std::uint8_t> s{f.width, f.height, std::vector<std::uint8_t>(f.values.size())};
+  for (std::size_t p = 0; p < f.values.size(); ++p) {  // as coverage_bytes()
+    s.values[p] = static_cast<std::uint8_t>(std::lround(std::clamp(f.values[p], 0.0f, 1.0f) * 255.0f));
+  }
+  return grey_png(s, plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
+}
+
+double sdf_section_range(const SdfRenderInput& input) {
+  if (!input.sdf) throw Error(ErrorCode::invalid_argument, "sdf section: no signed distance field given");
+  float range = 0.0f;
+  for (const float v : input.sdf->values()) {
+    if (std::isfinite(v)) range = std::max(range, std::abs(v));
+  }
+  return range;
+}
+
+std::vector<std::uint8_t> sdf_section_png(const SdfRenderInput& input, int axis, std::int64_t index, bool colour,
+                                          std::vector<PngText> text) {
+  check_field(input);
+  const ValueSection<float> s = extract(*input.sdf, axis, index);
+  const double found = sdf_section_range(input);
+  const double range = found > 0.0 ? found : 1.0;
+  const std::string& unit = input.unit;
+  std::vector<PngText> chunks = {{"voxd:unit", unit},
+                                 {"voxd:range", number_text(found) + " " + unit},
+                                 {"voxd:sign", input.inside_negative ? "inside negative" : "inside positive"}};
+  VectorSink out;
+  if (!colour) {
+    std::vector<std::uint8_t> grey(s.values.size());
+    for (std::size_t p = 0; p < s.values.size(); ++p) {
+      const double v = static_cast<double>(s.values[p]);
+      const double g = std::isnan(v) ? 128.0 : std::clamp(127.5 + 127.5 * v / range, 0.0, 255.0);
+      grey[p] = static_cast<std::uint8_t>(std::lround(g));
+    }
+    chunks.push_back({"voxd:min", number_text(-range) + " " + unit});
+    chunks.push_back({"voxd:max", number_text(range) + " " + unit});
+    chunks.push_back({"voxd:grey", "pixel = round(127.5 + 127.5 x value / " + number_text(range) +
+                                       "), clamped to 0..255: -range is 0, 0 is 128, +range is 255"});
+    write_png_grey8(s.width, s.height, grey, plane_text(input.sdf->grid(), axis, index, std::move(chunks), text), out);
+    return std::move(out.data);
+  }
+  DivergingMapOptions options;
+  options.range = range;
+  options.unit = unit;
+  options.positive_blue = !input.inside_negative;
+  DivergingMap map = render_diverging_map(s.width, s.height, s.values, options);
+  for (PngText& t : map.text) {
+    if (t.key != "voxd:unit") chunks.push_back(std::move(t));
+  }
+  write_png_rgb8(map.image, plane_text(input.sdf->grid(), axis, index, std::move(chunks), text), out);
+  return std::move(out.data);
+}
+
+}  // namespace voxd
