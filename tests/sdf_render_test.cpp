@@ -183,8 +183,8 @@ TEST(SdfRender, SphereSilhouetteHitsAndNormalsInEveryView) {
             EXPECT_NEAR(px[ch], std::min(255.0, rgb[ch] * img.shade[p] + 255.0 * img.specular[p]), 0.51);
           }
         }
-      EXPECT_LT(worst_distance, 0.05) << "hit points off the sphere, in voxels";
-      EXPECT_LT(worst_angle, 3.0) << "normals off the analytic normal, in degrees";
+      EXPECT_LT(worst_distance, 0.05) << "hit points off the sphere, in voxels (0.02 measured)";
+      EXPECT_LT(worst_angle, 1.0) << "normals off the analytic normal, in degrees (0.09 measured)";
       // The silhouette's area is pi r^2 to within the one-voxel band.
       const double expected = std::numbers::pi * kRadius * kRadius / (g.voxel_size * g.voxel_size) * s * s;
       EXPECT_NEAR(hits, expected, 2.0 * std::numbers::pi * (kRadius / g.voxel_size) * s * s);
@@ -259,6 +259,22 @@ TEST(SdfRender, ClampedBandRendersLikeTheFullField) {
       }
     }
   }
+}
+
+TEST(SdfRender, NaNAndHugeValuesAreSafe) {
+  const Grid g = sphere_grid();
+  const DenseVolume<float> band = field(g, sphere_distance, true, true, 3.0);
+  DenseVolume<float> holes = band, huge = band;
+  for (std::size_t p = 0; p < band.values().size(); ++p) {
+    if (band.values()[p] >= 3.0f) {
+      holes.values()[p] = std::numeric_limits<float>::quiet_NaN();  // counts as outside
+      huge.values()[p] = std::numeric_limits<float>::max();           // no surface within reach: the ray ends
+    }
+  }
+  const SdfRenderImage want = render_sdf(input_of(band, true, true), View{1, false}, 2);
+  EXPECT_TRUE(same_bits(render_sdf(input_of(holes, true, true), View{1, false}, 2), want));
+  const SdfRenderImage ended = render_sdf(input_of(huge, true, true), View{1, false}, 2);
+  for (const glm::dvec3& h : ended.hit) EXPECT_TRUE(std::isnan(h.x));
 }
 
 TEST(SdfRender, ResultDoesNotDependOnTheThreadCount) {

@@ -25,6 +25,7 @@
 // same bits as the full field (the values within about 2 voxels of the
 // surface are the same). A negative sliver of the interpolant shorter than
 // 1/16 voxel between lattice points can be missed (a ray grazing an edge).
+// NaN values count as outside.
 // A ray that enters the grid inside the part (the part is cut by the grid
 // box) hits at its entry point and is lit as a face towards the camera.
 //

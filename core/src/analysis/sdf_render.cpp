@@ -200,11 +200,12 @@ SdfRenderImage render_sdf(const SdfRenderInput& input, View view, int threads, i
           std::int64_t m_prev = 0;
           while (m < m_end) {
             m_prev = m;
+            // NaN counts as outside; a huge or infinite value ends the ray.
             const std::int64_t step =
-                d < kNear ? 1 : std::max<std::int64_t>(1, static_cast<std::int64_t>(std::floor(d * kLattice)));
+                !(d >= kNear) ? 1 : static_cast<std::int64_t>(std::floor(std::min(d * kLattice, static_cast<double>(m_end))));
             m = std::min(m + step, m_end);
             d = sample(m);
-            if (d > 0.0) continue;
+            if (!(d <= 0.0)) continue;
             // The crossing lies in the lattice step before m (stepping back
             // over lattice points a long step overshot, never behind m_prev).
             std::int64_t lo_m = m - 1;
