@@ -22,6 +22,7 @@
 
 #include "support/draco_cli.h"
 #include "support/http_client.h"
+#include "support/http_fixture.h"
 #include "support/run_process.h"
 #include "support/server_process.h"
 #include "support/test_meshes.h"
@@ -33,8 +34,6 @@ namespace {
 using nlohmann::json;
 using namespace std::chrono_literals;
 
-std::vector<std::uint8_t> bytes_of(const std::string& s) { return {s.begin(), s.end()}; }
-std::string text_of(const std::vector<std::uint8_t>& b) { return {b.begin(), b.end()}; }
 
 std::vector<std::uint8_t> sphere_stl(double r = 1.0, int level = 3) {
   return to_binary_stl(make_icosphere({0, 0, 0}, r, level));
@@ -45,88 +44,7 @@ std::vector<std::uint8_t> bunny_stl() { return read_file(std::string(VOXD_SHARED
 // at 1024 voxels along the bunny.
 const char* const kSlowParams = R"({"grid":{"resolution":1024},"inside":"winding"})";
 
-class HttpApiTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = make_temp_dir("voxd-http");
-    schemas_ = std::make_unique<SchemaCollector>(dir_ + "/responses");
-  }
-  void TearDown() override {
-    if (schemas_->count() > 0) {
-      std::string output;
-      EXPECT_EQ(schemas_->validate(&output), 0) << output;
-    }
-    if (server_ && server_->running()) {
-      EXPECT_EQ(server_->stop(), 0) << server_->log();
-    }
-    server_.reset();
-    std::filesystem::remove_all(dir_);
-  }
-
-  void start(std::vector<std::string> args = {}, std::vector<std::string> env = {}) {
-    if (std::find(args.begin(), args.end(), "--workers") == args.end()) {
-      args.push_back("--workers");
-      args.push_back("2");
-    }
-    server_ = std::make_unique<ServerProcess>(dir_ + "/data", args, env);
-    client_ = make_client(server_->port());
-  }
-  httplib::Client& http() { return *client_; }
-
-  // A JSON answer with its status, recorded for the schema check.
-  json expect_json(const httplib::Result& res, int status, const std::string& component) {
-    EXPECT_TRUE(res) << "no response";
-    if (!res) return json();
-    EXPECT_EQ(res->status, status) << res->body;
-    EXPECT_EQ(res->get_header_value("Content-Type"), "application/json") << res->body;
-    schemas_->add(component, res->body);
-    return json::parse(res->body);
-  }
-
-  // An RFC 9457 problem with the expected status and type.
-  json expect_problem(const httplib::Result& res, int status, const std::string& slug) {
-    EXPECT_TRUE(res) << "no response";
-    if (!res) return json();
-    EXPECT_EQ(res->status, status) << res->body;
-    EXPECT_EQ(res->get_header_value("Content-Type"), "application/problem+json") << res->body;
-    schemas_->add("Problem", res->body);
-    const json p = json::parse(res->body);
-    EXPECT_EQ(p.at("type"), "urn:voxd:problem:" + slug) << res->body;
-    EXPECT_EQ(p.at("status"), status);
-    EXPECT_FALSE(p.at("title").get<std::string>().empty());
-    EXPECT_GT(p.at("detail").get<std::string>().size(), 10u) << "a message a user can act on";
-    return p;
-  }
-
-  json submit(const std::vector<std::uint8_t>& mesh, const std::string& params, const std::string& filename = "part.stl") {
-    return expect_json(post_multipart(http(), "/v1/jobs", mesh, filename, params), 202, "JobStatus");
-  }
-
-  std::string volume(const std::string& id, const std::string& query = "") {
-    auto res = http().Get(("/v1/jobs/" + id + "/volume" + query).c_str());
-    EXPECT_TRUE(res);
-    if (!res) return {};
-    EXPECT_EQ(res->status, 200) << res->body;
-    return res->body;
-  }
-
-  // The CLI's output for the same mesh bytes and parameters.
-  std::string cli_volume(const std::vector<std::uint8_t>& mesh, const std::string& filename, const std::string& params,
-                         const std::string& format = "rle") {
-    const std::string in = dir_ + "/" + filename, out = dir_ + "/cli-out." + format;
-    write_file(in, mesh);
-    std::ofstream(dir_ + "/params.json") << params;
-    const auto r = run_process(std::string(VOXD_BINARY) + " voxelize " + in + " -o " + out + " --format " + format +
-                               " --params @" + dir_ + "/params.json");
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    return text_of(read_file(out));
-  }
-
-  std::string dir_;
-  std::unique_ptr<ServerProcess> server_;
-  std::unique_ptr<httplib::Client> client_;
-  std::unique_ptr<SchemaCollector> schemas_;
-};
+class HttpApiTest : public HttpServiceTest {};
 
 TEST_F(HttpApiTest, MultipartJobRunsAndItsVolumeEqualsTheCliInEveryFormat) {
   start();
@@ -653,14 +571,6 @@ TEST_F(HttpApiTest, EveryRequestAndJobStateIsLoggedAndJsonLogsAreJson) {
   }
   EXPECT_TRUE(request_line) << server_->log();
   EXPECT_EQ(states, (std::set<std::string>{"queued", "running", "succeeded"})) << server_->log();
-}
-
-// Decodes a PNG with the independent reader (tests/tools/read_png.py).
-json read_png(const std::string& bytes, const std::string& dir) {
-  write_file(dir + "/image.png", bytes_of(bytes));
-  const auto r = run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_png.py " + dir + "/image.png");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return json::parse(r.out);
 }
 
 TEST_F(HttpApiTest, AnalysisOfAHollowBoxFindsItsVoidItsThinWallsAndIsKept) {
