@@ -3,11 +3,15 @@
 // mutation loop, and independent Python readers (tests/tools/) written from
 // the format descriptions alone.
 #include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <map>
+#include <sstream>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -210,7 +214,7 @@ Bytes rle_preamble(const std::string& json) {
 // ------------------------------------------------------------------ names --
 
 TEST(VolumeFormatNames, NamesExtensionsAndMediaTypes) {
-  for (VolumeFormat f : {VolumeFormat::rle, VolumeFormat::binvox, VolumeFormat::raw}) {
+  for (VolumeFormat f : {VolumeFormat::rle, VolumeFormat::binvox, VolumeFormat::raw, VolumeFormat::nrrd}) {
     EXPECT_EQ(volume_format_from_string(to_string(f)), f);
     EXPECT_EQ(volume_format_from_path(std::string("out/model") + file_extension(f)), f);
     EXPECT_NE(std::string(media_type(f)), "");
@@ -223,6 +227,8 @@ TEST(VolumeFormatNames, NamesExtensionsAndMediaTypes) {
   EXPECT_EQ(volume_format_from_path(".raw"), std::nullopt);  // no name before the extension
   EXPECT_EQ(volume_format_from_path("raw"), std::nullopt);
   EXPECT_STREQ(media_type(VolumeFormat::raw), "application/octet-stream");
+  EXPECT_EQ(volume_format_from_path("sdf.NRRD"), VolumeFormat::nrrd);
+  EXPECT_STREQ(media_type(VolumeFormat::nrrd), "application/x-nrrd");
 }
 
 // -------------------------------------------------------------------- RLE --
@@ -301,6 +307,43 @@ TEST(VolumeFormatRle, U8RoundTrips) {
   }
   DenseVolume<std::uint8_t> constant(make_grid({70, 9, 4}), 255);
   EXPECT_EQ(read_rle_u8(rle_u8(constant)).values(), constant.values());
+}
+
+DenseVolume<float> random_f32_volume(const Grid& grid, unsigned seed) {
+  std::mt19937 rng(seed);
+  DenseVolume<float> v(grid, 0.0f);
+  // Runs of repeated values (as a clamped distance band has), specials too.
+  const float specials[] = {0.0f, -0.0f, 3.0f, -3.0f, std::numeric_limits<float>::infinity(), 1e-38f};
+  for (std::size_t i = 0; i < v.values().size();) {
+    const float value = rng() % 3 == 0 ? specials[rng() % 6] : std::uniform_real_distribution<float>(-5, 5)(rng);
+    for (std::size_t n = 1 + rng() % 20; n > 0 && i < v.values().size(); --n) v.values()[i++] = value;
+  }
+  return v;
+}
+
+Bytes rle_f32(const DenseVolume<float>& v) {
+  VectorSink sink;
+  write_rle(v, sink);
+  return sink.data;
+}
+
+TEST(VolumeFormatRle, F32RoundTripsBitForBit) {
+  for (const glm::i64vec3 dims : {glm::i64vec3(67, 5, 3), glm::i64vec3(1, 1, 1), glm::i64vec3(30, 20, 9)}) {
+    const DenseVolume<float> v = random_f32_volume(make_grid(dims, {1, 2, 3}, 0.7), 13);
+    const DenseVolume<float> back = read_rle_f32(rle_f32(v));
+    expect_same_grid(back.grid(), v.grid());
+    ASSERT_EQ(back.values().size(), v.values().size());
+    EXPECT_EQ(std::memcmp(back.values().data(), v.values().data(), v.values().size() * 4), 0);  // -0.0 stays -0.0
+  }
+  // The wrong reader names what the stream holds.
+  const Bytes stream = rle_f32(random_f32_volume(make_grid({4, 3, 2}), 14));
+  EXPECT_EQ(error_code_of([&] { read_rle_u8(stream); }), ErrorCode::malformed_input);
+  EXPECT_EQ(error_code_of([&] { read_rle_bits(stream); }), ErrorCode::malformed_input);
+  for (std::size_t n = 0; n < stream.size(); ++n)
+    EXPECT_EQ(error_code_of([&] { read_rle_f32(std::span(stream.data(), n)); }), ErrorCode::truncated_input) << n;
+  // A valid stream over the reader's limit allocates nothing.
+  EXPECT_EQ(error_code_of([&] { read_rle_f32(stream, ReadLimits{4 * 4 * 3 * 2 - 1}); }), ErrorCode::limit_exceeded);
+  EXPECT_EQ(read_rle_f32(stream, ReadLimits{4 * 4 * 3 * 2}).values().size(), 24u);
 }
 
 TEST(VolumeFormatRle, ReaderAcceptsNonCanonicalRuns) {
@@ -850,6 +893,105 @@ void check_bit_volume(const BitVolume& v) {
   }
 }
 
+// The NRRD header's fields (the blank line ends it) and the bytes after it.
+std::pair<std::map<std::string, std::string>, Bytes> split_nrrd(const Bytes& file) {
+  const std::string text(file.begin(), file.end());
+  const std::size_t end = text.find("\n\n");
+  EXPECT_NE(end, std::string::npos);
+  std::map<std::string, std::string> fields;
+  std::istringstream lines(text.substr(0, end));
+  for (std::string line; std::getline(lines, line);)
+    if (auto colon = line.find(": "); colon != std::string::npos) fields[line.substr(0, colon)] = line.substr(colon + 2);
+  return {fields, Bytes(file.begin() + static_cast<std::ptrdiff_t>(end + 2), file.end())};
+}
+
+Bytes gunzip(const Bytes& in) {
+  z_stream z{};
+  EXPECT_EQ(inflateInit2(&z, 15 + 16), Z_OK);
+  Bytes out(1 << 20);
+  z.next_in = const_cast<Bytef*>(in.data());
+  z.avail_in = static_cast<uInt>(in.size());
+  z.next_out = out.data();
+  z.avail_out = static_cast<uInt>(out.size());
+  EXPECT_EQ(inflate(&z, Z_FINISH), Z_STREAM_END);
+  out.resize(z.total_out);
+  EXPECT_EQ(z.avail_in, 0u) << "one gzip member, nothing after it";
+  inflateEnd(&z);
+  return out;
+}
+
+TEST(VolumeFormatNrrd, EveryValueTypeIsItsRawDataBehindAHeaderUncompressedOrGzip) {
+  const Grid g = make_grid({13, 7, 5}, {1, 2, 3}, 0.5);
+  const BitVolume bits = random_volume(g, 31);
+  const DenseVolume<std::uint8_t> bytes = random_u8_volume(g, 32);
+  const DenseVolume<float> floats = random_f32_volume(g, 33);
+  struct Case {
+    std::function<void(ByteSink&, NrrdEncoding)> write_nrrd;
+    std::function<void(ByteSink&)> write_raw;
+    const char* type;
+  };
+  const Case cases[] = {
+      {[&](ByteSink& s, NrrdEncoding e) { write_nrrd(bits, "voxels", s, e); },
+       [&](ByteSink& s) { write_raw(bits, RawPacking::bytes, s); }, "uchar"},
+      {[&](ByteSink& s, NrrdEncoding e) { write_nrrd(bytes, "coverage", s, e); }, [&](ByteSink& s) { write_raw(bytes, s); },
+       "uchar"},
+      {[&](ByteSink& s, NrrdEncoding e) { write_nrrd(floats, "distance", s, e); }, [&](ByteSink& s) { write_raw(floats, s); },
+       "float"},
+  };
+  for (const Case& c : cases) {
+    VectorSink raw, plain, gz;
+    c.write_raw(raw);
+    c.write_nrrd(plain, NrrdEncoding::raw);
+    c.write_nrrd(gz, NrrdEncoding::gzip);
+    const auto [fields, data] = split_nrrd(plain.data);
+    EXPECT_EQ(fields.at("type"), c.type);
+    EXPECT_EQ(fields.at("sizes"), "13 7 5");
+    EXPECT_EQ(fields.at("space origin"), "(1.25,2.25,3.25)");  // the first voxel's centre
+    EXPECT_EQ(fields.at("encoding"), "raw");
+    EXPECT_EQ(data, raw.data);
+    const auto [gz_fields, gz_data] = split_nrrd(gz.data);
+    EXPECT_EQ(gz_fields.at("encoding"), "gzip");
+    EXPECT_EQ(gunzip(gz_data), raw.data);
+    EXPECT_LT(gz_data.size(), raw.data.size());
+  }
+  // The value-volume dispatcher writes the same bytes with its options.
+  VectorSink via_dispatch;
+  encode_volume(ValueVolume(floats), VolumeFormat::nrrd, via_dispatch,
+                EncodeOptions{RawPacking::bytes, NrrdEncoding::raw, "distance"});
+  VectorSink direct;
+  write_nrrd(floats, "distance", direct);
+  EXPECT_EQ(via_dispatch.data, direct.data);
+}
+
+TEST(VolumeFormatValues, FormatsThatCannotHoldTheValuesAreRefusedWithWhatToAskFor) {
+  const ValueVolume floats = random_f32_volume(make_grid({5, 4, 3}), 41);
+  const ValueVolume bytes = random_u8_volume(make_grid({5, 4, 3}), 42);
+  EXPECT_STREQ(value_type_name(floats), "f32");
+  EXPECT_STREQ(value_type_name(bytes), "u8");
+  EXPECT_EQ(byte_size(floats), 5u * 4 * 3 * 4);
+  const auto binvox = format_refusal(floats, VolumeFormat::binvox, {});
+  ASSERT_TRUE(binvox);
+  EXPECT_NE(binvox->find("rle, raw or nrrd"), std::string::npos);
+  EXPECT_FALSE(format_refusal(bytes, VolumeFormat::binvox, {}));
+  EncodeOptions packed;
+  packed.raw_packing = RawPacking::bits;
+  EXPECT_TRUE(format_refusal(bytes, VolumeFormat::raw, packed));
+  for (VolumeFormat f : {VolumeFormat::rle, VolumeFormat::raw, VolumeFormat::nrrd}) {
+    EXPECT_FALSE(format_refusal(floats, f, {})) << to_string(f);
+    VectorSink sink;
+    encode_volume(floats, f, sink);
+    EXPECT_FALSE(sink.data.empty());
+  }
+  VectorSink sink;
+  EXPECT_EQ(error_code_of([&] { encode_volume(floats, VolumeFormat::binvox, sink); }), ErrorCode::invalid_argument);
+  EXPECT_TRUE(sink.data.empty()) << "refused before writing";
+  // u8 binvox through the dispatcher is the version-2 writer's output.
+  VectorSink dispatched, direct;
+  encode_volume(bytes, VolumeFormat::binvox, dispatched);
+  write_binvox(std::get<DenseVolume<std::uint8_t>>(bytes), direct);
+  EXPECT_EQ(dispatched.data, direct.data);
+}
+
 TEST(VolumeFormatMutation, RleStreams) {
   const std::vector<Bytes> seeds = {
       encode(random_volume(make_grid({13, 7, 5}, {1, 2, 3}, 0.5), 21), VolumeFormat::rle),
@@ -861,6 +1003,13 @@ TEST(VolumeFormatMutation, RleStreams) {
                   check_bit_volume(v);
                   // Whatever was accepted must survive its own round trip.
                   expect_same_voxels(v, read_rle_bits(encode(v, VolumeFormat::rle)));
+                });
+  const std::vector<Bytes> f32_seeds = {rle_f32(random_f32_volume(make_grid({11, 6, 4}), 23))};
+  mutation_loop(f32_seeds, 1500, 1, [](const Bytes& b) { return read_rle_f32(b); },
+                [](const DenseVolume<float>& v) {
+                  ASSERT_EQ(v.values().size(), v.grid().voxel_count());
+                  const DenseVolume<float> back = read_rle_f32(rle_f32(v));
+                  EXPECT_EQ(std::memcmp(back.values().data(), v.values().data(), v.values().size() * 4), 0);
                 });
   const std::vector<Bytes> u8_seeds = {rle_u8(random_u8_volume(make_grid({11, 6, 4}), 22))};
   mutation_loop(u8_seeds, 1500, 1, [](const Bytes& b) { return read_rle_u8(b); },

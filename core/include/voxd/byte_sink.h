@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <span>
 #include <string>
+#include <memory>
 #include <vector>
 
 namespace voxd {
@@ -41,6 +42,26 @@ class FileSink final : public ByteSink {
  private:
   std::string path_;
   std::FILE* file_ = nullptr;
+};
+
+// Compresses what it is given as one gzip member (RFC 1952) into `out`:
+// NRRD's "encoding: gzip" and HTTP's Content-Encoding: gzip. finish() writes
+// the trailer; without it the stream is incomplete. `level` is zlib's, 1
+// (fastest, the default: volumes are large) to 9. Throws
+// std::runtime_error if zlib fails (never the input's fault).
+class GzipSink final : public ByteSink {
+ public:
+  explicit GzipSink(ByteSink& out, int level = 1);
+  ~GzipSink() override;
+  GzipSink(const GzipSink&) = delete;
+  GzipSink& operator=(const GzipSink&) = delete;
+  using ByteSink::write;
+  void write(std::span<const std::uint8_t> bytes) override;
+  void finish();
+
+ private:
+  struct Stream;  // zlib's state, kept out of this header
+  std::unique_ptr<Stream> stream_;
 };
 
 }  // namespace voxd

@@ -8,11 +8,17 @@
 //            Bit volumes are written as "#binvox 1" (values 0/1); u8 volumes as
 //            "#binvox 2", the version whose set voxels carry a value 1..255.
 //  - raw:    headerless, x fastest then y then z; one byte per voxel (0/1) or
-//            packed bits (LSB first, no row padding)
+//            packed bits (LSB first, no row padding); u8 and little-endian
+//            float32 values as they are
+//  - nrrd:   NRRD 0004 (ParaView, 3D Slicer, ITK): a text header placing the
+//            voxel centres in model space, then the raw data, uncompressed or
+//            gzip; bits as uchar 0/1, u8 as uchar, f32 as float
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
+#include <variant>
 
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
@@ -20,30 +26,52 @@
 
 namespace voxd {
 
-enum class VolumeFormat { rle, binvox, raw };
+enum class VolumeFormat { rle, binvox, raw, nrrd };
 enum class RawPacking { bytes, bits };
+enum class NrrdEncoding { raw, gzip };
 
 const char* to_string(VolumeFormat format) noexcept;
 std::optional<VolumeFormat> volume_format_from_string(std::string_view name);
-// From a path's extension (.rle, .binvox, .raw); nullopt if unrecognised.
+// From a path's extension (.rle, .binvox, .raw, .nrrd); nullopt if unrecognised.
 std::optional<VolumeFormat> volume_format_from_path(std::string_view path);
 // MIME type used when serving the format.
 const char* media_type(VolumeFormat format) noexcept;
-// File extension with the dot (".rle", ".binvox", ".raw").
+// File extension with the dot (".rle", ".binvox", ".raw", ".nrrd").
 const char* file_extension(VolumeFormat format) noexcept;
 
 struct EncodeOptions {
   RawPacking raw_packing = RawPacking::bytes;
+  NrrdEncoding nrrd_encoding = NrrdEncoding::raw;
+  std::string nrrd_content = "voxels";  // NRRD "content:" line: what the values are
 };
+
+// A volume of one value per voxel: coverage bytes or fractions, distances.
+using ValueVolume = std::variant<DenseVolume<std::uint8_t>, DenseVolume<float>>;
+const Grid& grid_of(const ValueVolume& volume);
+// "u8" or "f32", the RLE value type names.
+const char* value_type_name(const ValueVolume& volume);
+std::size_t byte_size(const ValueVolume& volume);
 
 void encode_volume(const BitVolume& volume, VolumeFormat format, ByteSink& sink,
                    const EncodeOptions& options = {});
+// u8: rle, binvox (version 2), raw, nrrd. f32: rle, raw, nrrd. Throws
+// Error(invalid_argument) with format_refusal's message otherwise.
+void encode_volume(const ValueVolume& volume, VolumeFormat format, ByteSink& sink,
+                   const EncodeOptions& options = {});
+// Why `format` (with `options`) cannot hold `volume`, said so a user can pick
+// another; nullopt when it can. Lets a server refuse before streaming.
+std::optional<std::string> format_refusal(const ValueVolume& volume, VolumeFormat format, const EncodeOptions& options);
 
 void write_rle(const BitVolume& volume, ByteSink& sink);
 void write_rle(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
 void write_binvox(const BitVolume& volume, ByteSink& sink);
 void write_binvox(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
 void write_raw(const BitVolume& volume, RawPacking packing, ByteSink& sink);
+void write_raw(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
+void write_nrrd(const BitVolume& volume, std::string_view content, ByteSink& sink,
+                NrrdEncoding encoding = NrrdEncoding::raw);
+void write_nrrd(const DenseVolume<std::uint8_t>& volume, std::string_view content, ByteSink& sink,
+                NrrdEncoding encoding = NrrdEncoding::raw);
 
 // Float volumes (distances, local thickness): voxd RLE with value_type f32,
 // raw little-endian float32 (x fastest, then y, then z), and NRRD (a text
@@ -51,7 +79,8 @@ void write_raw(const BitVolume& volume, RawPacking packing, ByteSink& sink);
 // places voxel centres in model space and names the quantity in `content`.
 void write_rle(const DenseVolume<float>& volume, ByteSink& sink);
 void write_raw(const DenseVolume<float>& volume, ByteSink& sink);
-void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink);
+void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink,
+                NrrdEncoding encoding = NrrdEncoding::raw);
 
 // What a reader may allocate for the decoded volume. Readers validate the
 // whole input before allocating, so a lying header cannot make them allocate;
@@ -64,6 +93,7 @@ struct ReadLimits {
 // truncated_input) on bad data.
 BitVolume read_rle_bits(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
+DenseVolume<float> read_rle_f32(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 // binvox has no voxel size/origin beyond translate/scale; the returned grid is
 // the cubic D^3 grid with origin = translate and voxel_size = scale / D.
 // Reads versions 1 and 2; read_binvox sets the voxels whose value is non-zero.

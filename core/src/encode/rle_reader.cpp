@@ -3,6 +3,7 @@
 // volume, so a header that lies about the dims costs nothing; only a stream
 // that is valid end to end gets its volume allocated and filled (second pass).
 #include <algorithm>
+#include <bit>
 #include <string>
 
 #include "encode/bit_runs.h"
@@ -93,14 +94,22 @@ void decode_bit_payload(ByteCursor in, std::uint64_t slab_voxels, const OnOnes& 
   check_covered(in, position, slab_voxels);
 }
 
-// u8 payload: (varint run length, value byte) pairs; calls
+// The value of a run: one byte, or four little-endian bytes of a float.
+inline std::uint8_t read_value(ByteCursor& in, std::uint8_t*) { return in.u8("a run value"); }
+inline float read_value(ByteCursor& in, float*) {
+  std::uint32_t bits = 0;
+  for (int b = 0; b < 4; ++b) bits |= static_cast<std::uint32_t>(in.u8("a run value")) << (8 * b);
+  return std::bit_cast<float>(bits);
+}
+
+// u8 / f32 payload: (varint run length, value) pairs; calls
 // on_run(first_voxel, length, value) for each.
-template <class OnRun>
-void decode_u8_payload(ByteCursor in, std::uint64_t slab_voxels, const OnRun& on_run) {
+template <class T, class OnRun>
+void decode_value_payload(ByteCursor in, std::uint64_t slab_voxels, const OnRun& on_run) {
   std::uint64_t position = 0;
   while (!in.at_end()) {
     const std::uint64_t run = in.varint("a run length");
-    const std::uint8_t value = in.u8("a run value");
+    const T value = read_value(in, static_cast<T*>(nullptr));
     if (run > slab_voxels - position)
       in.fail(ErrorCode::malformed_input,
               "the runs add up to more than the slab's " + std::to_string(slab_voxels) + " voxels");
@@ -138,6 +147,28 @@ std::uint64_t slab_voxel_count(const Grid& grid) {
   return static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y);
 }
 
+template <class T>
+DenseVolume<T> read_rle_values(std::span<const std::uint8_t> data, const ReadLimits& limits,
+                               encode::RleValueType type, const char* reader) {
+  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
+  const encode::RleHeader header = read_header_of_type(in, type, reader);
+  const Grid& grid = header.grid;
+  const std::uint64_t slab_voxels = slab_voxel_count(grid);
+
+  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
+    decode_value_payload<T>(payload_cursor(payload, at, k), slab_voxels, [](std::uint64_t, std::uint64_t, T) {});
+  });
+  encode::check_read_limit(grid.voxel_count() * sizeof(T), limits, "RLE reader");
+
+  DenseVolume<T> volume(grid, T{});
+  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
+    T* slab = volume.slab(k);
+    decode_value_payload<T>(payload_cursor(payload, at, k), slab_voxels,
+                            [&](std::uint64_t first, std::uint64_t length, T value) { std::fill_n(slab + first, length, value); });
+  });
+  return volume;
+}
+
 }  // namespace
 
 BitVolume read_rle_bits(std::span<const std::uint8_t> data, const ReadLimits& limits) {
@@ -162,25 +193,11 @@ BitVolume read_rle_bits(std::span<const std::uint8_t> data, const ReadLimits& li
 }
 
 DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data, const ReadLimits& limits) {
-  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
-  const encode::RleHeader header = read_header_of_type(in, encode::RleValueType::u8, "read_rle_u8");
-  const Grid& grid = header.grid;
-  const std::uint64_t slab_voxels = slab_voxel_count(grid);
+  return read_rle_values<std::uint8_t>(data, limits, encode::RleValueType::u8, "read_rle_u8");
+}
 
-  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
-    decode_u8_payload(payload_cursor(payload, at, k), slab_voxels, [](std::uint64_t, std::uint64_t, std::uint8_t) {});
-  });
-  encode::check_read_limit(grid.voxel_count(), limits, "RLE reader");
-
-  DenseVolume<std::uint8_t> volume(grid, 0);
-  walk_slab_blocks(in, grid.dims.z, [&](std::int64_t k, std::span<const std::uint8_t> payload, std::size_t at) {
-    std::uint8_t* slab = volume.slab(k);
-    decode_u8_payload(payload_cursor(payload, at, k), slab_voxels,
-                      [&](std::uint64_t first, std::uint64_t length, std::uint8_t value) {
-                        if (value != 0) std::fill_n(slab + first, length, value);
-                      });
-  });
-  return volume;
+DenseVolume<float> read_rle_f32(std::span<const std::uint8_t> data, const ReadLimits& limits) {
+  return read_rle_values<float>(data, limits, encode::RleValueType::f32, "read_rle_f32");
 }
 
 }  // namespace voxd

@@ -4,13 +4,14 @@
 #include <algorithm>
 #include <cctype>
 #include <string>
+#include <type_traits>
 
 #include "voxd/error.h"
 
 namespace voxd {
 namespace {
 
-constexpr VolumeFormat kAllFormats[] = {VolumeFormat::rle, VolumeFormat::binvox, VolumeFormat::raw};
+constexpr VolumeFormat kAllFormats[] = {VolumeFormat::rle, VolumeFormat::binvox, VolumeFormat::raw, VolumeFormat::nrrd};
 
 bool equals_ignoring_case(std::string_view a, std::string_view b) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
@@ -25,6 +26,7 @@ const char* to_string(VolumeFormat format) noexcept {
     case VolumeFormat::rle: return "rle";
     case VolumeFormat::binvox: return "binvox";
     case VolumeFormat::raw: return "raw";
+    case VolumeFormat::nrrd: return "nrrd";
   }
   return "unknown";
 }
@@ -40,6 +42,7 @@ const char* file_extension(VolumeFormat format) noexcept {
     case VolumeFormat::rle: return ".rle";
     case VolumeFormat::binvox: return ".binvox";
     case VolumeFormat::raw: return ".raw";
+    case VolumeFormat::nrrd: return ".nrrd";
   }
   return "";
 }
@@ -58,6 +61,7 @@ const char* media_type(VolumeFormat format) noexcept {
     case VolumeFormat::rle: return "application/vnd.voxd.rle";
     case VolumeFormat::binvox: return "application/x-binvox";
     case VolumeFormat::raw: return "application/octet-stream";
+    case VolumeFormat::nrrd: return "application/x-nrrd";
   }
   return "application/octet-stream";
 }
@@ -67,8 +71,49 @@ void encode_volume(const BitVolume& volume, VolumeFormat format, ByteSink& sink,
     case VolumeFormat::rle: return write_rle(volume, sink);
     case VolumeFormat::binvox: return write_binvox(volume, sink);
     case VolumeFormat::raw: return write_raw(volume, options.raw_packing, sink);
+    case VolumeFormat::nrrd: return write_nrrd(volume, options.nrrd_content, sink, options.nrrd_encoding);
   }
   throw Error(ErrorCode::invalid_argument, "unknown volume format");
+}
+
+const Grid& grid_of(const ValueVolume& volume) {
+  return std::visit([](const auto& v) -> const Grid& { return v.grid(); }, volume);
+}
+
+const char* value_type_name(const ValueVolume& volume) {
+  return std::holds_alternative<DenseVolume<float>>(volume) ? "f32" : "u8";
+}
+
+std::size_t byte_size(const ValueVolume& volume) {
+  return std::visit([](const auto& v) { return v.values().size() * sizeof(v.values()[0]); }, volume);
+}
+
+std::optional<std::string> format_refusal(const ValueVolume& volume, VolumeFormat format, const EncodeOptions& options) {
+  const bool floats = std::holds_alternative<DenseVolume<float>>(volume);
+  if (format == VolumeFormat::binvox && floats)
+    return "binvox holds bits or bytes, not the float32 values of this volume; ask for rle, raw or nrrd";
+  if (format == VolumeFormat::raw && options.raw_packing == RawPacking::bits)
+    return std::string("raw packing bits holds one bit per voxel, not the ") + value_type_name(volume) +
+           " values of this volume; ask for packing bytes";
+  return std::nullopt;
+}
+
+void encode_volume(const ValueVolume& volume, VolumeFormat format, ByteSink& sink, const EncodeOptions& options) {
+  if (auto refusal = format_refusal(volume, format, options)) throw Error(ErrorCode::invalid_argument, *refusal);
+  std::visit(
+      [&](const auto& v) {
+        using V = std::decay_t<decltype(v)>;
+        switch (format) {
+          case VolumeFormat::rle: return write_rle(v, sink);
+          case VolumeFormat::binvox:
+            if constexpr (std::is_same_v<V, DenseVolume<std::uint8_t>>) return write_binvox(v, sink);
+            break;
+          case VolumeFormat::raw: return write_raw(v, sink);
+          case VolumeFormat::nrrd: return write_nrrd(v, options.nrrd_content, sink, options.nrrd_encoding);
+        }
+        throw Error(ErrorCode::invalid_argument, "unknown volume format");
+      },
+      volume);
 }
 
 }  // namespace voxd
