@@ -144,14 +144,14 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, c
       peel();
       r.index = in.count("index");
       r.coordinate = in.finite("coordinate");
-      r.colour = in.choice("colour", {"none", "thickness"}, "none");
+      r.colour = in.choice("colour", {"none", "thickness", "distance"}, "none");
       if (r.index.has_value() == r.coordinate.has_value() && in.errors.empty())
         in.errors.push_back({path_prefix + "/index", "give exactly one of index (voxel layer) or coordinate (model units)"});
       break;
     case AnalysisKind::preview:
       in.allowed = {"view", "colour"};
       r.view = in.choice("view", {"+x", "-x", "+y", "-y", "+z", "-z"}, "+z");
-      r.colour = in.choice("colour", {"none", "thickness"}, "none");
+      r.colour = in.choice("colour", {"none", "thickness", "distance"}, "none");
       break;
     case AnalysisKind::thickness:
       in.allowed = {"format", "unit"};

@@ -38,7 +38,8 @@ struct AnalysisRequest {
   // the model after `peel` layers of skin removal (0 = as voxelized).
   std::string peel_metric = "faces";  // faces | euclidean
   std::int64_t peel = 0;
-  // section, preview: none | thickness (colour by local thickness).
+  // section, preview: none | thickness (colour by local thickness); section
+  // also distance (an sdf job's diverging distance map).
   std::string colour = "none";
   // preview: +x | -x | +y | -y | +z | -z.
   std::string view = "+z";

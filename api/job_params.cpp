@@ -206,20 +206,91 @@ void parse_rotation(Validator& val, const json& rot, JobParams& out) {
   }
 }
 
+void parse_coverage(Validator& val, const json& c, CoverageParams& out) {
+  const std::string path = "/coverage";
+  if (!val.is_object(c, path)) return;
+  val.allow_keys(c, path, {"sampling", "rays", "points", "seed", "threshold", "values"});
+  if (auto s = val.one_of(c, path, "sampling", {"exact", "uniform", "stochastic"}))
+    out.options.sampling = *s == "exact" ? CoverageSampling::exact : *s == "uniform" ? CoverageSampling::uniform
+                                                                                      : CoverageSampling::stochastic;
+  if (auto k = val.integer(c, path, "rays", 1, 64)) out.options.rays = static_cast<int>(*k);
+  if (auto m = val.integer(c, path, "points", 1, 256)) out.options.points = static_cast<int>(*m);
+  // Options that the chosen sampling would silently ignore are refused, so a
+  // client never believes it set something it did not.
+  if (c.contains("points") && out.options.sampling != CoverageSampling::uniform)
+    val.fail(path + "/points", "points per voxel apply only to sampling \"uniform\" (the paper's point sampling); "
+                               "\"exact\" and \"stochastic\" integrate along each ray exactly");
+  if (c.contains("seed")) {
+    const json& v = c.at("seed");
+    if (!v.is_number_integer() || (v.is_number_integer() && !v.is_number_unsigned() && v.get<std::int64_t>() < 0))
+      val.fail(path + "/seed", "must be a non-negative integer, got " + v.dump());
+    else
+      out.options.seed = v.get<std::uint64_t>();
+    if (out.options.sampling != CoverageSampling::stochastic)
+      val.fail(path + "/seed", "the seed applies only to sampling \"stochastic\" (the other samplings place rays regularly)");
+  }
+  if (auto t = val.number(c, path, "threshold", 0.0, 1.0, true)) out.threshold = static_cast<float>(*t);
+  if (auto v = val.one_of(c, path, "values", {"u8", "f32"})) out.float_values = *v == "f32";
+  if (c.contains("threshold") && c.contains("values"))
+    val.fail(path + "/values", "with a threshold the volume is bits (coverage >= threshold); drop one of the two");
+}
+
+void parse_sdf(Validator& val, const json& d, SdfOptions& out) {
+  const std::string path = "/sdf";
+  if (!val.is_object(d, path)) return;
+  val.allow_keys(d, path, {"band", "sign_convention", "units"});
+  if (d.contains("band")) {
+    const json& b = d.at("band");
+    if (b.is_string()) {
+      if (b.get<std::string>() == "full")
+        out.full = true;
+      else
+        val.fail(path + "/band", "must be a number of voxels (> 0 and <= 1000) or \"full\", got " + b.dump());
+    } else if (auto w = val.number(d, path, "band", 0.0, 1000.0, true)) {
+      out.band = *w;
+    }
+  }
+  if (auto s = val.one_of(d, path, "sign_convention", {"inside_negative", "inside_positive"}))
+    out.sign = *s == "inside_negative" ? SignConvention::inside_negative : SignConvention::inside_positive;
+  if (auto u = val.one_of(d, path, "units", {"model", "voxels"})) out.model_units = *u == "model";
+}
+
 }  // namespace
+
+std::string JobParams::mode_name() const {
+  if (coverage) return "coverage";
+  if (sdf) return "sdf";
+  return to_string(mode);
+}
 
 JobParams parse_job_params(const json& params) {
   Validator val;
   JobParams out;
   if (!val.is_object(params, "")) throw InvalidParams(std::move(val.errors));
-  val.allow_keys(params, "", {"grid", "mode", "inside", "rotation", "orient", "analyses"});
+  val.allow_keys(params, "", {"grid", "mode", "inside", "rotation", "orient", "analyses", "coverage", "sdf"});
   if (params.contains("grid")) parse_grid(val, params.at("grid"), out);
   if (params.contains("rotation")) parse_rotation(val, params.at("rotation"), out);
   if (auto o = val.one_of(params, "", "orient", {"none", "auto"})) out.orient_auto = *o == "auto";
-  if (auto m = val.one_of(params, "", "mode", {"solid", "surface", "solid+surface"}))
-    out.mode = *m == "solid" ? VoxelMode::solid : *m == "surface" ? VoxelMode::surface : VoxelMode::solid_and_surface;
+  const auto mode = val.one_of(params, "", "mode", {"solid", "surface", "solid+surface", "coverage", "sdf"});
+  if (mode == "surface") out.mode = VoxelMode::surface;
+  if (mode == "solid+surface") out.mode = VoxelMode::solid_and_surface;
+  if (mode == "coverage") out.coverage.emplace();
+  if (mode == "sdf") out.sdf.emplace();
+  for (const char* options : {"coverage", "sdf"}) {
+    if (!params.contains(options) || (params.contains("mode") && !mode)) continue;  // a bad mode is reported already
+    if (mode.value_or("solid") != options)
+      val.fail(std::string("/") + options, std::string("options for mode \"") + options + "\", but the mode is \"" +
+                                               mode.value_or("solid") + "\"; set \"mode\": \"" + options + "\" or drop them");
+    else if (out.coverage)
+      parse_coverage(val, params.at(options), *out.coverage);
+    else
+      parse_sdf(val, params.at(options), *out.sdf);
+  }
   if (auto i = val.one_of(params, "", "inside", {"parity", "vote", "winding"}))
     out.inside = *i == "parity" ? InsideTest::parity : *i == "vote" ? InsideTest::vote : InsideTest::winding;
+  if (out.sdf) out.sdf->inside = out.inside;
+  if (out.coverage && params.contains("inside"))
+    val.fail("/inside", "coverage counts crossings along rays (parity); the inside test does not apply to it");
   if (params.contains("analyses")) {
     try {
       out.analyses = parse_analyses(params.at("analyses"));

@@ -9,17 +9,35 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "api/analysis_request.h"
+#include "voxd/coverage.h"
 #include "voxd/grid.h"
+#include "voxd/sdf.h"
 #include "voxd/voxelize.h"
 
 namespace voxd::api {
+
+// "mode": "coverage" (Thon et al.'s grey levels) and its "coverage" object.
+struct CoverageParams {
+  CoverageOptions options;          // sampling, rays, points, seed (threads set by the runner)
+  std::optional<float> threshold;   // set: the job's volume is the bits coverage >= threshold
+  bool float_values = false;        // "values": "f32" (fractions 0..1) instead of "u8" (Thon's byte)
+};
 
 struct JobParams {
   GridRequest grid;
   std::optional<glm::dmat3> rotation;  // applied before orient
   bool orient_auto = false;
+  // The binary volume: the result of a solid/surface job, and the solid
+  // (centre inside) that the analyses measure for a coverage or sdf job.
   VoxelMode mode = VoxelMode::solid;
-  InsideTest inside = InsideTest::parity;
+  InsideTest inside = InsideTest::parity;  // also the sign of an sdf job
+  std::optional<CoverageParams> coverage;  // set iff "mode": "coverage"
+  std::optional<SdfOptions> sdf;           // set iff "mode": "sdf" (inside = the job's inside)
+
+  // The job's "mode" as written: solid, surface, solid+surface, coverage, sdf.
+  std::string mode_name() const;
+  // Whether the job's result is a volume of values (u8 or f32) rather than bits.
+  bool has_values() const { return sdf || (coverage && !coverage->threshold); }
   // Analyses the worker prepares once the volume exists (api/analysis_request.h).
   std::vector<AnalysisRequest> analyses;
 };

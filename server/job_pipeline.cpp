@@ -5,7 +5,11 @@
 #include <chrono>
 #include <string>
 
+#include <algorithm>
+
+#include "voxd/coverage.h"
 #include "voxd/error.h"
+#include "voxd/sdf.h"
 #include "voxd/transform.h"
 #include "voxd/voxelize.h"
 
@@ -39,6 +43,12 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
   std::uint64_t volumes = 1;
   if (params.mode != VoxelMode::surface && params.inside == InsideTest::vote) volumes = 3;
   if (params.mode == VoxelMode::solid_and_surface) volumes += 1;
+  // Coverage and distances are computed as one float per voxel; bytes are
+  // made from the floats (both alive for a moment). The distance field holds
+  // its own solid for the sign beside the job's.
+  const std::uint64_t floats = 4 * grid.voxel_count();
+  if (params.coverage) return bits * volumes + floats + (params.coverage->float_values ? 0 : grid.voxel_count());
+  if (params.sdf) return bits * (volumes + 1) + floats;
   return bits * volumes;
 }
 
@@ -100,8 +110,62 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
   options.mode = job.params.mode;
   options.inside = job.params.inside;
   options.threads = threads;
-  result.volume = voxelize(job.mesh, job.grid, options, control);
-  result.timings.add("voxelize", clock.lap());
+  if (!job.params.coverage && !job.params.sdf) {
+    result.volume = voxelize(job.mesh, job.grid, options, control);
+    result.timings.add("voxelize", clock.lap());
+  } else {
+    // The values take most of the time: the solid gets the first tenth of
+    // the progress bar, the values the rest.
+    const double begin = control ? control->span_begin() : 0.0, end = control ? control->span_end() : 1.0;
+    const double split = begin + 0.1 * (end - begin);
+    auto span = [control](double b, double e) {
+      if (control) control->set_span(b, e);
+    };
+    if (!job.params.coverage || !job.params.coverage->threshold) {
+      span(begin, split);
+      if (job.params.coverage) options.inside = InsideTest::parity;  // coverage counts parity crossings
+      result.volume = voxelize(job.mesh, job.grid, options, control);
+      result.timings.add("voxelize", clock.lap());
+    }
+    span(split, end);
+    if (job.params.coverage) {
+      const api::CoverageParams& c = *job.params.coverage;
+      CoverageOptions o = c.options;
+      o.threads = threads;
+      DenseVolume<float> coverage = voxelize_coverage(job.mesh, job.grid, o, control);
+      result.timings.add("coverage", clock.lap());
+      double total = 0.0;
+      for (float v : coverage.values()) total += v;
+      result.values_info = {{"quantity", "coverage"},
+                            {"sampling", to_string(o.sampling)},
+                            {"covered_volume", total * job.grid.voxel_volume()}};
+      if (c.threshold) {
+        result.volume = coverage_threshold(coverage, *c.threshold);
+        result.values_info["threshold"] = *c.threshold;
+      } else if (c.float_values) {
+        result.values = std::move(coverage);
+        result.values_info["unit"] = "fraction of the voxel";
+      } else {
+        result.values = coverage_bytes(coverage);
+        result.values_info["unit"] = "fraction of the voxel x 255";
+      }
+    } else {
+      SdfOptions o = *job.params.sdf;
+      o.threads = threads;
+      DenseVolume<float> sdf = signed_distance_field(job.mesh, job.grid, o, control);
+      result.timings.add("sdf", clock.lap());
+      const auto [lo, hi] = std::minmax_element(sdf.values().begin(), sdf.values().end());
+      result.values_info = {{"quantity", "signed distance"},
+                            {"unit", o.model_units ? "model units" : "voxels"},
+                            {"sign_convention", o.sign == SignConvention::inside_negative ? "inside_negative" : "inside_positive"},
+                            {"band", o.full ? nlohmann::json("full") : nlohmann::json(o.band)},
+                            {"min", *lo},
+                            {"max", *hi}};
+      result.values = std::move(sdf);
+    }
+    if (result.values) result.values_info["type"] = value_type_name(*result.values);
+    span(begin, end);
+  }
   result.filled = result.volume.count();
   result.timings.add("count", clock.lap());
   return result;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <glm/mat3x3.hpp>
+#include <nlohmann/json.hpp>
 
 #include "api/job_params.h"
 #include "voxd/bit_volume.h"
@@ -18,6 +19,7 @@
 #include "voxd/mesh_decode.h"
 #include "voxd/mesh_report.h"
 #include "voxd/progress.h"
+#include "voxd/volume_format.h"
 
 namespace voxd {
 
@@ -54,8 +56,16 @@ struct VoxelJobResult {
   std::optional<MassProperties> mesh_mass;  // with the report; in the voxels' (rotated) frame
   glm::dmat3 rotation{1.0};
   Grid grid;
+  // The binary volume: the result of a solid/surface job or of a coverage
+  // threshold; the solid (centre inside, the job's inside test) of a
+  // coverage or sdf job, which the analyses measure.
   BitVolume volume;
   std::uint64_t filled = 0;
+  // A coverage or sdf job's result (api::JobParams::has_values()).
+  std::optional<ValueVolume> values;
+  // What the values are, for the job status and the CLI summary
+  // (proto-schemas/job-status.schema.json "values").
+  nlohmann::json values_info;
   StageTimings timings;
 };
 

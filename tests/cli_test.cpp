@@ -1,5 +1,6 @@
 // The `voxd` command line, run as a real process.
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -203,6 +204,58 @@ TEST_F(CliTest, SharedClosedMeshesVoxelizeToTheirMeshVolume) {
       EXPECT_NEAR(filled / volume, 1.0, 0.02) << name;
     }
   }
+}
+
+TEST_F(CliTest, ValueModesWriteTheirValuesAndSummarizeThem) {
+  const Mesh sphere = test::make_icosphere({0, 0, 0}, 1.0, 4);
+  const std::string mesh = write_mesh("sphere.stl", sphere);
+  // Coverage as binvox version 2: the grey levels add up to the mesh volume.
+  auto r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("c.binvox") +
+                       " --resolution 48 --padding 1 --mode coverage --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json summary = json::parse(r.out);
+  EXPECT_EQ(summary.at("mode"), "coverage");
+  EXPECT_EQ(summary.at("values").at("type"), "u8");
+  const double mesh_volume = test::mesh_volume(sphere);
+  EXPECT_NEAR(summary.at("values").at("covered_volume").get<double>(), mesh_volume, 1e-3 * mesh_volume);
+  const auto binvox = test::read_file(path("c.binvox"));
+  const DenseVolume<std::uint8_t> grey = read_binvox_u8(binvox);
+  const double h = summary.at("grid").at("voxel_size").get<double>();
+  double total = 0;
+  for (std::uint8_t b : grey.values()) total += b / 255.0;
+  EXPECT_NEAR(total * h * h * h, mesh_volume, 5e-3 * mesh_volume);  // bytes round each voxel by up to 1/510
+
+  // SDF as gzip NRRD: the header says so, and its negatives are the solid.
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.nrrd") +
+                  " --resolution 32 --padding 3 --mode sdf --nrrd-encoding gzip --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  summary = json::parse(r.out);
+  EXPECT_EQ(summary.at("values").at("quantity"), "signed distance");
+  const auto nrrd = test::read_file(path("d.nrrd"));
+  const std::string text(nrrd.begin(), nrrd.end());
+  EXPECT_NE(text.find("\nencoding: gzip\n"), std::string::npos);
+  EXPECT_NE(text.find("\ntype: float\n"), std::string::npos);
+  EXPECT_NE(text.find("\ncontent: signed distance (model units)\n"), std::string::npos);
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.raw") + " --resolution 32 --padding 3 --mode sdf --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto raw = test::read_file(path("d.raw"));
+  ASSERT_EQ(raw.size(), 38u * 38 * 38 * 4);
+  std::uint64_t negative = 0;
+  for (std::size_t i = 0; i < raw.size(); i += 4) {
+    float v;
+    std::memcpy(&v, raw.data() + i, 4);
+    negative += v < 0;
+  }
+  EXPECT_EQ(negative, json::parse(r.out).at("filled_voxels").get<std::uint64_t>());
+
+  // What cannot hold the values is refused before any work, in one line.
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.binvox") + " --resolution 32 --mode sdf");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("float32"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("d.binvox")));
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("x.nrrd") + " --mode sdf --nrrd-encoding bz2");
+  EXPECT_EQ(r.exit_code, 2);
 }
 
 }  // namespace

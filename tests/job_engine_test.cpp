@@ -183,7 +183,7 @@ TEST_F(JobEngineTest, IdenticalSubmissionIsAnsweredFromTheFinishedResult) {
 TEST_F(JobEngineTest, SynchronousRunsReturnTheVolumeAndLeaveNoJob) {
   JobManager m(config());
   JobSnapshot s;
-  const auto v = m.run_sync(sphere_stl(), "s.stl", json{{"grid", {{"resolution", 30}}}}, &s);
+  const auto v = m.run_sync(sphere_stl(), "s.stl", json{{"grid", {{"resolution", 30}}}}, &s).solid;
   ASSERT_TRUE(v);
   EXPECT_EQ(s.state, JobState::succeeded);
   EXPECT_EQ(v->count(), *s.filled_voxels);

@@ -125,5 +125,85 @@ TEST(JobParams, EveryExampleOfThePublishedSchemaIsAccepted) {
   for (const auto& example : schema.at("examples")) EXPECT_NO_THROW(parse_job_params(example)) << example.dump();
 }
 
+TEST(JobParams, CoverageModeDefaultsToExactIntegrationWithFourByFourRaysAsBytes) {
+  const JobParams p = parse_job_params(json::parse(R"({"mode": "coverage"})"));
+  ASSERT_TRUE(p.coverage.has_value());
+  EXPECT_FALSE(p.sdf.has_value());
+  EXPECT_EQ(p.mode_name(), "coverage");
+  EXPECT_EQ(p.coverage->options.sampling, CoverageSampling::exact);
+  EXPECT_EQ(p.coverage->options.rays, 4);
+  EXPECT_FALSE(p.coverage->threshold.has_value());
+  EXPECT_FALSE(p.coverage->float_values);
+  EXPECT_TRUE(p.has_values());
+}
+
+TEST(JobParams, CoverageOptionsAreParsed) {
+  JobParams p = parse_job_params(json::parse(R"({"mode": "coverage", "coverage": {"sampling": "stochastic", "rays": 8, "seed": 18446744073709551615, "values": "f32"}})"));
+  EXPECT_EQ(p.coverage->options.sampling, CoverageSampling::stochastic);
+  EXPECT_EQ(p.coverage->options.rays, 8);
+  EXPECT_EQ(p.coverage->options.seed, UINT64_MAX);
+  EXPECT_TRUE(p.coverage->float_values);
+  p = parse_job_params(json::parse(R"({"mode": "coverage", "coverage": {"sampling": "uniform", "rays": 2, "points": 16}})"));
+  EXPECT_EQ(p.coverage->options.sampling, CoverageSampling::uniform);
+  EXPECT_EQ(p.coverage->options.points, 16);
+  // A threshold turns the result into bits.
+  p = parse_job_params(json::parse(R"({"mode": "coverage", "coverage": {"threshold": 0.25}})"));
+  EXPECT_FLOAT_EQ(*p.coverage->threshold, 0.25f);
+  EXPECT_FALSE(p.has_values());
+}
+
+TEST(JobParams, CoverageOptionsThatWouldBeIgnoredAreRefusedAtTheirPaths) {
+  auto e = errors_of(json::parse(R"({"mode": "coverage", "coverage": {"points": 4, "seed": 3}})"));
+  EXPECT_TRUE(has_error(e, "/coverage/points", "only to sampling \"uniform\"")) << e.size();
+  EXPECT_TRUE(has_error(e, "/coverage/seed", "only to sampling \"stochastic\""));
+  e = errors_of(json::parse(R"({"mode": "coverage", "coverage": {"threshold": 0.5, "values": "f32", "rays": 65, "sampling": "random"}, "inside": "winding"})"));
+  EXPECT_TRUE(has_error(e, "/coverage/values", "drop one of the two"));
+  EXPECT_TRUE(has_error(e, "/coverage/rays", "between 1 and 64"));
+  EXPECT_TRUE(has_error(e, "/coverage/sampling", "\"exact\", \"uniform\", \"stochastic\""));
+  EXPECT_TRUE(has_error(e, "/inside", "does not apply"));
+  e = errors_of(json::parse(R"({"mode": "coverage", "coverage": {"threshold": 0, "seed": -1, "colour": 1}})"));
+  EXPECT_TRUE(has_error(e, "/coverage/threshold", "> 0"));
+  EXPECT_TRUE(has_error(e, "/coverage/seed", "non-negative integer"));
+  EXPECT_TRUE(has_error(e, "/coverage/colour", "unknown field"));
+}
+
+TEST(JobParams, SdfModeDefaultsToABandOfThreeVoxelsInsideNegativeInModelUnits) {
+  const JobParams p = parse_job_params(json::parse(R"({"mode": "sdf", "inside": "winding"})"));
+  ASSERT_TRUE(p.sdf.has_value());
+  EXPECT_EQ(p.mode_name(), "sdf");
+  EXPECT_DOUBLE_EQ(p.sdf->band, 3.0);
+  EXPECT_FALSE(p.sdf->full);
+  EXPECT_EQ(p.sdf->sign, SignConvention::inside_negative);
+  EXPECT_TRUE(p.sdf->model_units);
+  EXPECT_EQ(p.sdf->inside, InsideTest::winding);  // the sign comes from the job's inside test
+  EXPECT_TRUE(p.has_values());
+}
+
+TEST(JobParams, SdfOptionsAreParsedAndCheckedAtTheirPaths) {
+  JobParams p = parse_job_params(json::parse(R"({"mode": "sdf", "sdf": {"band": "full", "sign_convention": "inside_positive", "units": "voxels"}})"));
+  EXPECT_TRUE(p.sdf->full);
+  EXPECT_EQ(p.sdf->sign, SignConvention::inside_positive);
+  EXPECT_FALSE(p.sdf->model_units);
+  p = parse_job_params(json::parse(R"({"mode": "sdf", "sdf": {"band": 1.5}})"));
+  EXPECT_DOUBLE_EQ(p.sdf->band, 1.5);
+  auto e = errors_of(json::parse(R"({"mode": "sdf", "sdf": {"band": "wide", "units": "mm", "sign_convention": "negative"}})"));
+  EXPECT_TRUE(has_error(e, "/sdf/band", "or \"full\""));
+  EXPECT_TRUE(has_error(e, "/sdf/units", "\"model\", \"voxels\""));
+  EXPECT_TRUE(has_error(e, "/sdf/sign_convention", "\"inside_negative\", \"inside_positive\""));
+  e = errors_of(json::parse(R"({"mode": "sdf", "sdf": {"band": 0}})"));
+  EXPECT_TRUE(has_error(e, "/sdf/band", "> 0"));
+}
+
+TEST(JobParams, OptionsForAnotherModeAreRefused) {
+  auto e = errors_of(json::parse(R"({"sdf": {"band": 2}})"));
+  EXPECT_TRUE(has_error(e, "/sdf", "but the mode is \"solid\""));
+  e = errors_of(json::parse(R"({"mode": "sdf", "coverage": {"rays": 2}})"));
+  EXPECT_TRUE(has_error(e, "/coverage", "but the mode is \"sdf\""));
+  // A bad mode is reported once, not again for its options.
+  e = errors_of(json::parse(R"({"mode": "grey", "coverage": {"rays": 2}})"));
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0].path, "/mode");
+}
+
 }  // namespace
 }  // namespace voxd::api

@@ -22,6 +22,8 @@
 #include "voxd/error.h"
 #include "voxd/local_thickness.h"
 #include "voxd/preview.h"
+#include "voxd/sdf_render.h"
+#include "voxd/value_images.h"
 #include "voxd/volume_format.h"
 
 namespace voxd::cli {
@@ -43,6 +45,10 @@ writes into DIR what the HTTP API serves for a job:
   preview-from{+x,-x,+y,-y,+z,-z}.png  shaded views; preview-*-thickness.png
                          coloured by local thickness
   thickness.nrrd         the local-thickness volume (float32, model units)
+  with --mode coverage:  section-{x,y,z}-coverage.png, the grey levels
+  with --mode sdf:       section-{x,y,z}-distance.png (diverging map) and
+                         preview-sdf-from{+x,...}.png (the zero level set
+                         ray-marched); the other files measure the solid
   analyses/KEY.EXT       each entry of the job JSON's "analyses" array, the
                          bytes its /v1/jobs/{id}/KIND route answers
 Lengths are in the mesh's model units. The thickness files need the local
@@ -142,8 +148,25 @@ int analyze_command(int argc, char** argv) {
     write_png("section-" + a + ".png", section_png(result.volume, axis, result.grid.dims[axis] / 2));
     if (map) write_png("section-" + a + "-thickness.png", section_png(result.volume, axis, result.grid.dims[axis] / 2, &*map));
   }
+  // A coverage or sdf job's values: their middle sections, and the sdf's
+  // surface rendered from its distances.
+  std::optional<SdfRenderInput> sdf;
+  if (params.sdf) sdf = sdf_render_input(std::get<DenseVolume<float>>(*result.values), *params.sdf);
+  if (result.values) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string a(1, "xyz"[axis]);
+      const std::int64_t middle = result.grid.dims[axis] / 2;
+      if (sdf) {
+        write_png("section-" + a + "-distance.png", sdf_section_png(*sdf, axis, middle, true));
+      } else {
+        write_png("section-" + a + "-coverage.png",
+                  std::visit([&](const auto& v) { return coverage_section_png(v, axis, middle); }, *result.values));
+      }
+    }
+  }
   for (const char* name : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
     const View view = *parse_view(name);
+    if (sdf) write_png(std::string("preview-sdf-from") + name + ".png", sdf_preview_png(*sdf, view, {}, threads));
     write_png(std::string("preview-from") + name + ".png", preview_png(result.volume, view, nullptr, {}, threads));
     if (map) write_png(std::string("preview-from") + name + "-thickness.png", preview_png(result.volume, view, &*map, {}, threads));
   }
@@ -172,15 +195,21 @@ int analyze_command(int argc, char** argv) {
         [&kept](const std::string& key, const std::string& bytes) { kept[key] = bytes; }};
     server::JobSnapshot job;
     job.id = "cli";
+    job.params = params_json;
     job.grid = result.grid;
     job.mesh = result.report;
     job.mesh_mass = result.mesh_mass;
+    job.values = result.values_info;
+    // Non-owning views of this run's volumes (they outlive the loop).
+    const server::JobOutput output{
+        std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
+        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr};
     std::filesystem::create_directories(*out_dir + "/analyses");
     for (std::size_t i = 0; i < params.analyses.size(); ++i) {
       const api::AnalysisRequest& request = params.analyses[i];
       std::string bytes;
       try {
-        bytes = server::job_analysis(request, job, result.volume, artifacts).bytes;
+        bytes = server::job_analysis(request, job, output, artifacts).bytes;
       } catch (const server::AnalysisRejected& e) {
         throw Error(ErrorCode::invalid_argument, "analyses/" + std::to_string(i) + ": " + e.what());
       }

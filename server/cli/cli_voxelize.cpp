@@ -33,10 +33,12 @@ volume to OUT ("-" for standard output).
   --origin X,Y,Z         minimum corner of voxel (0,0,0) (with --voxel-size, --dims)
   --dims NX,NY,NZ        grid size in voxels (with --voxel-size, --origin)
   --padding P            empty voxels added on every side
-  --mode M               solid | surface | solid+surface
-  --inside T             parity | vote | winding
-  --format F             rle | binvox | raw (default: from OUT's extension)
+  --mode M               solid | surface | solid+surface | coverage | sdf
+                         (their options in --params: "coverage": {...}, "sdf": {...})
+  --inside T             parity | vote | winding (for sdf: the sign)
+  --format F             rle | binvox | raw | nrrd (default: from OUT's extension)
   --raw-packing P        bytes (default) | bits, for --format raw
+  --nrrd-encoding E      raw (default) | gzip, for --format nrrd
   --threads N            worker threads (default: all cores)
   --max-voxels N         refuse grids with more voxels (default 2^36: 8 GiB of bits)
   --report               include the mesh report (topology, area, volume)
@@ -44,6 +46,11 @@ volume to OUT ("-" for standard output).
 
 Flags override the matching fields of --params. A summary (grid, filled
 voxels, volume, time per stage) is printed on standard error.
+
+Modes coverage and sdf write values: coverage as bytes (0..255, Thon's grey
+levels; "values": "f32" for fractions) or, with a threshold, bits; sdf as
+float32 distances (rle, raw or nrrd; binvox holds no floats). "Filled" is
+then the solid (voxel centres inside) the values come with.
 )";
 
 std::string format_seconds(double s) {
@@ -57,7 +64,7 @@ std::string format_seconds(double s) {
 int voxelize_command(int argc, char** argv) {
   Args args(argc, argv, 2,
             {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "format",
-             "raw-packing", "threads", "output", "max-voxels"},
+             "raw-packing", "nrrd-encoding", "threads", "output", "max-voxels"},
             {"json", "report", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -74,16 +81,26 @@ int voxelize_command(int argc, char** argv) {
   std::optional<VolumeFormat> format;
   if (auto f = args.value("format")) {
     format = volume_format_from_string(*f);
-    if (!format) throw UsageError("--format must be rle, binvox or raw, got '" + *f + "'");
+    if (!format) throw UsageError("--format must be rle, binvox, raw or nrrd, got '" + *f + "'");
   } else {
     format = volume_format_from_path(*out_path);
     if (!format)
-      throw UsageError("cannot tell the output format from '" + *out_path + "'; use --format rle|binvox|raw");
+      throw UsageError("cannot tell the output format from '" + *out_path + "'; use --format rle|binvox|raw|nrrd");
   }
   EncodeOptions encode_options;
   if (auto p = args.value("raw-packing")) {
     if (*p == "bits") encode_options.raw_packing = RawPacking::bits;
     else if (*p != "bytes") throw UsageError("--raw-packing must be bytes or bits, got '" + *p + "'");
+  }
+  if (auto e = args.value("nrrd-encoding")) {
+    if (*e == "gzip") encode_options.nrrd_encoding = NrrdEncoding::gzip;
+    else if (*e != "raw") throw UsageError("--nrrd-encoding must be raw or gzip, got '" + *e + "'");
+  }
+  // A format that cannot hold the values is refused before any work.
+  if (params.has_values()) {
+    const bool floats = params.sdf || params.coverage->float_values;
+    const ValueVolume empty = floats ? ValueVolume(DenseVolume<float>()) : ValueVolume(DenseVolume<std::uint8_t>());
+    if (auto refusal = format_refusal(empty, *format, encode_options)) throw UsageError("mode " + params.mode_name() + ": " + *refusal);
   }
   const int threads = thread_count(args);
 
@@ -102,6 +119,15 @@ int voxelize_command(int argc, char** argv) {
     }
   }
   VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, args.has("report"), nullptr, threads);
+  encode_options.nrrd_content = result.values ? result.values_info.value("quantity", "values") + " (" +
+                                                    result.values_info.value("unit", "") + ")"
+                                              : "voxels (1 = filled)";
+  auto encode = [&](ByteSink& sink) {
+    if (result.values)
+      encode_volume(*result.values, *format, sink, encode_options);
+    else
+      encode_volume(result.volume, *format, sink, encode_options);
+  };
 
   // Encode to a temporary file renamed into place, so OUT is never half written.
   const auto start = std::chrono::steady_clock::now();
@@ -115,14 +141,14 @@ int voxelize_command(int argc, char** argv) {
         n += b.size();
       }
     } sink;
-    encode_volume(result.volume, *format, sink, encode_options);
+    encode(sink);
     std::fflush(stdout);
     bytes_written = sink.n;
   } else {
     const std::string tmp = *out_path + ".partial";
     try {
       FileSink sink(tmp);
-      encode_volume(result.volume, *format, sink, encode_options);
+      encode(sink);
       sink.close();
       std::filesystem::rename(tmp, *out_path);
     } catch (...) {
@@ -140,13 +166,14 @@ int voxelize_command(int argc, char** argv) {
     json summary = {
         {"mesh", {{"path", mesh_path}, {"format", to_string(result.format)}, {"triangles", result.triangles}}},
         {"grid", api::to_json(g)},
-        {"mode", to_string(params.mode)},
+        {"mode", params.mode_name()},
         {"inside", to_string(params.inside)},
         {"filled_voxels", result.filled},
         {"filled_volume", filled_volume},
         {"output", {{"path", *out_path}, {"format", to_string(*format)}, {"bytes", bytes_written}}},
     };
     if (result.report) summary["report"] = api::to_json(*result.report);
+    summary["values"] = result.values_info;
     json rot = json::array();
     for (int r = 0; r < 3; ++r) rot.push_back({result.rotation[0][r], result.rotation[1][r], result.rotation[2][r]});
     summary["rotation"] = rot;
@@ -163,6 +190,7 @@ int voxelize_command(int argc, char** argv) {
     s << "filled:  " << result.filled << " voxels ("
       << 100.0 * static_cast<double>(result.filled) / static_cast<double>(g.voxel_count()) << "%), volume "
       << filled_volume << " (model units^3)\n";
+    if (!result.values_info.is_null()) s << "values:  " << result.values_info.dump() << '\n';
     if (result.report)
       s << "mesh report: " << api::to_json(*result.report).dump() << '\n';
     s << "timings:";

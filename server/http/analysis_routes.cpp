@@ -19,7 +19,7 @@ using httplib::Response;
 
 struct FinishedJob {
   JobSnapshot snapshot;
-  std::shared_ptr<const BitVolume> volume;
+  JobOutput output;
 };
 
 FinishedJob finished_job(JobManager& jobs, const std::string& id) {
@@ -31,9 +31,9 @@ FinishedJob finished_job(JobManager& jobs, const std::string& id) {
   if (job->state != JobState::succeeded)
     throw ProblemError(make_problem(409, "job-not-finished", "The job has no volume yet",
                                     std::string("the job is ") + to_string(job->state) + "; its analyses exist once it has succeeded"));
-  auto volume = jobs.volume(id);
-  if (!volume) throw unknown();
-  return {*job, std::move(volume)};
+  JobOutput output{jobs.volume(id), jobs.values(id)};
+  if (!output.solid || (job->has_value_volume() && !output.values)) throw unknown();
+  return {*job, std::move(output)};
 }
 
 ProblemError invalid_query(const std::string& detail) {
@@ -67,7 +67,7 @@ std::vector<std::string> install_analysis_routes(httplib::Server& server, JobMan
       const FinishedJob job = finished_job(jobs, id);
       AnalysisResult result;
       try {
-        result = job_analysis(request, job.snapshot, *job.volume, artifacts_of(jobs, id));
+        result = job_analysis(request, job.snapshot, job.output, artifacts_of(jobs, id));
       } catch (const AnalysisRejected& e) {
         throw invalid_query(e.what());
       }

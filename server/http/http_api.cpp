@@ -8,6 +8,8 @@
 #include <httplib.h>
 #include <spdlog/spdlog.h>
 
+#include "api/job_params.h"
+#include "api/param_error.h"
 #include "api/result_json.h"
 #include "server/http/analysis_routes.h"
 #include "server/http/problem.h"
@@ -163,8 +165,17 @@ VolumeRequest read_volume_request(const Request& req) {
     const auto f = volume_format_from_string(req.get_param_value("format"));
     if (!f)
       throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter",
-                                      "format must be rle, binvox or raw, got '" + req.get_param_value("format") + "'"));
+                                      "format must be rle, binvox, raw or nrrd, got '" + req.get_param_value("format") + "'"));
     v.format = *f;
+  }
+  if (req.has_param("encoding")) {
+    const std::string e = req.get_param_value("encoding");
+    if (v.format != VolumeFormat::nrrd)
+      throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter",
+                                      "encoding applies to format nrrd only (for compression in transit send Accept-Encoding: gzip)"));
+    if (e == "gzip") v.options.nrrd_encoding = NrrdEncoding::gzip;
+    else if (e != "raw")
+      throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", "encoding must be raw or gzip, got '" + e + "'"));
   }
   if (req.has_param("packing")) {
     const std::string p = req.get_param_value("packing");
@@ -173,6 +184,25 @@ VolumeRequest read_volume_request(const Request& req) {
       throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", "packing must be bytes or bits, got '" + p + "'"));
   }
   return v;
+}
+
+// What a job's volume holds, for the NRRD "content:" line.
+std::string volume_content(const json& values) {
+  if (!values.is_object()) return "voxels (1 = filled)";
+  std::string text = values.value("quantity", "values");
+  if (values.contains("unit")) text += " (" + values.at("unit").get<std::string>();
+  if (values.contains("sign_convention")) text += ", " + values.at("sign_convention").get<std::string>();
+  if (values.contains("unit")) text += ")";
+  return text;
+}
+
+// Refuses a format that cannot hold a value job's values before any work.
+void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {
+  if (!params.has_values()) return;
+  const bool floats = params.sdf || (params.coverage && params.coverage->float_values);
+  const ValueVolume empty = floats ? ValueVolume(DenseVolume<float>()) : ValueVolume(DenseVolume<std::uint8_t>());
+  if (auto refusal = format_refusal(empty, v.format, v.options))
+    throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
 }
 
 bool accepts_gzip(const Request& req) {
@@ -254,7 +284,7 @@ void HttpApi::install(httplib::Server& server) {
     if (cors) {
       res.set_header("Access-Control-Allow-Origin", origin);
       res.set_header("Vary", "Origin");
-      res.set_header("Access-Control-Expose-Headers", "Location, Retry-After, X-Request-Id, X-Voxd-Job-Id, X-Voxd-Dims, X-Voxd-Filled-Voxels");
+      res.set_header("Access-Control-Expose-Headers", "Location, Retry-After, X-Request-Id, X-Voxd-Job-Id, X-Voxd-Dims, X-Voxd-Filled-Voxels, X-Voxd-Value-Type");
       if (req.method == "OPTIONS" && req.has_header("Access-Control-Request-Method")) {
         res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
         res.set_header("Access-Control-Allow-Headers", "Authorization, Content-Type, X-Request-Id");
@@ -395,9 +425,21 @@ void HttpApi::install(httplib::Server& server) {
     if (job->state != JobState::succeeded)
       throw ProblemError(make_problem(409, "job-not-finished", "The job has no volume yet",
                                       std::string("the job is ") + to_string(job->state) + "; its volume exists once it has succeeded"));
+    VolumeRequest request = v;
+    request.options.nrrd_content = volume_content(job->values);
+    const std::string filename = id + file_extension(v.format);
+    if (job->has_value_volume()) {
+      auto values = jobs_.values(id);
+      if (!values) throw unknown_job(id);
+      if (auto refusal = format_refusal(*values, v.format, v.options))
+        throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
+      res.set_header("X-Voxd-Value-Type", value_type_name(*values));
+      return stream_volume(res, std::move(values), v.format, request.options, accepts_gzip(req), filename, &metrics_);
+    }
     auto volume = jobs_.volume(id);
     if (!volume) throw unknown_job(id);
-    stream_volume(res, std::move(volume), v.format, v.options, accepts_gzip(req), id + file_extension(v.format), &metrics_);
+    res.set_header("X-Voxd-Value-Type", "bit");
+    stream_volume(res, std::move(volume), v.format, request.options, accepts_gzip(req), filename, &metrics_);
   }));
   allow_only(job_path + "/volume", "GET");
 
@@ -407,9 +449,10 @@ void HttpApi::install(httplib::Server& server) {
   server.Post("/v1/voxelize", guarded_upload([this](const Request& req, Response& res, const httplib::ContentReader& reader) {
     const VolumeRequest v = read_volume_request(req);
     Submission s = read_submission(req, reader, metrics_, config_.max_upload_bytes);
+    check_format_holds(api::parse_job_params(s.params), v);
     JobSnapshot job;
-    auto volume = jobs_.run_sync(std::move(s.mesh), s.filename, s.params, &job, config_.sync_max_voxels);
-    if (!volume) {
+    JobOutput output = jobs_.run_sync(std::move(s.mesh), s.filename, s.params, &job, config_.sync_max_voxels);
+    if (!output.solid) {
       Problem p = job.failure ? make_problem(job.failure->type == "internal" ? 500 : 422, job.failure->type, job.failure->title, job.failure->detail)
                               : make_problem(409, "cancelled", "The job was cancelled", "the job was cancelled");
       throw ProblemError(p);
@@ -417,7 +460,15 @@ void HttpApi::install(httplib::Server& server) {
     res.set_header("X-Voxd-Job-Id", job.id);
     res.set_header("X-Voxd-Dims", std::to_string(job.grid.dims.x) + "," + std::to_string(job.grid.dims.y) + "," + std::to_string(job.grid.dims.z));
     res.set_header("X-Voxd-Filled-Voxels", std::to_string(job.filled_voxels.value_or(0)));
-    stream_volume(res, std::move(volume), v.format, v.options, accepts_gzip(req), "voxels" + std::string(file_extension(v.format)), &metrics_);
+    VolumeRequest request = v;
+    request.options.nrrd_content = volume_content(job.values);
+    const std::string filename = "voxels" + std::string(file_extension(v.format));
+    if (output.values) {
+      res.set_header("X-Voxd-Value-Type", value_type_name(*output.values));
+      return stream_volume(res, std::move(output.values), v.format, request.options, accepts_gzip(req), filename, &metrics_);
+    }
+    res.set_header("X-Voxd-Value-Type", "bit");
+    stream_volume(res, std::move(output.solid), v.format, request.options, accepts_gzip(req), filename, &metrics_);
   }));
   allow_only("/v1/voxelize", "POST");
 }

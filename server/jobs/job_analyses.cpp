@@ -13,12 +13,15 @@
 #include <spdlog/spdlog.h>
 
 #include "api/analysis_json.h"
+#include "api/job_params.h"
 #include "voxd/analysis.h"
 #include "voxd/analysis_images.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
 #include "voxd/preview.h"
 #include "voxd/radiography.h"
+#include "voxd/sdf_render.h"
+#include "voxd/value_images.h"
 #include "voxd/section.h"
 #include "voxd/skin_removal.h"
 #include "voxd/volume_format.h"
@@ -137,6 +140,31 @@ DenseVolume<float> thickness_in(DenseVolume<float> map, const std::string& unit)
   return map;
 }
 
+// An sdf job's field and how to read it (its convention and units come
+// from the job JSON); nullopt for other jobs.
+std::optional<SdfRenderInput> sdf_input(const JobSnapshot& job, const JobOutput& output) {
+  if (!output.values || !std::holds_alternative<DenseVolume<float>>(*output.values)) return std::nullopt;
+  const api::JobParams params = api::parse_job_params(job.params);
+  if (!params.sdf) return std::nullopt;
+  return sdf_render_input(std::get<DenseVolume<float>>(*output.values), *params.sdf);
+}
+
+// A coverage or sdf job's section shows its values (colour none or
+// distance); colour thickness and peeled sections show the solid.
+std::optional<std::string> value_job_section(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
+                                         std::int64_t layer, const std::vector<PngText>& text) {
+  const std::optional<SdfRenderInput> sdf = sdf_input(job, output);
+  if (r.colour == "distance" && !sdf)
+    throw AnalysisRejected("colour=distance shows the distances of an sdf job; this job's mode is " +
+                           api::parse_job_params(job.params).mode_name() + ": use colour none or thickness");
+  if (!output.values || r.colour == "thickness") return std::nullopt;
+  if (r.peel > 0)
+    throw AnalysisRejected("peel removes skin from the solid; a section of the job's values takes no peel "
+                           "(use colour=thickness for the peeled solid)");
+  if (sdf) return to_bytes(sdf_section_png(*sdf, r.axis, layer, r.colour == "distance", text));
+  return std::visit([&](const auto& v) { return to_bytes(coverage_section_png(v, r.axis, layer, text)); }, *output.values);
+}
+
 std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, const ArtifactAccess& artifacts,
                              JobControl* control) {
   const DenseVolume<float> map = thickness_in(job_thickness_map(volume, artifacts, control), r.unit);
@@ -175,8 +203,9 @@ DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAcce
   return map;
 }
 
-AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& volume,
+AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
                             const ArtifactAccess& artifacts, JobControl* control) {
+  const BitVolume& volume = *output.solid;
   const std::string key = r.artifact_key();
   if (auto kept = artifacts.load(key)) return {std::move(*kept), true};
   const auto lock = key_lock(artifacts, key);
@@ -188,6 +217,10 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
     case AnalysisKind::radiography: bytes = radiography_result(r, job, volume); break;
     case AnalysisKind::section: {
       const std::int64_t layer = section_layer(r, job.grid);
+      if (auto values = value_job_section(r, job, output, layer, {{"voxd:job", job.id}})) {
+        bytes = std::move(*values);
+        break;
+      }
       std::optional<DenseVolume<float>> map;
       if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
       const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
@@ -197,6 +230,11 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
       break;
     }
     case AnalysisKind::preview: {
+      // An sdf job's surface is its zero level set, rendered directly.
+      if (const auto sdf = sdf_input(job, output); sdf && r.colour == "none") {
+        bytes = to_bytes(sdf_preview_png(*sdf, *parse_view(r.view), {{"voxd:job", job.id}}));
+        break;
+      }
       std::optional<DenseVolume<float>> map;
       if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
       bytes = to_bytes(preview_png(volume, *parse_view(r.view), map ? &*map : nullptr, {{"voxd:job", job.id}}));

@@ -76,7 +76,7 @@ struct Job {
   std::optional<PreparedVoxelJob> prepared;  // until a worker takes it
   JobControl control;
   bool ephemeral = false;           // synchronous job: never stored, dropped after use
-  std::shared_ptr<const BitVolume> result;  // a synchronous job's volume, for its caller
+  JobOutput result;  // a synchronous job's volumes, for its caller
   bool stopped_by_shutdown = false;  // cancelled because the service stops
   // Serializes this job's store writes with its removal: a worker writing the
   // final record just after a client deleted the finished job must not bring
@@ -103,9 +103,16 @@ struct JobManager::Impl {
   bool stopping = false;
   double recent_job_seconds = 1.0;  // moving average, for Retry-After
 
-  // Recently used result volumes, so streaming a fresh result reads no disk.
+  // Recently used result volumes (a job's solid under its id, its values
+  // under id + kValuesKey), so streaming a fresh result reads no disk.
   static constexpr std::size_t kCacheBytes = std::size_t{1} << 30;
-  std::list<std::pair<std::string, std::shared_ptr<const BitVolume>>> cache;
+  static constexpr const char* kValuesKey = "/values";
+  struct CacheEntry {
+    std::string key;
+    std::shared_ptr<const void> item;
+    std::size_t bytes;
+  };
+  std::list<CacheEntry> cache;
   std::size_t cache_bytes = 0;
 
   std::vector<std::thread> workers;
@@ -153,29 +160,38 @@ struct JobManager::Impl {
     }
   }
 
-  // Requires the lock.
-  void cache_put(const std::string& id, std::shared_ptr<const BitVolume> v) {
-    cache_drop(id);
-    cache_bytes += v->byte_size();
-    cache.emplace_front(id, std::move(v));
+  // Require the lock.
+  void cache_put(const std::string& key, std::shared_ptr<const void> item, std::size_t bytes) {
+    cache_erase(key);
+    cache_bytes += bytes;
+    cache.push_front({key, std::move(item), bytes});
     while (cache_bytes > kCacheBytes && cache.size() > 1) {
-      cache_bytes -= cache.back().second->byte_size();
+      cache_bytes -= cache.back().bytes;
       cache.pop_back();
     }
   }
-  void cache_drop(const std::string& id) {
+  void cache_put(const std::string& id, const JobOutput& output) {
+    if (output.values) cache_put(id + kValuesKey, output.values, byte_size(*output.values));
+    cache_put(id, output.solid, output.solid->byte_size());
+  }
+  void cache_erase(const std::string& key) {
     for (auto it = cache.begin(); it != cache.end(); ++it)
-      if (it->first == id) {
-        cache_bytes -= it->second->byte_size();
+      if (it->key == key) {
+        cache_bytes -= it->bytes;
         cache.erase(it);
         return;
       }
   }
-  std::shared_ptr<const BitVolume> cache_get(const std::string& id) {
+  void cache_drop(const std::string& id) {
+    cache_erase(id);
+    cache_erase(id + kValuesKey);
+  }
+  template <class T>
+  std::shared_ptr<const T> cache_get(const std::string& key) {
     for (auto it = cache.begin(); it != cache.end(); ++it)
-      if (it->first == id) {
+      if (it->key == key) {
         cache.splice(cache.begin(), cache, it);
-        return it->second;
+        return std::static_pointer_cast<const T>(it->item);
       }
     return nullptr;
   }
@@ -190,7 +206,7 @@ struct JobManager::Impl {
   // routes would keep them. A request the grid cannot answer fails alone;
   // cancellation stops the job.
   nlohmann::json prepare_analyses(Job& job, const std::vector<api::AnalysisRequest>& requests, const VoxelJobResult& r,
-                        const BitVolume& volume) {
+                                  const JobOutput& output) {
     nlohmann::json status = analyses_status(requests, job.snap.id, "pending");
     if (requests.empty()) return status;
     JobSnapshot view;
@@ -200,6 +216,7 @@ struct JobManager::Impl {
     }
     view.mesh = r.report;
     view.mesh_mass = r.mesh_mass;
+    view.values = r.values_info;
     const std::string id = view.id;
     const ArtifactAccess artifacts{
         id, [this, id](const std::string& key) { return store.load_artifact(id, key); },
@@ -217,7 +234,7 @@ struct JobManager::Impl {
       job.control.set_span(0.5 + 0.5 * static_cast<double>(i) / n, 0.5 + 0.5 * static_cast<double>(i + 1) / n);
       job.control.set_progress(0.0);
       try {
-        job_analysis(requests[i], view, volume, artifacts, &job.control);
+        job_analysis(requests[i], view, output, artifacts, &job.control);
         status[i]["state"] = "ready";
       } catch (const AnalysisRejected& e) {
         status[i]["state"] = "failed";
@@ -257,15 +274,19 @@ struct JobManager::Impl {
       deliver();
       const auto t0 = std::chrono::steady_clock::now();
       JobSnapshot done;
-      std::shared_ptr<const BitVolume> volume;
       try {
         const std::vector<api::AnalysisRequest> analyses = prepared.params.analyses;
         // With analyses to prepare, voxelizing is the first half of the bar.
         if (!analyses.empty()) job->control.set_span(0.0, 0.5);
         VoxelJobResult r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
-        volume = std::make_shared<const BitVolume>(std::move(r.volume));
-        if (!job->ephemeral) store.save_volume(job->snap.id, *volume);
-        nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, *volume);
+        JobOutput output;
+        output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
+        if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
+        if (!job->ephemeral) {
+          store.save_volume(job->snap.id, *output.solid);
+          if (output.values) store.save_values(job->snap.id, *output.values);
+        }
+        nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
         std::lock_guard lock(mutex);
         JobSnapshot& s = job->snap;
         if (!analyses.empty()) s.analyses = std::move(analyses_done);
@@ -277,10 +298,11 @@ struct JobManager::Impl {
           if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
             s.timings.push_back(t);
         s.filled_voxels = r.filled;
+        s.values = r.values_info.is_null() ? nlohmann::json(nullptr) : r.values_info;
         if (job->ephemeral) {
-          job->result = volume;
+          job->result = output;
         } else {
-          cache_put(s.id, volume);
+          cache_put(s.id, output);
           succeeded_by_hash[s.content_hash] = s.id;
         }
       } catch (const Error& e) {
@@ -594,17 +616,34 @@ std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
     std::lock_guard lock(impl_->mutex);
     auto it = impl_->jobs.find(id);
     if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
-    if (auto v = impl_->cache_get(id)) return v;
+    if (auto v = impl_->cache_get<BitVolume>(id)) return v;
   }
   auto v = impl_->store.load_volume(id);
   if (v) {
     std::lock_guard lock(impl_->mutex);
-    if (impl_->jobs.count(id)) impl_->cache_put(id, v);
+    if (impl_->jobs.count(id)) impl_->cache_put(id, v, v->byte_size());
   }
   return v;
 }
 
-std::shared_ptr<const BitVolume> JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
+std::shared_ptr<const ValueVolume> JobManager::values(const std::string& id) {
+  const std::string key = id + Impl::kValuesKey;
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto it = impl_->jobs.find(id);
+    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded || !it->second->snap.has_value_volume())
+      return nullptr;
+    if (auto v = impl_->cache_get<ValueVolume>(key)) return v;
+  }
+  auto v = impl_->store.load_values(id);
+  if (v) {
+    std::lock_guard lock(impl_->mutex);
+    if (impl_->jobs.count(id)) impl_->cache_put(key, v, byte_size(*v));
+  }
+  return v;
+}
+
+JobOutput JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
                                                       const nlohmann::json& params_json, JobSnapshot* snapshot,
                                                       std::uint64_t max_voxels) {
   std::shared_ptr<Job> job = impl_->enqueue(mesh_bytes, name_hint, params_json, true, nullptr, max_voxels);
@@ -612,7 +651,7 @@ std::shared_ptr<const BitVolume> JobManager::run_sync(std::vector<std::uint8_t> 
   impl_->finished_cv.wait(lock, [&] { return finished(job->snap.state); });
   if (snapshot) *snapshot = job->snap;
   impl_->jobs.erase(job->snap.id);
-  return job->snap.state == JobState::succeeded ? job->result : nullptr;
+  return job->snap.state == JobState::succeeded ? job->result : JobOutput{};
 }
 
 JobCounts JobManager::counts() const {

@@ -20,6 +20,7 @@
 #include "api/job_params.h"
 #include "server/job_pipeline.h"
 #include "voxd/bit_volume.h"
+#include "voxd/volume_format.h"
 
 namespace voxd::server {
 
@@ -55,6 +56,20 @@ struct JobSnapshot {
   // "error"}; state pending -> ready | failed, or on_request for a job
   // answered from an earlier one's result (computed when first asked).
   nlohmann::json analyses = nlohmann::json::array();
+  // A coverage or sdf job's values once succeeded: {"type": "u8"|"f32",
+  // "quantity", "unit", ...} (VoxelJobResult::values_info); null otherwise.
+  // A coverage threshold's has no "type": its volume is bits.
+  nlohmann::json values = nullptr;
+  // Whether the job's result is a volume of values rather than bits.
+  bool has_value_volume() const { return values.is_object() && values.contains("type"); }
+};
+
+// What a succeeded job produced: its binary volume (the result of a solid or
+// surface job, the solid of a coverage or sdf job) and, for a coverage or
+// sdf job, its values, which are then the job's result.
+struct JobOutput {
+  std::shared_ptr<const BitVolume> solid;
+  std::shared_ptr<const ValueVolume> values;
 };
 
 struct JobManagerConfig {
@@ -124,13 +139,15 @@ class JobManager {
   // The result volume of a succeeded job (loaded from the store if not in
   // memory); nullptr if the job is unknown or not succeeded.
   std::shared_ptr<const BitVolume> volume(const std::string& id);
+  // A succeeded coverage or sdf job's values; nullptr for other jobs.
+  std::shared_ptr<const ValueVolume> values(const std::string& id);
 
   // Submits and waits for the result (POST /v1/voxelize). The job goes
   // through the same queue, so it cannot starve asynchronous jobs, but it is
-  // never stored. Returns nullptr when the job did not succeed; `snapshot`
-  // then holds its failure. Throws like submit().
+  // never stored. Returns an empty output (solid null) when the job did not
+  // succeed; `snapshot` then holds its failure. Throws like submit().
   // `max_voxels` (0 = none) is an extra, smaller grid limit for this call.
-  std::shared_ptr<const BitVolume> run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
+  JobOutput run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
                                             const nlohmann::json& params_json, JobSnapshot* snapshot,
                                             std::uint64_t max_voxels = 0);
 

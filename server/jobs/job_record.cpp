@@ -100,6 +100,7 @@ json to_json(const JobSnapshot& job) {
   for (const auto& [stage, seconds] : job.timings) timings[stage] = seconds;
   out["timings"] = timings;
   out["analyses"] = job.analyses;
+  out["values"] = job.values;
   if (job.filled_voxels) {
     out["filled_voxels"] = *job.filled_voxels;
     out["filled_volume"] = static_cast<double>(*job.filled_voxels) * job.grid.voxel_volume();
@@ -153,6 +154,7 @@ JobSnapshot job_from_json(const json& r) {
                              r.at("error").at("title"), r.at("error").at("detail")};
   }
   if (r.contains("analyses") && r.at("analyses").is_array()) job.analyses = r.at("analyses");
+  if (r.contains("values") && r.at("values").is_object()) job.values = r.at("values");
   job.cached = r.at("cached");
   job.content_hash = r.at("content_hash");
   return job;

@@ -96,18 +96,50 @@ void JobStore::save_volume(const std::string& id, const BitVolume& volume) const
   write_atomically(job_dir(id) / "volume.rle", [&](ByteSink& sink) { write_rle(volume, sink); });
 }
 
-void JobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
-  fs::create_directories(job_dir(to_id));
-  std::error_code ec;
-  fs::create_hard_link(job_dir(from_id) / "volume.rle", job_dir(to_id) / "volume.rle", ec);
-  if (ec) fs::copy_file(job_dir(from_id) / "volume.rle", job_dir(to_id) / "volume.rle", fs::copy_options::overwrite_existing);
+void JobStore::save_values(const std::string& id, const ValueVolume& values) const {
+  fs::create_directories(job_dir(id));
+  const std::string name = std::string("values.") + value_type_name(values) + ".rle";
+  write_atomically(job_dir(id) / name, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
 }
 
+void JobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
+  fs::create_directories(job_dir(to_id));
+  for (const char* name : {"volume.rle", "values.u8.rle", "values.f32.rle"}) {
+    const fs::path from = job_dir(from_id) / name, to = job_dir(to_id) / name;
+    // The volume must be there (else the original is gone: throw); values only for value jobs.
+    if (std::string_view(name) != "volume.rle" && !fs::exists(from)) continue;
+    std::error_code ec;
+    fs::create_hard_link(from, to, ec);
+    if (ec) fs::copy_file(from, to, fs::copy_options::overwrite_existing);
+  }
+}
+
+namespace {
+
+std::optional<std::vector<std::uint8_t>> read_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  return std::vector<std::uint8_t>{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The store's own files are trusted to be as large as the job limits let
+// them be (8 Gi voxels), not the untrusted-input default of 1 GiB.
+constexpr ReadLimits kStoredVolumeLimits{std::uint64_t{1} << 36};
+
+}  // namespace
+
 std::shared_ptr<const BitVolume> JobStore::load_volume(const std::string& id) const {
-  std::ifstream in(job_dir(id) / "volume.rle", std::ios::binary);
-  if (!in) return nullptr;
-  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  return std::make_shared<const BitVolume>(read_rle_bits(bytes));
+  const auto bytes = read_file(job_dir(id) / "volume.rle");
+  if (!bytes) return nullptr;
+  return std::make_shared<const BitVolume>(read_rle_bits(*bytes, kStoredVolumeLimits));
+}
+
+std::shared_ptr<const ValueVolume> JobStore::load_values(const std::string& id) const {
+  if (const auto bytes = read_file(job_dir(id) / "values.u8.rle"))
+    return std::make_shared<const ValueVolume>(read_rle_u8(*bytes, kStoredVolumeLimits));
+  if (const auto bytes = read_file(job_dir(id) / "values.f32.rle"))
+    return std::make_shared<const ValueVolume>(read_rle_f32(*bytes, kStoredVolumeLimits));
+  return nullptr;
 }
 
 void JobStore::remove(const std::string& id) const {

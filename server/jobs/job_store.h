@@ -1,6 +1,7 @@
 #pragma once
 // The embedded job store: one directory per job under DATA_DIR/jobs/ID with
-// record.json (the job snapshot) and, once succeeded, volume.rle. Every file is
+// record.json (the job snapshot) and, once succeeded, volume.rle (and, for a
+// coverage or sdf job, values.u8.rle or values.f32.rle). Every file is
 // written to a temporary name, flushed to disk and renamed, so a crash or a
 // kill never leaves a half-written record or result behind.
 #include <filesystem>
@@ -11,6 +12,7 @@
 
 #include "server/jobs/job_manager.h"
 #include "voxd/bit_volume.h"
+#include "voxd/volume_format.h"
 
 namespace voxd::server {
 
@@ -24,8 +26,12 @@ class JobStore {
   void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const;
   void save(const JobSnapshot& job) const;
   void save_volume(const std::string& id, const BitVolume& volume) const;
-  // Shares a finished result with a job created from an identical submission:
-  // a hard link, so deleting either job leaves the other's file intact.
+  // A coverage or sdf job's values, as RLE beside the volume.
+  void save_values(const std::string& id, const ValueVolume& values) const;
+  std::shared_ptr<const ValueVolume> load_values(const std::string& id) const;
+  // Shares a finished result (volume and values) with a job created from an
+  // identical submission: hard links, so deleting either job leaves the
+  // other's files intact.
   void share_volume(const std::string& from_id, const std::string& to_id) const;
   std::shared_ptr<const BitVolume> load_volume(const std::string& id) const;
   void remove(const std::string& id) const;

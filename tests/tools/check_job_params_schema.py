@@ -25,6 +25,19 @@ invalid = [
     {"colour": "red"},
     {"rotation": {"axis": [0, 0, 1]}},
     {"orient": "sideways"},
+    {"mode": "grey"},
+    {"sdf": {"band": 3}},
+    {"mode": "sdf", "coverage": {"rays": 2}},
+    {"mode": "sdf", "sdf": {"band": "wide"}},
+    {"mode": "sdf", "sdf": {"band": 0}},
+    {"mode": "sdf", "sdf": {"units": "mm"}},
+    {"mode": "coverage", "coverage": {"rays": 65}},
+    {"mode": "coverage", "coverage": {"threshold": 0}},
+    {"mode": "coverage", "coverage": {"seed": -1}},
+    {"mode": "coverage", "inside": "winding"},
+    {"mode": "coverage", "coverage": {"points": 8}},
+    {"mode": "coverage", "coverage": {"sampling": "exact", "seed": 3}},
+    {"mode": "coverage", "coverage": {"threshold": 0.5, "values": "f32"}},
 ]
 for doc in invalid:
     if validator.is_valid(doc):

@@ -25,6 +25,8 @@ class JobControl {
     span_begin_.store(begin, std::memory_order_relaxed);
     span_end_.store(end, std::memory_order_relaxed);
   }
+  double span_begin() const { return span_begin_.load(std::memory_order_relaxed); }
+  double span_end() const { return span_end_.load(std::memory_order_relaxed); }
 
  private:
   std::atomic<bool> cancel_{false};
