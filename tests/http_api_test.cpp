@@ -678,27 +678,6 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
   http().Delete(("/v1/jobs/" + slow.at("id").get<std::string>()).c_str());
 }
 
-// The NRRD header's fields and the float32 data after the blank line.
-struct Nrrd {
-  std::map<std::string, std::string> fields;
-  std::vector<float> data;
-};
-Nrrd parse_nrrd(const std::string& bytes) {
-  Nrrd n;
-  const std::size_t end = bytes.find("\n\n");
-  EXPECT_NE(end, std::string::npos);
-  EXPECT_EQ(bytes.rfind("NRRD0004\n", 0), 0u);
-  std::istringstream lines(bytes.substr(0, end));
-  for (std::string line; std::getline(lines, line);) {
-    const auto colon = line.find(": ");
-    if (line.empty() || line[0] == '#' || colon == std::string::npos) continue;
-    n.fields[line.substr(0, colon)] = line.substr(colon + 2);
-  }
-  n.data.resize((bytes.size() - end - 2) / 4);
-  std::memcpy(n.data.data(), bytes.data() + end + 2, n.data.size() * 4);
-  return n;
-}
-
 TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   start();
   // A plate 4 voxels thick (z voxels 1..4) over x, y voxels 1..18, voxel 0.5
@@ -718,18 +697,19 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   EXPECT_EQ(res->get_header_value("X-Voxd-Unit"), "model units");
   EXPECT_EQ(res->get_header_value("X-Voxd-Cache"), "miss");
   const Nrrd nrrd = parse_nrrd(res->body);
+  const std::vector<float> values = floats_of(nrrd.data);
   EXPECT_EQ(nrrd.fields.at("type"), "float");
   EXPECT_EQ(nrrd.fields.at("sizes"), "20 20 6");
   EXPECT_EQ(nrrd.fields.at("space directions"), "(0.5,0,0) (0,0.5,0) (0,0,0.5)");
   EXPECT_EQ(nrrd.fields.at("space origin"), "(0.25,0.25,0.25)");
   EXPECT_EQ(nrrd.fields.at("endian"), "little");
-  ASSERT_EQ(nrrd.data.size(), 20u * 20 * 6);
+  ASSERT_EQ(values.size(), 20u * 20 * 6);
   for (int k = 0; k < 6; ++k)
     for (int j = 0; j < 20; ++j)
       for (int i = 0; i < 20; ++i) {
         const bool in = i >= 1 && i <= 18 && j >= 1 && j <= 18 && k >= 1 && k <= 4;
         // Voxels within 2 of the rim are still covered by a centred ball.
-        ASSERT_EQ(nrrd.data[voxel(i, j, k)], in ? 2.0f : 0.0f) << i << "," << j << "," << k;
+        ASSERT_EQ(values[voxel(i, j, k)], in ? 2.0f : 0.0f) << i << "," << j << "," << k;
       }
   EXPECT_EQ(http().Get(("/v1/jobs/" + id + "/thickness").c_str())->get_header_value("X-Voxd-Cache"), "hit");
   auto raw = http().Get(("/v1/jobs/" + id + "/thickness?format=raw&unit=voxels").c_str());
@@ -743,8 +723,7 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   const auto decoded = run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_rle.py " + dir_ +
                                    "/t.rle " + dir_ + "/t.f32");
   ASSERT_EQ(decoded.exit_code, 0) << decoded.err;
-  const auto* nrrd_bytes = reinterpret_cast<const std::uint8_t*>(nrrd.data.data());
-  EXPECT_EQ(read_file(dir_ + "/t.f32"), std::vector<std::uint8_t>(nrrd_bytes, nrrd_bytes + nrrd.data.size() * 4));
+  EXPECT_EQ(text_of(read_file(dir_ + "/t.f32")), nrrd.data);
   expect_problem(http().Get(("/v1/jobs/" + id + "/thickness?format=vtk").c_str()), 400, "invalid-query");
 
   // Preview from +z ('+' escaped, and unescaped, which a query decodes to a

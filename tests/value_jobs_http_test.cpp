@@ -33,32 +33,6 @@ class ValueJobsTest : public HttpServiceTest {
   }
 };
 
-// A header field map and the data after the blank line.
-struct Nrrd {
-  std::map<std::string, std::string> fields;
-  std::string data;
-};
-Nrrd parse_nrrd(const std::string& bytes) {
-  Nrrd n;
-  const std::size_t end = bytes.find("\n\n");
-  EXPECT_NE(end, std::string::npos);
-  EXPECT_EQ(bytes.rfind("NRRD0004\n", 0), 0u);
-  std::istringstream lines(bytes.substr(0, end));
-  for (std::string line; std::getline(lines, line);) {
-    const auto colon = line.find(": ");
-    if (line.empty() || line[0] == '#' || colon == std::string::npos) continue;
-    n.fields[line.substr(0, colon)] = line.substr(colon + 2);
-  }
-  n.data = bytes.substr(end + 2);
-  return n;
-}
-
-std::vector<float> floats_of(const std::string& bytes) {
-  std::vector<float> v(bytes.size() / 4);
-  std::memcpy(v.data(), bytes.data(), v.size() * 4);
-  return v;
-}
-
 std::string gunzip(const std::string& in) {
   z_stream z{};
   EXPECT_EQ(inflateInit2(&z, 15 + 16), Z_OK);

@@ -4,6 +4,9 @@
 // check a JSON answer or an RFC 9457 problem, and a collector that validates
 // every JSON body against the OpenAPI schemas when the test ends.
 #include <algorithm>
+#include <cstring>
+#include <map>
+#include <sstream>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -30,6 +33,33 @@ inline nlohmann::json read_png(const std::string& bytes, const std::string& dir)
   const auto r = run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_png.py " + dir + "/image.png");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return nlohmann::json::parse(r.out);
+}
+
+// An NRRD file: its header fields and the data after the blank line.
+struct Nrrd {
+  std::map<std::string, std::string> fields;
+  std::string data;
+};
+inline Nrrd parse_nrrd(const std::string& bytes) {
+  Nrrd n;
+  const std::size_t end = bytes.find("\n\n");
+  EXPECT_NE(end, std::string::npos);
+  EXPECT_EQ(bytes.rfind("NRRD0004\n", 0), 0u);
+  std::istringstream lines(bytes.substr(0, end));
+  for (std::string line; std::getline(lines, line);) {
+    const auto colon = line.find(": ");
+    if (line.empty() || line[0] == '#' || colon == std::string::npos) continue;
+    n.fields[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  if (end != std::string::npos) n.data = bytes.substr(end + 2);
+  return n;
+}
+
+// Little-endian float32 data as floats.
+inline std::vector<float> floats_of(const std::string& bytes) {
+  std::vector<float> v(bytes.size() / 4);
+  std::memcpy(v.data(), bytes.data(), v.size() * 4);
+  return v;
 }
 
 class HttpServiceTest : public ::testing::Test {
