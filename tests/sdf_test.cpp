@@ -303,6 +303,33 @@ TEST(SignedDistanceField, TorusBandEqualsBruteForce) {
   expect_sign_matches_solid(sdf, mesh);
 }
 
+// Triangles much smaller than the band (a fifth of a voxel's face and
+// less), as on the benchmark mesh: the band goes through the clusters of
+// neighbouring triangles. Sampled voxels against the brute force, bit for
+// bit, in the band and beyond it.
+TEST(SignedDistanceField, FineMeshBandEqualsBruteForceBitForBit) {
+  const Mesh mesh = test::make_torus({0.05, -0.02, 0.03}, 4.0, 1.5, 240, 90);
+  const Grid g = make_grid({-5.83, -5.91, -1.87}, 0.1, 118, 118, 38);
+  SdfOptions o;
+  const DenseVolume<float> sdf = signed_distance_field(mesh, g, o);
+  const double B = o.band * g.voxel_size;
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<std::int64_t> ix(0, g.dims.x - 1), iy(0, g.dims.y - 1), iz(0, g.dims.z - 1);
+  std::int64_t wrong = 0, in_band = 0;
+  for (int n = 0; n < 4000; ++n) {
+    const std::int64_t i = ix(rng), j = iy(rng), k = iz(rng);
+    const double d = brute_distance(mesh, g.center(i, j, k));
+    const float got = std::abs(sdf.at(i, j, k));
+    if (d > B * (1.0 - 1e-6) && d < B * (1.0 + 1e-6)) continue;  // at the band's edge either is right
+    in_band += d < B;
+    const float want = d < B ? static_cast<float>(d) : static_cast<float>(B);
+    if (got != want && ++wrong <= 5)
+      ADD_FAILURE() << "voxel (" << i << "," << j << "," << k << "): got " << got << ", brute force " << d;
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(in_band, 500);
+}
+
 TEST(SignedDistanceField, SignFollowsTheChosenInsideTest) {
   // Two overlapping spheres: parity (and vote: two crossings along every
   // axis) calls the overlap outside, the winding number (2) inside.

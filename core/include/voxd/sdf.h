@@ -5,12 +5,16 @@
 // voxelize(mesh, grid, {solid, options.inside}) fills it).
 //
 // Narrow band (Jones 1996: exact distances are only needed near the surface).
-// Every triangle is scattered to the voxels whose centres lie within the band
-// of its bounding box, and each voxel keeps the smallest exact point-triangle
-// distance it receives. A voxel whose distance is at most band * voxel_size is
-// reached by its nearest triangle, so its value is exact; every other voxel
-// holds +-band (clamped). Threads own disjoint chunks of z-slabs, each with
-// the triangles whose band reaches it, so no two threads write one voxel and
+// Triangles are scattered to the voxels whose centres lie within the band of
+// them, and each voxel keeps the smallest exact point-triangle distance it
+// receives. A voxel whose distance is at most band * voxel_size is reached by
+// its nearest triangle, so its value is exact; every other voxel holds +-band
+// (clamped). Neighbouring small triangles go as a cluster (one visit per voxel
+// for the cluster, one bound for all its triangles, then exact distances in
+// order of their lower bounds), after a first pass has given each voxel an
+// upper bound from the triangles' centroids, so that few exact distances are
+// computed that do not win. Threads own disjoint chunks of z-slabs, each with
+// the clusters whose band reaches it, so no two threads write one voxel and
 // the result does not depend on the thread count.
 //
 // Full field (`full`): the voxels the band leaves clamped get exact nearest-
@@ -28,8 +32,9 @@
 // the exact distance rounded to float: a brute force over all triangles with
 // point_triangle_distance2 gives the same bits.
 //
-// Cost: the band is about (2 band + 1)^3 voxel visits per triangle, most
-// settled by a plane and a bounding-sphere bound; the full field adds a tree
+// Cost: the band is about (2 band + 1)^3 voxel visits per cluster of about a
+// dozen triangles (per triangle where they are large or folded), most
+// settled by the cluster's oriented box; the full field adds a tree
 // query per voxel outside the band, a few microseconds each on a million
 // triangles (bench/sdf_bench.cpp). Memory: the float result, the solid's bit
 // per voxel and the triangle bins; with `full`, the hierarchy (about 70

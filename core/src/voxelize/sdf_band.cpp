@@ -1,0 +1,453 @@
+// The narrow band by scattering triangles to voxels; see sdf_band.h.
+#include "voxelize/sdf_band.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "voxd/parallel.h"
+#include "voxelize/sdf_triangle.h"
+
+namespace voxd::sdf {
+namespace {
+
+inline dvec3 corner(const Mesh& mesh, std::size_t tri, int c) { return dvec3(mesh.corner(tri, c)); }
+
+// Lowers each voxel of slabs [z0, z1) within the band of triangle t to its
+// distance if that is smaller. `values` hold float(distance * to_output);
+// the minimum of rounded values is the rounded minimum, so the order in which
+// triangles arrive does not matter.
+//
+// Which voxels to visit is worked out per row in index space (voxel i's
+// centre at coordinate i), cheap and with a margin for rounding: the band of
+// the bounding box, of the bounding sphere and of the plane. Each visited
+// voxel then gets two lower bounds in model units, relative to the triangle
+// (so small numbers, small rounding): its distance to the plane and to the
+// bounding sphere. If either reaches its current value the triangle cannot
+// lower it; only then is the exact distance computed. Once the nearer
+// triangles have been by, the sphere skips most voxels (the plane alone does
+// not: along a curved surface the neighbours' planes pass close to a voxel).
+void scatter_triangle(const Triangle& t, const Grid& g, const BandSetup& s, std::int64_t z0, std::int64_t z1,
+                      DenseVolume<float>& values) {
+  const IndexSpace index_of(g);
+  const double band = s.band * index_of.inv_voxel, band2 = band * band;  // voxels
+  const dvec3 lo = index_of(glm::min(glm::min(t.a, t.b), t.c)), hi = index_of(glm::max(glm::max(t.a, t.b), t.c));
+  const dvec3 centroid = (t.a + t.b + t.c) / 3.0;
+  const double radius =
+      std::sqrt(std::max({glm::dot(t.a - centroid, t.a - centroid), glm::dot(t.b - centroid, t.b - centroid),
+                          glm::dot(t.c - centroid, t.c - centroid)})) * (1.0 + 1e-9);
+  const dvec3 centroid_i = index_of(centroid);
+  const double reach = band + radius * index_of.inv_voxel, reach2 = reach * reach;
+  const dvec3 unit = t.degenerate ? dvec3(0.0) : t.n / std::sqrt(t.nn);
+  const dvec3 a_i = index_of(t.a);
+  // Restrict rows by the plane only where that is well conditioned.
+  const double inv_unit_x = std::abs(unit.x) > 1e-3 ? 1.0 / unit.x : 0.0;
+
+  const std::int64_t k0 = std::max(z0, IndexSpace::first(lo.z - band, g.dims.z));
+  const std::int64_t k1 = std::min(z1 - 1, IndexSpace::last(hi.z + band, g.dims.z));
+  const std::int64_t j0 = IndexSpace::first(lo.y - band, g.dims.y), j1 = IndexSpace::last(hi.y + band, g.dims.y);
+  for (std::int64_t k = k0; k <= k1; ++k) {
+    const auto kk = static_cast<double>(k);
+    const double dz = std::max({lo.z - kk, kk - hi.z, 0.0}), sz = kk - centroid_i.z;
+    const double cz = centre_coordinate(g, 2, k);
+    float* slab = values.slab(k);
+    for (std::int64_t j = j0; j <= j1; ++j) {
+      const auto jj = static_cast<double>(j);
+      const double dy = std::max({lo.y - jj, jj - hi.y, 0.0}), sy = jj - centroid_i.y;
+      const double box_rest2 = band2 - dy * dy - dz * dz, sphere_rest2 = reach2 - sy * sy - sz * sz;
+      if (box_rest2 < 0.0 || sphere_rest2 < 0.0) continue;
+      const double bx = std::sqrt(box_rest2), sx = std::sqrt(sphere_rest2);
+      double from = std::max(lo.x - bx, centroid_i.x - sx), to = std::min(hi.x + bx, centroid_i.x + sx);
+      const double plane_yz_i = unit.y * (jj - a_i.y) + unit.z * (kk - a_i.z);
+      if (inv_unit_x != 0.0) {  // |plane_yz_i + unit.x (i - a_i.x)| <= band
+        const double p0 = a_i.x + (-band - plane_yz_i) * inv_unit_x, p1 = a_i.x + (band - plane_yz_i) * inv_unit_x;
+        from = std::max(from, std::min(p0, p1));
+        to = std::min(to, std::max(p0, p1));
+      }
+      const std::int64_t i0 = IndexSpace::first(from, g.dims.x), i1 = IndexSpace::last(to, g.dims.x);
+
+      const double cy = centre_coordinate(g, 1, j);
+      const double plane_yz = unit.y * (cy - t.a.y) + unit.z * (cz - t.a.z);
+      const double sphere_yz2 = (cy - centroid.y) * (cy - centroid.y) + (cz - centroid.z) * (cz - centroid.z);
+      float* row = slab + j * g.dims.x;
+      for (std::int64_t i = i0; i <= i1; ++i) {
+        const double cx = centre_coordinate(g, 0, i);
+        const double limit = static_cast<double>(row[i]) * s.to_model;
+        const double plane = plane_yz + unit.x * (cx - t.a.x);
+        if (plane * plane >= limit * limit) continue;
+        const double sphere2 = (cx - centroid.x) * (cx - centroid.x) + sphere_yz2;
+        if (sphere2 >= (limit + radius) * (limit + radius)) continue;
+        const double d2 = distance2(t, dvec3(cx, cy, cz));
+        if (d2 >= limit * limit) continue;
+        row[i] = std::min(row[i], static_cast<float>(std::sqrt(d2) * s.to_output));
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Clusters: scattering triangle by triangle visits each band voxel once per
+// triangle within the band of it (about 50 at 512^3 on the benchmark mesh,
+// each visit a few bound tests), since the band (3 voxels) is wide against
+// the triangles. Neighbouring triangles are grouped instead, and a cluster
+// visits the band of its box once; per voxel, one bound on the whole cluster
+// (an oriented box, thin along a smooth patch) settles most visits, and only
+// where it may beat the voxel's value are the cluster's triangles tested one
+// by one, as before. Grouping: triangles whose centroids share a cell of a
+// coarse grid, sized for about a dozen triangles per cell on a smooth
+// surface, at most kClusterSize per cluster.
+
+constexpr std::uint32_t kClusterSize = 16;
+
+struct Cluster {
+  std::uint32_t begin = 0, end = 0;  // ClusterSet::order[begin, end)
+  bool flat = false;                 // scattered as a whole; otherwise triangle by triangle
+  dvec3 centre{0.0};                 // model units
+  dvec3 u{0.0}, w{0.0}, n{0.0};      // orthonormal frame, n the mean normal
+  dvec3 half{0.0};                   // half-extents along u, w, n (model units, rounded up)
+  double radius = 0.0;               // bounding sphere about the centre
+  dvec3 lo{0.0}, hi{0.0};            // bounding box, index space
+};
+
+struct ClusterSet {
+  std::vector<std::uint32_t> order;  // triangles, cluster by cluster
+  std::vector<Cluster> clusters;
+};
+
+// Sorts `keys` on `threads` threads: blocks sorted in parallel, then merged.
+void parallel_sort(std::vector<std::uint64_t>& keys, int threads) {
+  const auto n = static_cast<std::int64_t>(keys.size());
+  const std::int64_t blocks = std::clamp<std::int64_t>(threads, 1, 64), size = (n + blocks - 1) / blocks;
+  if (blocks == 1 || n < 65536) {
+    std::sort(keys.begin(), keys.end());
+    return;
+  }
+  parallel_for(0, blocks, 1, threads, [&](std::int64_t b0, std::int64_t b1) {
+    for (std::int64_t b = b0; b < b1; ++b)
+      std::sort(keys.begin() + std::min(n, b * size), keys.begin() + std::min(n, (b + 1) * size));
+  });
+  for (std::int64_t width = size; width < n; width *= 2)
+    for (std::int64_t b = 0; b + width < n; b += 2 * width)
+      std::inplace_merge(keys.begin() + b, keys.begin() + b + width, keys.begin() + std::min(n, b + 2 * width));
+}
+
+void fit_cluster(const Mesh& mesh, const std::vector<std::uint32_t>& order, const IndexSpace& index_of,
+                 double voxel, Cluster& c) {
+  dvec3 lo(kInfinity), hi(-kInfinity), area(0.0);
+  for (std::uint32_t x = c.begin; x < c.end; ++x) {
+    const dvec3 a = corner(mesh, order[x], 0), b = corner(mesh, order[x], 1), d = corner(mesh, order[x], 2);
+    lo = glm::min(lo, glm::min(glm::min(a, b), d));
+    hi = glm::max(hi, glm::max(glm::max(a, b), d));
+    area += glm::cross(b - a, d - a);
+  }
+  c.lo = index_of(lo);
+  c.hi = index_of(hi);
+  const double area_length = glm::length(area);
+  if (c.end - c.begin < 2 || !(area_length > 0.0) || !std::isfinite(area_length)) return;  // not flat
+  c.n = area / area_length;
+  dvec3 u(0.0);
+  u[std::abs(c.n.x) < 0.6 ? 0 : 1] = 1.0;
+  c.u = glm::normalize(u - glm::dot(u, c.n) * c.n);
+  c.w = glm::cross(c.n, c.u);
+  const dvec3 box_centre = 0.5 * (lo + hi);
+  dvec3 qmin(kInfinity), qmax(-kInfinity);
+  auto frame = [&](const dvec3& d) { return dvec3(glm::dot(c.u, d), glm::dot(c.w, d), glm::dot(c.n, d)); };
+  for (std::uint32_t x = c.begin; x < c.end; ++x)
+    for (int k = 0; k < 3; ++k) {
+      const dvec3 q = frame(corner(mesh, order[x], k) - box_centre);
+      qmin = glm::min(qmin, q);
+      qmax = glm::max(qmax, q);
+    }
+  const dvec3 mid = 0.5 * (qmin + qmax);
+  c.centre = box_centre + mid.x * c.u + mid.y * c.w + mid.z * c.n;
+  dvec3 half(0.0);
+  double r2 = 0.0;
+  for (std::uint32_t x = c.begin; x < c.end; ++x)
+    for (int k = 0; k < 3; ++k) {
+      const dvec3 d = corner(mesh, order[x], k) - c.centre;
+      half = glm::max(half, glm::abs(frame(d)));
+      r2 = std::max(r2, glm::dot(d, d));
+    }
+  // The box holds every vertex, so (convex) every triangle; the slack
+  // covers the rounding of the frame products, far below a millionth.
+  const double slack = 1e-9 * (glm::length(hi - lo) + glm::length(c.centre));
+  c.half = half + slack;
+  c.radius = std::sqrt(r2) * (1.0 + 1e-9) + slack;
+  // Thin against a voxel: the band of the box is then about the band of the
+  // patch. A thick or folded group is cheaper triangle by triangle.
+  c.flat = c.half.z <= 0.5 * voxel;
+}
+
+ClusterSet make_clusters(const Mesh& mesh, const Grid& g, int threads) {
+  ClusterSet set;
+  const std::size_t n = mesh.triangle_count();
+  if (n == 0) return set;
+  const IndexSpace index_of(g);
+  double area = 0.0;  // voxels^2
+  for (std::size_t t = 0; t < n; ++t) {
+    const dvec3 a = corner(mesh, t, 0), b = corner(mesh, t, 1), c = corner(mesh, t, 2);
+    area += 0.5 * glm::length(glm::cross(b - a, c - a));
+  }
+  area *= index_of.inv_voxel * index_of.inv_voxel;
+  // A plane crosses a cube of side s in about 1.2 s^2 on average: about a
+  // dozen triangles per cell; never below a voxel.
+  double cell = std::clamp(std::sqrt(10.0 * area / static_cast<double>(n)), 1.0, 64.0);
+  if (!std::isfinite(cell)) cell = 1.0;
+  auto cells = [&](int axis) { return static_cast<std::uint64_t>(std::ceil(static_cast<double>(g.dims[axis]) / cell)) + 2; };
+  while (cells(0) * cells(1) * cells(2) >= (std::uint64_t{1} << 31)) cell *= 2.0;
+  const std::uint64_t ncx = cells(0), ncy = cells(1), ncz = cells(2);
+  std::vector<std::uint64_t> keys(n);
+  parallel_for(0, static_cast<std::int64_t>(n), 65536, threads, [&](std::int64_t t0, std::int64_t t1) {
+    for (std::int64_t t = t0; t < t1; ++t) {
+      const auto tt = static_cast<std::size_t>(t);
+      const dvec3 centroid = index_of((corner(mesh, tt, 0) + corner(mesh, tt, 1) + corner(mesh, tt, 2)) / 3.0);
+      auto cell_of = [&](double x, std::uint64_t count) {
+        const double c = std::floor(x / cell) + 1.0;
+        return static_cast<std::uint64_t>(std::clamp(std::isfinite(c) ? c : 0.0, 0.0, static_cast<double>(count - 1)));
+      };
+      // z fastest: a chunk (a few z-cells thick) then takes its clusters
+      // column by column, and the voxels they share stay in cache.
+      const std::uint64_t key =
+          (cell_of(centroid.y, ncy) * ncx + cell_of(centroid.x, ncx)) * ncz + cell_of(centroid.z, ncz);
+      keys[tt] = key << 32 | static_cast<std::uint64_t>(t);
+    }
+  });
+  parallel_sort(keys, threads);
+  set.order.resize(n);
+  for (std::size_t x = 0; x < n;) {
+    std::size_t end = x + 1;
+    while (end < n && end - x < kClusterSize && keys[end] >> 32 == keys[x] >> 32) ++end;
+    Cluster c;
+    c.begin = static_cast<std::uint32_t>(x);
+    c.end = static_cast<std::uint32_t>(end);
+    set.clusters.push_back(c);
+    x = end;
+  }
+  for (std::size_t x = 0; x < n; ++x) set.order[x] = static_cast<std::uint32_t>(keys[x]);
+  parallel_for(0, static_cast<std::int64_t>(set.clusters.size()), 4096, threads, [&](std::int64_t c0, std::int64_t c1) {
+    for (std::int64_t c = c0; c < c1; ++c)
+      fit_cluster(mesh, set.order, index_of, g.voxel_size, set.clusters[static_cast<std::size_t>(c)]);
+  });
+  return set;
+}
+
+// The float at or above v.
+inline float round_up(double v) {
+  const auto f = static_cast<float>(v);
+  return static_cast<double>(f) >= v ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
+}
+
+// What scatter_cluster tests each triangle of a cluster with, made once per
+// cluster and chunk.
+struct Probe {
+  Triangle t;
+  dvec3 unit{0.0};  // unit normal; 0 when degenerate
+  double inv_ab = 0.0, inv_bc = 0.0, inv_ca = 0.0;  // 1 / |in_ab| ...
+  explicit Probe(const Triangle& tri) : t(tri) {
+    if (t.degenerate) return;
+    unit = t.n / std::sqrt(t.nn);
+    inv_ab = 1.0 / glm::length(t.in_ab);
+    inv_bc = 1.0 / glm::length(t.in_bc);
+    inv_ca = 1.0 / glm::length(t.in_ca);
+  }
+};
+
+// A lower bound of distance2(q.t, p), without branches or divisions: the
+// point's height over the plane and, in the plane, how far its projection
+// lies outside the farthest edge line (the distance to that half-plane,
+// which holds the triangle). The factor and the term in |ap|^2 cover the
+// rounding (relative 1e-15 of |ap|), far below a float's resolution.
+inline double lower_bound2(const Probe& q, const dvec3& p) {
+  if (q.t.degenerate) return 0.0;
+  const dvec3 ap = p - q.t.a;
+  const double h = glm::dot(q.unit, ap);
+  const double e = std::max({0.0, -glm::dot(q.t.in_ab, ap) * q.inv_ab, -glm::dot(q.t.in_bc, p - q.t.b) * q.inv_bc,
+                             -glm::dot(q.t.in_ca, p - q.t.c) * q.inv_ca});
+  return (h * h + e * e) * (1.0 - 1e-9) - 1e-12 * glm::dot(ap, ap);
+}
+
+// Lowers each voxel of slabs [z0, z1) within the band of the flat cluster c
+// to its distance to c's triangles if smaller, like scatter_triangle: rows
+// restricted in index space by the band of the box, of the bounding sphere
+// and of the slab along the mean normal; per voxel, the distance to the
+// oriented box bounds all its triangles'.
+template <bool kSeed>
+void scatter_cluster(const Cluster& c, const std::vector<Probe>& probes, const std::vector<dvec3>& centroids,
+                     const Grid& g, const BandSetup& s, std::int64_t z0, std::int64_t z1, DenseVolume<float>& values) {
+  const IndexSpace index_of(g);
+  const double band = s.band * index_of.inv_voxel, band2 = band * band;  // voxels
+  const dvec3 centre_i = index_of(c.centre);
+  const double reach = band + c.radius * index_of.inv_voxel, reach2 = reach * reach;
+  const double slab = band + c.half.z * index_of.inv_voxel;
+  const double inv_n_x = std::abs(c.n.x) > 1e-3 ? 1.0 / c.n.x : 0.0;
+
+  const std::int64_t k0 = std::max(z0, IndexSpace::first(c.lo.z - band, g.dims.z));
+  const std::int64_t k1 = std::min(z1 - 1, IndexSpace::last(c.hi.z + band, g.dims.z));
+  const std::int64_t j0 = IndexSpace::first(c.lo.y - band, g.dims.y), j1 = IndexSpace::last(c.hi.y + band, g.dims.y);
+  for (std::int64_t k = k0; k <= k1; ++k) {
+    const auto kk = static_cast<double>(k);
+    const double dz = std::max({c.lo.z - kk, kk - c.hi.z, 0.0}), sz = kk - centre_i.z;
+    const double cz = centre_coordinate(g, 2, k);
+    float* slab_values = values.slab(k);
+    for (std::int64_t j = j0; j <= j1; ++j) {
+      const auto jj = static_cast<double>(j);
+      const double dy = std::max({c.lo.y - jj, jj - c.hi.y, 0.0}), sy = jj - centre_i.y;
+      const double box_rest2 = band2 - dy * dy - dz * dz, sphere_rest2 = reach2 - sy * sy - sz * sz;
+      if (box_rest2 < 0.0 || sphere_rest2 < 0.0) continue;
+      const double bx = std::sqrt(box_rest2), sx = std::sqrt(sphere_rest2);
+      double from = std::max(c.lo.x - bx, centre_i.x - sx), to = std::min(c.hi.x + bx, centre_i.x + sx);
+      if (inv_n_x != 0.0) {  // |n . (p - centre)| <= slab
+        const double plane_yz_i = c.n.y * (jj - centre_i.y) + c.n.z * (kk - centre_i.z);
+        const double p0 = centre_i.x + (-slab - plane_yz_i) * inv_n_x, p1 = centre_i.x + (slab - plane_yz_i) * inv_n_x;
+        from = std::max(from, std::min(p0, p1));
+        to = std::min(to, std::max(p0, p1));
+      }
+      const std::int64_t i0 = IndexSpace::first(from, g.dims.x), i1 = IndexSpace::last(to, g.dims.x);
+      if (i0 > i1) continue;
+
+      const double cy = centre_coordinate(g, 1, j);
+      const double ey = cy - c.centre.y, ez = cz - c.centre.z;
+      const double u_yz = c.u.y * ey + c.u.z * ez, w_yz = c.w.y * ey + c.w.z * ez, n_yz = c.n.y * ey + c.n.z * ez;
+      float* row = slab_values + j * g.dims.x;
+      for (std::int64_t i = i0; i <= i1; ++i) {
+        const double cx = centre_coordinate(g, 0, i), ex = cx - c.centre.x;
+        double limit = static_cast<double>(row[i]) * s.to_model;
+        const double qu = std::max(std::abs(u_yz + c.u.x * ex) - c.half.x, 0.0);
+        const double qw = std::max(std::abs(w_yz + c.w.x * ex) - c.half.y, 0.0);
+        const double qn = std::max(std::abs(n_yz + c.n.x * ex) - c.half.z, 0.0);
+        // A lower bound of every triangle's distance, to rounding far below
+        // a float's resolution, which the factor covers.
+        if ((qu * qu + qw * qw + qn * qn) * (1.0 - 1e-9) >= limit * limit) continue;
+        const dvec3 p(cx, cy, cz);
+        if constexpr (kSeed) {
+          double u2 = kInfinity;
+          for (const dvec3& q : centroids) u2 = std::min(u2, glm::dot(p - q, p - q));
+          // Strictly above the distance (a centroid is a point of the
+          // surface), so the nearest triangle still beats it.
+          const double bound = std::sqrt(u2) * (1.0 + 1e-6);
+          if (bound < limit) row[i] = std::min(row[i], round_up(bound * s.to_output));
+          continue;
+        }
+        // The triangles by increasing lower bound, until it reaches the
+        // value: usually one exact distance, the nearest.
+        std::array<double, kClusterSize> bound2;
+        for (std::size_t x = 0; x < probes.size(); ++x) bound2[x] = lower_bound2(probes[x], p);
+        for (;;) {
+          std::size_t best = 0;
+          for (std::size_t x = 1; x < probes.size(); ++x)
+            if (bound2[x] < bound2[best]) best = x;
+          if (!(bound2[best] < limit * limit)) break;
+          bound2[best] = kInfinity;
+          const double d2 = distance2(probes[best].t, p);
+          if (d2 >= limit * limit) continue;
+          row[i] = std::min(row[i], static_cast<float>(std::sqrt(d2) * s.to_output));
+          limit = static_cast<double>(row[i]) * s.to_model;
+        }
+      }
+    }
+  }
+}
+
+// Clusters grouped by the chunks of z-slabs their band reaches, so each
+// thread owns a chunk of the output.
+struct SlabBins {
+  std::int64_t slabs_per_chunk = 1;
+  std::int64_t chunk_count = 0;
+  std::vector<std::uint64_t> offsets;  // chunk c: clusters[offsets[c], offsets[c + 1])
+  std::vector<std::uint32_t> clusters;
+};
+
+SlabBins bin_by_slab(const ClusterSet& set, const Grid& g, double band, int threads) {
+  SlabBins bins;
+  const std::int64_t nz = g.dims.z;
+  bins.slabs_per_chunk = std::clamp<std::int64_t>(nz / (8 * threads), 1, 16);
+  bins.chunk_count = (nz + bins.slabs_per_chunk - 1) / bins.slabs_per_chunk;
+  const std::size_t n = set.clusters.size();
+  const double band_voxels = band / g.voxel_size;
+  std::vector<std::int64_t> first(n), last(n);
+  for (std::size_t x = 0; x < n; ++x) {
+    // The same slabs as scatter_cluster's (and so scatter_triangle's for
+    // the cluster's triangles), by the same arithmetic.
+    const Cluster& c = set.clusters[x];
+    const std::int64_t k0 = IndexSpace::first(c.lo.z - band_voxels, nz);
+    const std::int64_t k1 = IndexSpace::last(c.hi.z + band_voxels, nz);
+    first[x] = k0 / bins.slabs_per_chunk;
+    last[x] = k0 <= k1 ? k1 / bins.slabs_per_chunk : first[x] - 1;
+  }
+  bins.offsets.assign(static_cast<std::size_t>(bins.chunk_count) + 1, 0);
+  for (std::size_t x = 0; x < n; ++x)
+    for (std::int64_t c = first[x]; c <= last[x]; ++c) ++bins.offsets[static_cast<std::size_t>(c) + 1];
+  for (std::size_t c = 1; c < bins.offsets.size(); ++c) bins.offsets[c] += bins.offsets[c - 1];
+  bins.clusters.resize(bins.offsets.back());
+  std::vector<std::uint64_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
+  for (std::size_t x = 0; x < n; ++x)
+    for (std::int64_t c = first[x]; c <= last[x]; ++c)
+      bins.clusters[cursor[static_cast<std::size_t>(c)]++] = static_cast<std::uint32_t>(x);
+  return bins;
+}
+
+}  // namespace
+
+void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, int threads, DenseVolume<float>& values,
+                  const detail::ProgressSpan& progress) {
+  const ClusterSet set = make_clusters(mesh, g, threads);
+  progress.check_cancelled();
+  const SlabBins bins = bin_by_slab(set, g, s.band, threads);
+  // Cancellation and progress every this many triangles (~1 ms of work).
+  constexpr std::uint64_t kTick = 512;
+  std::uint64_t total = 0;
+  for (const std::uint32_t c : bins.clusters) total += set.clusters[c].end - set.clusters[c].begin;
+  std::atomic<std::uint64_t> done{0};
+  parallel_for(0, bins.chunk_count, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
+    std::vector<Probe> probes;
+    std::vector<dvec3> centroids;
+    for (std::int64_t chunk = c0; chunk < c1; ++chunk) {
+      progress.check_cancelled();
+      const std::int64_t z0 = chunk * bins.slabs_per_chunk, z1 = std::min(g.dims.z, z0 + bins.slabs_per_chunk);
+      std::uint64_t pending = 0;
+      for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
+           x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
+        const Cluster& c = set.clusters[bins.clusters[x]];
+        if (!c.flat) continue;
+        centroids.clear();
+        for (std::uint32_t y = c.begin; y < c.end; ++y) {
+          const std::size_t t = set.order[y];
+          centroids.push_back((corner(mesh, t, 0) + corner(mesh, t, 1) + corner(mesh, t, 2)) / 3.0);
+        }
+        scatter_cluster<true>(c, probes, centroids, g, s, z0, z1, values);
+      }
+      for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
+           x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
+        const Cluster& c = set.clusters[bins.clusters[x]];
+        if (c.flat) {
+          probes.clear();
+          for (std::uint32_t y = c.begin; y < c.end; ++y) {
+            const std::size_t t = set.order[y];
+            probes.emplace_back(Triangle(corner(mesh, t, 0), corner(mesh, t, 1), corner(mesh, t, 2)));
+          }
+          scatter_cluster<false>(c, probes, centroids, g, s, z0, z1, values);
+        } else {
+          for (std::uint32_t y = c.begin; y < c.end; ++y) {
+            const std::size_t t = set.order[y];
+            scatter_triangle(Triangle(corner(mesh, t, 0), corner(mesh, t, 1), corner(mesh, t, 2)), g, s, z0, z1, values);
+          }
+        }
+        pending += c.end - c.begin;
+        if (pending >= kTick) {
+          progress.check_cancelled();
+          progress.report(static_cast<double>(done.fetch_add(pending) + pending) / static_cast<double>(std::max<std::uint64_t>(total, 1)));
+          pending = 0;
+        }
+      }
+      progress.report(static_cast<double>(done.fetch_add(pending) + pending) / static_cast<double>(std::max<std::uint64_t>(total, 1)));
+    }
+  });
+  progress.report(1.0);
+}
+
+}  // namespace voxd::sdf
