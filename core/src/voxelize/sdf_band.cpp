@@ -102,23 +102,6 @@ void scatter_triangle(const Triangle& t, const Grid& g, const BandSetup& s, std:
 // coarse grid, sized for about a dozen triangles per cell on a smooth
 // surface, at most kClusterSize per cluster.
 
-constexpr std::uint32_t kClusterSize = 16;
-
-struct Cluster {
-  std::uint32_t begin = 0, end = 0;  // ClusterSet::order[begin, end)
-  bool flat = false;                 // scattered as a whole; otherwise triangle by triangle
-  dvec3 centre{0.0};                 // model units
-  dvec3 u{0.0}, w{0.0}, n{0.0};      // orthonormal frame, n the mean normal
-  dvec3 half{0.0};                   // half-extents along u, w, n (model units, rounded up)
-  double radius = 0.0;               // bounding sphere about the centre
-  dvec3 lo{0.0}, hi{0.0};            // bounding box, index space
-};
-
-struct ClusterSet {
-  std::vector<std::uint32_t> order;  // triangles, cluster by cluster
-  std::vector<Cluster> clusters;
-};
-
 // Sorts `keys` on `threads` threads: blocks sorted in parallel, then merged.
 void parallel_sort(std::vector<std::uint64_t>& keys, int threads) {
   const auto n = static_cast<std::int64_t>(keys.size());
@@ -353,15 +336,6 @@ void scatter_cluster(const Cluster& c, const std::vector<Probe>& probes, const s
   }
 }
 
-// Clusters grouped by the chunks of z-slabs their band reaches, so each
-// thread owns a chunk of the output.
-struct SlabBins {
-  std::int64_t slabs_per_chunk = 1;
-  std::int64_t chunk_count = 0;
-  std::vector<std::uint64_t> offsets;  // chunk c: clusters[offsets[c], offsets[c + 1])
-  std::vector<std::uint32_t> clusters;
-};
-
 SlabBins bin_by_slab(const ClusterSet& set, const Grid& g, double band, int threads) {
   SlabBins bins;
   const std::int64_t nz = g.dims.z;
@@ -393,11 +367,17 @@ SlabBins bin_by_slab(const ClusterSet& set, const Grid& g, double band, int thre
 
 }  // namespace
 
-void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, int threads, DenseVolume<float>& values,
-                  const detail::ProgressSpan& progress) {
-  const ClusterSet set = make_clusters(mesh, g, threads);
-  progress.check_cancelled();
-  const SlabBins bins = bin_by_slab(set, g, s.band, threads);
+BandPlan plan_band(const Mesh& mesh, const Grid& g, const BandSetup& s, int threads) {
+  BandPlan plan;
+  plan.set = make_clusters(mesh, g, threads);
+  plan.bins = bin_by_slab(plan.set, g, s.band, threads);
+  return plan;
+}
+
+void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const BandPlan& plan, int threads,
+                  DenseVolume<float>& values, const detail::ProgressSpan& progress) {
+  const ClusterSet& set = plan.set;
+  const SlabBins& bins = plan.bins;
   // Cancellation and progress every this many triangles (~1 ms of work).
   constexpr std::uint64_t kTick = 512;
   std::uint64_t total = 0;

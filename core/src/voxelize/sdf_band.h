@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -48,10 +49,45 @@ struct BandSetup {
   double to_output = 1.0;  // model units -> output unit
 };
 
+// Neighbouring triangles, scattered together (why: sdf_band.cpp).
+constexpr std::uint32_t kClusterSize = 16;
+
+struct Cluster {
+  std::uint32_t begin = 0, end = 0;  // ClusterSet::order[begin, end)
+  bool flat = false;                 // scattered as a whole; otherwise triangle by triangle
+  dvec3 centre{0.0};                 // model units
+  dvec3 u{0.0}, w{0.0}, n{0.0};      // orthonormal frame, n the mean normal
+  dvec3 half{0.0};                   // half-extents along u, w, n (model units, rounded up)
+  double radius = 0.0;               // bounding sphere about the centre
+  dvec3 lo{0.0}, hi{0.0};            // bounding box, index space
+};
+
+struct ClusterSet {
+  std::vector<std::uint32_t> order;  // triangles, cluster by cluster
+  std::vector<Cluster> clusters;
+};
+
+// Clusters grouped by the chunks of z-slabs their band reaches, so each
+// thread owns a chunk of the output.
+struct SlabBins {
+  std::int64_t slabs_per_chunk = 1;
+  std::int64_t chunk_count = 0;
+  std::vector<std::uint64_t> offsets;  // chunk c: clusters[offsets[c], offsets[c + 1])
+  std::vector<std::uint32_t> clusters;
+};
+
+// What the scatter needs before the output exists: the clusters and the
+// chunks of z-slabs they reach (made while the output is being filled).
+struct BandPlan {
+  ClusterSet set;
+  SlabBins bins;
+};
+BandPlan plan_band(const Mesh& mesh, const Grid& g, const BandSetup& s, int threads);
+
 // Lowers every voxel within the band of the mesh to its exact distance (in
 // the output unit; `values` start at the clamped band value). Threads own
 // disjoint z-slabs, so the result does not depend on their number.
-void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, int threads, DenseVolume<float>& values,
-                  const detail::ProgressSpan& progress);
+void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const BandPlan& plan, int threads,
+                  DenseVolume<float>& values, const detail::ProgressSpan& progress);
 
 }  // namespace voxd::sdf
