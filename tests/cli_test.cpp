@@ -248,6 +248,16 @@ TEST_F(CliTest, ValueModesWriteTheirValuesAndSummarizeThem) {
   }
   EXPECT_EQ(negative, json::parse(r.out).at("filled_voxels").get<std::uint64_t>());
 
+  // Quantized RLE: u16 levels with their offset and scale in the header.
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("q.rle") + " --resolution 32 --padding 3 --mode sdf --quantize u16");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto q = test::read_file(path("q.rle"));
+  EXPECT_EQ(read_rle_u16(q).values().size(), 38u * 38 * 38);
+  EXPECT_EQ(json::parse(read_rle_metadata(q)).at("quantization").at("levels"), 65535);
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("q.rle") + " --resolution 32 --quantize u8");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("not to bits"), std::string::npos) << r.err;
+
   // What cannot hold the values is refused before any work, in one line.
   r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.binvox") + " --resolution 32 --mode sdf");
   EXPECT_EQ(r.exit_code, 2);

@@ -117,8 +117,24 @@ TEST_F(ValueJobsTest, SdfOfABoxIsTheAnalyticDistanceInNrrdRawAndRle) {
   ASSERT_EQ(decoded.exit_code, 0) << decoded.err;
   EXPECT_EQ(text_of(read_file(dir_ + "/v.f32")), nrrd.data);
 
+  json p;
+  // Quantized to u16 levels: within half a level of the floats, the surface
+  // (0) a level exactly, offset and scale in the header.
+  const std::string q16 = volume(id, "?format=rle&quantize=u16");
+  const std::span<const std::uint8_t> q16_bytes(reinterpret_cast<const std::uint8_t*>(q16.data()), q16.size());
+  const json quantization = json::parse(read_rle_metadata(q16_bytes)).at("quantization");
+  EXPECT_EQ(quantization.at("content"), "signed distance (model units, inside_negative)");
+  EXPECT_EQ(quantization.at("offset"), -1.5);
+  const double scale = quantization.at("scale");
+  const DenseVolume<std::uint16_t> levels = read_rle_u16(q16_bytes);
+  ASSERT_EQ(levels.values().size(), sdf.size());
+  for (std::size_t i = 0; i < sdf.size(); ++i) ASSERT_NEAR(-1.5 + scale * levels.values()[i], sdf[i], scale / 2 + 1e-9) << i;
+  EXPECT_LT(q16.size(), volume(id, "?format=rle").size());
+  p = expect_problem(http().Get(("/v1/jobs/" + id + "/volume?format=nrrd&quantize=u8").c_str()), 400, "invalid-query");
+  EXPECT_NE(p.at("detail").get<std::string>().find("format rle"), std::string::npos) << p.dump();
+
   // Formats that cannot hold float values are refused with what to ask for.
-  json p = expect_problem(http().Get(("/v1/jobs/" + id + "/volume?format=binvox").c_str()), 400, "invalid-query");
+  p = expect_problem(http().Get(("/v1/jobs/" + id + "/volume?format=binvox").c_str()), 400, "invalid-query");
   EXPECT_NE(p.at("detail").get<std::string>().find("rle, raw or nrrd"), std::string::npos) << p.dump();
   p = expect_problem(http().Get(("/v1/jobs/" + id + "/volume?format=raw&packing=bits").c_str()), 400, "invalid-query");
   EXPECT_NE(p.at("detail").get<std::string>().find("packing bytes"), std::string::npos) << p.dump();
@@ -280,6 +296,8 @@ TEST_F(ValueJobsTest, CoverageOfABoxAtSubVoxelOffsetsIsTheAnalyticFraction) {
   EXPECT_EQ(bits_status.at("filled_voxels"), expected);
   auto res = http().Get(("/v1/jobs/" + bits_id + "/volume?format=raw&packing=bytes").c_str());
   EXPECT_EQ(res->get_header_value("X-Voxd-Value-Type"), "bit");
+  expect_problem(http().Get(("/v1/jobs/" + bits_id + "/volume?format=rle&quantize=u8").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + bytes_id + "/volume?format=rle&quantize=u8").c_str()), 400, "invalid-query");
 
   // A coverage job's section is its grey levels, byte for byte.
   const json png = read_png(http().Get(("/v1/jobs/" + bytes_id + "/section?axis=z&index=1").c_str())->body, dir_);

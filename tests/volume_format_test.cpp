@@ -346,6 +346,65 @@ TEST(VolumeFormatRle, F32RoundTripsBitForBit) {
   EXPECT_EQ(read_rle_f32(stream, ReadLimits{4 * 4 * 3 * 2}).values().size(), 24u);
 }
 
+TEST(VolumeFormatRle, QuantizedFloatsRecoverWithinHalfAStepAndZeroStaysZero) {
+  // A clamped band around a surface, as a distance field has: values in
+  // [-1.5, 1.5], runs of the clamp, a NaN and infinities.
+  DenseVolume<float> v = random_f32_volume(make_grid({40, 9, 5}, {1, 2, 3}, 0.5), 51);
+  for (float& x : v.values()) x = std::isfinite(x) ? std::clamp(x, -1.5f, 1.5f) : x;
+  v.values()[7] = std::numeric_limits<float>::quiet_NaN();
+  v.values()[8] = 0.0f;
+  for (Quantize levels : {Quantize::u8, Quantize::u16}) {
+    VectorSink sink;
+    write_rle_quantized(v, levels, "signed distance (model units)", sink);
+    const nlohmann::json meta = nlohmann::json::parse(read_rle_metadata(sink.data)).at("quantization");
+    const double offset = meta.at("offset"), scale = meta.at("scale");
+    const std::uint32_t top = levels == Quantize::u8 ? 254 : 65534;
+    EXPECT_EQ(meta.at("levels"), top + 1);
+    EXPECT_EQ(meta.at("nan_level"), top + 1);
+    EXPECT_EQ(meta.at("content"), "signed distance (model units)");
+    EXPECT_DOUBLE_EQ(offset, -1.5);  // symmetric: the values have both signs
+    EXPECT_DOUBLE_EQ(scale, 3.0 / top);
+    std::vector<std::uint32_t> q;
+    if (levels == Quantize::u8) {
+      const DenseVolume<std::uint8_t> decoded = read_rle_u8(sink.data);
+      q.assign(decoded.values().begin(), decoded.values().end());
+    } else {
+      const DenseVolume<std::uint16_t> decoded = read_rle_u16(sink.data);
+      q.assign(decoded.values().begin(), decoded.values().end());
+    }
+    ASSERT_EQ(q.size(), v.values().size());
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      const float x = v.values()[i];
+      if (std::isnan(x)) {
+        EXPECT_EQ(q[i], top + 1);
+      } else {
+        ASSERT_LE(q[i], top);
+        EXPECT_NEAR(offset + scale * q[i], std::clamp(static_cast<double>(x), -1.5, 1.5), scale / 2 * (1 + 1e-9)) << i;
+      }
+    }
+    EXPECT_EQ(q[8], top / 2) << "zero is a level exactly";
+  }
+  // Non-negative values keep their own range: coverage fractions in [0, 1].
+  DenseVolume<float> fractions(make_grid({3, 2, 1}), 0.0f);
+  fractions.values() = {0.0f, 0.1f, 0.3f, 0.6f, 0.9f, 1.0f};
+  VectorSink sink;
+  write_rle_quantized(fractions, Quantize::u8, "coverage", sink);
+  const nlohmann::json meta = nlohmann::json::parse(read_rle_metadata(sink.data)).at("quantization");
+  EXPECT_EQ(meta.at("offset"), 0.0);
+  EXPECT_DOUBLE_EQ(meta.at("scale").get<double>(), 1.0 / 254);
+  EXPECT_EQ(read_rle_u8(sink.data).values(), (std::vector<std::uint8_t>{0, 25, 76, 152, 229, 254}));
+  // Quantizing is for floats in rle: anything else is refused with the reason.
+  EncodeOptions quantized;
+  quantized.quantize = Quantize::u16;
+  EXPECT_TRUE(format_refusal(ValueVolume(fractions), VolumeFormat::nrrd, quantized));
+  EXPECT_TRUE(format_refusal(ValueVolume(random_u8_volume(make_grid({2, 2, 2}), 1)), VolumeFormat::rle, quantized));
+  EXPECT_FALSE(format_refusal(ValueVolume(fractions), VolumeFormat::rle, quantized));
+  VectorSink via;
+  encode_volume(ValueVolume(fractions), VolumeFormat::rle, via, EncodeOptions{RawPacking::bytes, NrrdEncoding::raw, "coverage", Quantize::u8});
+  EXPECT_EQ(via.data, sink.data);
+  EXPECT_EQ(read_rle_metadata(rle_f32(fractions)), "");
+}
+
 TEST(VolumeFormatRle, ReaderAcceptsNonCanonicalRuns) {
   // The spec lets runs be split by zero-length runs (bits) or repeat a value
   // (u8); voxd never writes that, other writers may.

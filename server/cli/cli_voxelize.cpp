@@ -39,6 +39,8 @@ volume to OUT ("-" for standard output).
   --format F             rle | binvox | raw | nrrd (default: from OUT's extension)
   --raw-packing P        bytes (default) | bits, for --format raw
   --nrrd-encoding E      raw (default) | gzip, for --format nrrd
+  --quantize Q           none (default) | u8 | u16: float values as rle levels
+                         (value = offset + scale * level, both in the header)
   --threads N            worker threads (default: all cores)
   --max-voxels N         refuse grids with more voxels (default 2^36: 8 GiB of bits)
   --report               include the mesh report (topology, area, volume)
@@ -64,7 +66,7 @@ std::string format_seconds(double s) {
 int voxelize_command(int argc, char** argv) {
   Args args(argc, argv, 2,
             {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "format",
-             "raw-packing", "nrrd-encoding", "threads", "output", "max-voxels"},
+             "raw-packing", "nrrd-encoding", "quantize", "threads", "output", "max-voxels"},
             {"json", "report", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -96,6 +98,13 @@ int voxelize_command(int argc, char** argv) {
     if (*e == "gzip") encode_options.nrrd_encoding = NrrdEncoding::gzip;
     else if (*e != "raw") throw UsageError("--nrrd-encoding must be raw or gzip, got '" + *e + "'");
   }
+  if (auto q = args.value("quantize")) {
+    if (*q == "u8") encode_options.quantize = Quantize::u8;
+    else if (*q == "u16") encode_options.quantize = Quantize::u16;
+    else if (*q != "none") throw UsageError("--quantize must be none, u8 or u16, got '" + *q + "'");
+  }
+  if (encode_options.quantize != Quantize::none && !params.has_values())
+    throw UsageError("--quantize applies to the float values of modes coverage (f32) and sdf, not to bits");
   // A format that cannot hold the values is refused before any work.
   if (params.has_values()) {
     const bool floats = params.sdf || params.coverage->float_values;
@@ -119,7 +128,7 @@ int voxelize_command(int argc, char** argv) {
     }
   }
   VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, args.has("report"), nullptr, threads);
-  encode_options.nrrd_content = result.values ? result.values_info.value("quantity", "values") + " (" +
+  encode_options.content = result.values ? result.values_info.value("quantity", "values") + " (" +
                                                     result.values_info.value("unit", "") + ")"
                                               : "voxels (1 = filled)";
   auto encode = [&](ByteSink& sink) {

@@ -168,6 +168,13 @@ VolumeRequest read_volume_request(const Request& req) {
                                       "format must be rle, binvox, raw or nrrd, got '" + req.get_param_value("format") + "'"));
     v.format = *f;
   }
+  if (req.has_param("quantize")) {
+    const std::string q = req.get_param_value("quantize");
+    if (q == "u8") v.options.quantize = Quantize::u8;
+    else if (q == "u16") v.options.quantize = Quantize::u16;
+    else if (q != "none")
+      throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", "quantize must be none, u8 or u16, got '" + q + "'"));
+  }
   if (req.has_param("encoding")) {
     const std::string e = req.get_param_value("encoding");
     if (v.format != VolumeFormat::nrrd)
@@ -196,9 +203,15 @@ std::string volume_content(const json& values) {
   return text;
 }
 
+void refuse_quantized_bits(const VolumeRequest& v) {
+  if (v.options.quantize != Quantize::none)
+    throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter",
+                                    "quantize applies to the float values of coverage (f32) and sdf jobs; this volume is bits"));
+}
+
 // Refuses a format that cannot hold a value job's values before any work.
 void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {
-  if (!params.has_values()) return;
+  if (!params.has_values()) return refuse_quantized_bits(v);
   const bool floats = params.sdf || (params.coverage && params.coverage->float_values);
   const ValueVolume empty = floats ? ValueVolume(DenseVolume<float>()) : ValueVolume(DenseVolume<std::uint8_t>());
   if (auto refusal = format_refusal(empty, v.format, v.options))
@@ -426,7 +439,7 @@ void HttpApi::install(httplib::Server& server) {
       throw ProblemError(make_problem(409, "job-not-finished", "The job has no volume yet",
                                       std::string("the job is ") + to_string(job->state) + "; its volume exists once it has succeeded"));
     VolumeRequest request = v;
-    request.options.nrrd_content = volume_content(job->values);
+    request.options.content = volume_content(job->values);
     const std::string filename = id + file_extension(v.format);
     if (job->has_value_volume()) {
       auto values = jobs_.values(id);
@@ -436,6 +449,7 @@ void HttpApi::install(httplib::Server& server) {
       res.set_header("X-Voxd-Value-Type", value_type_name(*values));
       return stream_volume(res, std::move(values), v.format, request.options, accepts_gzip(req), filename, &metrics_);
     }
+    refuse_quantized_bits(v);
     auto volume = jobs_.volume(id);
     if (!volume) throw unknown_job(id);
     res.set_header("X-Voxd-Value-Type", "bit");
@@ -461,7 +475,7 @@ void HttpApi::install(httplib::Server& server) {
     res.set_header("X-Voxd-Dims", std::to_string(job.grid.dims.x) + "," + std::to_string(job.grid.dims.y) + "," + std::to_string(job.grid.dims.z));
     res.set_header("X-Voxd-Filled-Voxels", std::to_string(job.filled_voxels.value_or(0)));
     VolumeRequest request = v;
-    request.options.nrrd_content = volume_content(job.values);
+    request.options.content = volume_content(job.values);
     const std::string filename = "voxels" + std::string(file_extension(v.format));
     if (output.values) {
       res.set_header("X-Voxd-Value-Type", value_type_name(*output.values));

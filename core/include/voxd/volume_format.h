@@ -39,10 +39,15 @@ const char* media_type(VolumeFormat format) noexcept;
 // File extension with the dot (".rle", ".binvox", ".raw", ".nrrd").
 const char* file_extension(VolumeFormat format) noexcept;
 
+// Float values in RLE as integer levels (far smaller than f32 runs inside a
+// distance band): see write_rle_quantized.
+enum class Quantize { none, u8, u16 };
+
 struct EncodeOptions {
   RawPacking raw_packing = RawPacking::bytes;
   NrrdEncoding nrrd_encoding = NrrdEncoding::raw;
-  std::string nrrd_content = "voxels";  // NRRD "content:" line: what the values are
+  std::string content = "voxels";      // what the values are: NRRD "content:", quantized RLE metadata
+  Quantize quantize = Quantize::none;   // rle of f32 values only
 };
 
 // A volume of one value per voxel: coverage bytes or fractions, distances.
@@ -78,6 +83,16 @@ void write_nrrd(const DenseVolume<std::uint8_t>& volume, std::string_view conten
 // header then the raw data; opens in ParaView, 3D Slicer, ITK), whose header
 // places voxel centres in model space and names the quantity in `content`.
 void write_rle(const DenseVolume<float>& volume, ByteSink& sink);
+// Float values as RLE u8 or u16 levels q with value = offset + scale * q
+// (proto-schemas/rle-format.md 3.1), offset and scale in the header's
+// "metadata": {"quantization": {"offset", "scale", "levels", "content"}}.
+// Levels 0 .. L = 2^bits - 2 span [lo, hi]: the finite values' range, made
+// symmetric (lo = -hi) when it has both signs, so that 0 is level L / 2
+// exactly (a distance field's surface stays where it is) and the error is
+// at most scale / 2. NaN becomes level L + 1 (the one level left over);
+// infinities clamp to the ends. Quantized slab by slab: no copy of the
+// volume. Throws Error(invalid_argument) for Quantize::none.
+void write_rle_quantized(const DenseVolume<float>& volume, Quantize levels, std::string_view content, ByteSink& sink);
 void write_raw(const DenseVolume<float>& volume, ByteSink& sink);
 void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink,
                 NrrdEncoding encoding = NrrdEncoding::raw);
@@ -94,6 +109,10 @@ struct ReadLimits {
 BitVolume read_rle_bits(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 DenseVolume<float> read_rle_f32(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
+DenseVolume<std::uint16_t> read_rle_u16(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
+// The header's "metadata" object as JSON text ("" when it has none), e.g. to
+// read a quantized stream's offset and scale.
+std::string read_rle_metadata(std::span<const std::uint8_t> data);
 // binvox has no voxel size/origin beyond translate/scale; the returned grid is
 // the cubic D^3 grid with origin = translate and voxel_size = scale / D.
 // Reads versions 1 and 2; read_binvox sets the voxels whose value is non-zero.

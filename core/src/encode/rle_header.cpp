@@ -81,7 +81,7 @@ std::optional<RleValueType> rle_value_type_from_string(std::string_view name) {
   return std::nullopt;
 }
 
-std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value_type) {
+std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value_type, const std::string& metadata_json) {
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(grid.origin[a]))
       throw Error(ErrorCode::invalid_argument, "RLE writer: the grid origin must be finite");
@@ -98,6 +98,7 @@ std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value
   header["voxel_size"] = grid.voxel_size;
   header["axis_order"] = "xyz";
   header["value_type"] = to_string(value_type);
+  if (!metadata_json.empty()) header["metadata"] = nlohmann::ordered_json::parse(metadata_json);
   const std::string text = header.dump();
 
   std::vector<std::uint8_t> out(kRleMagic.begin(), kRleMagic.end());
@@ -143,8 +144,10 @@ RleHeader read_rle_header(ByteCursor& in) {
   if (!type)
     bad_header("value_type must be one of \"bit\", \"u8\", \"u16\", \"f32\", \"rgba8\", found " + value_type.dump());
   result.value_type = *type;
-  if (const auto it = header.find("metadata"); it != header.end() && !it->is_object())
-    bad_header("metadata must be a JSON object");
+  if (const auto it = header.find("metadata"); it != header.end()) {
+    if (!it->is_object()) bad_header("metadata must be a JSON object");
+    result.metadata_json = it->dump();
+  }
   return result;
 }
 

@@ -96,13 +96,17 @@ void decode_bit_payload(ByteCursor in, std::uint64_t slab_voxels, const OnOnes& 
 
 // The value of a run: one byte, or four little-endian bytes of a float.
 inline std::uint8_t read_value(ByteCursor& in, std::uint8_t*) { return in.u8("a run value"); }
+inline std::uint16_t read_value(ByteCursor& in, std::uint16_t*) {
+  const std::uint16_t lo = in.u8("a run value");
+  return static_cast<std::uint16_t>(lo | (in.u8("a run value") << 8));
+}
 inline float read_value(ByteCursor& in, float*) {
   std::uint32_t bits = 0;
   for (int b = 0; b < 4; ++b) bits |= static_cast<std::uint32_t>(in.u8("a run value")) << (8 * b);
   return std::bit_cast<float>(bits);
 }
 
-// u8 / f32 payload: (varint run length, value) pairs; calls
+// u8 / u16 / f32 payload: (varint run length, value) pairs; calls
 // on_run(first_voxel, length, value) for each.
 template <class T, class OnRun>
 void decode_value_payload(ByteCursor in, std::uint64_t slab_voxels, const OnRun& on_run) {
@@ -198,6 +202,15 @@ DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data, const 
 
 DenseVolume<float> read_rle_f32(std::span<const std::uint8_t> data, const ReadLimits& limits) {
   return read_rle_values<float>(data, limits, encode::RleValueType::f32, "read_rle_f32");
+}
+
+DenseVolume<std::uint16_t> read_rle_u16(std::span<const std::uint8_t> data, const ReadLimits& limits) {
+  return read_rle_values<std::uint16_t>(data, limits, encode::RleValueType::u16, "read_rle_u16");
+}
+
+std::string read_rle_metadata(std::span<const std::uint8_t> data) {
+  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
+  return encode::read_rle_header(in).metadata_json;
 }
 
 }  // namespace voxd

@@ -33,11 +33,15 @@ std::optional<RleValueType> rle_value_type_from_string(std::string_view name);
 struct RleHeader {
   Grid grid;
   RleValueType value_type = RleValueType::bit;
+  std::string metadata_json;  // the "metadata" object's text, empty when absent
 };
 
-// Preamble + length-prefixed JSON header. Throws Error(invalid_argument) for a
-// grid JSON cannot carry (non-finite numbers, non-positive sizes).
-std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value_type);
+// Preamble + length-prefixed JSON header, with `metadata_json` (a JSON
+// object's text) under "metadata" when not empty. Throws
+// Error(invalid_argument) for a grid JSON cannot carry (non-finite numbers,
+// non-positive sizes).
+std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value_type,
+                                            const std::string& metadata_json = {});
 
 // Reads and validates the preamble and JSON header, leaving `in` at the first
 // block. Throws Error(malformed_input / truncated_input).

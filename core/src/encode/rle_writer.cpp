@@ -2,10 +2,13 @@
 // parallel a few ahead of the writer and written in order, so the memory in
 // flight is a handful of encoded slabs, never a copy of the volume.
 #include <algorithm>
+#include <cmath>
 #include <bit>
 #include <cstring>
 #include <functional>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "encode/bit_runs.h"
 #include "encode/byte_buffer.h"
@@ -68,8 +71,8 @@ void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes,
   sink.write(end_block, static_cast<std::size_t>(end - end_block));
 }
 
-void write_header(const Grid& grid, encode::RleValueType type, ByteSink& sink) {
-  const std::vector<std::uint8_t> header = encode::encode_rle_header(grid, type);
+void write_header(const Grid& grid, encode::RleValueType type, ByteSink& sink, const std::string& metadata = {}) {
+  const std::vector<std::uint8_t> header = encode::encode_rle_header(grid, type, metadata);
   sink.write(header.data(), header.size());
 }
 
@@ -131,7 +134,63 @@ void encode_f32_slab(const DenseVolume<float>& volume, std::int64_t k, ByteBuffe
   }
 }
 
+// Levels of a quantized stream: value = offset + scale * q for q in 0..top;
+// top + 1 marks NaN.
+struct Quantizer {
+  double offset = 0.0, scale = 1.0;
+  std::uint32_t top = 0;
+  std::uint32_t level(float v) const {
+    if (std::isnan(v)) return top + 1;
+    const double q = std::nearbyint((static_cast<double>(v) - offset) / scale);
+    return q <= 0 ? 0 : q >= top ? top : static_cast<std::uint32_t>(q);
+  }
+};
+
+Quantizer make_quantizer(const DenseVolume<float>& volume, std::uint32_t top) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (float v : volume.values())
+    if (std::isfinite(v)) {
+      lo = std::min(lo, static_cast<double>(v));
+      hi = std::max(hi, static_cast<double>(v));
+    }
+  if (!(lo <= hi)) lo = hi = 0.0;  // no finite value
+  if (lo < 0 && hi > 0) hi = std::max(-lo, hi), lo = -hi;
+  Quantizer q;
+  q.top = top;
+  q.offset = lo;
+  q.scale = hi > lo ? (hi - lo) / top : 1.0;
+  return q;
+}
+
+// Runs of equal levels, the levels little-endian in `bytes` bytes.
+void encode_quantized_slab(const DenseVolume<float>& volume, std::int64_t k, const Quantizer& q, int bytes, ByteBuffer& out) {
+  const float* values = volume.slab(k);
+  const std::size_t n = volume.slab_size();
+  for (std::size_t i = 0; i < n;) {
+    const std::uint32_t level = q.level(values[i]);
+    std::size_t j = i + 1;
+    while (j < n && q.level(values[j]) == level) ++j;
+    out.put_varint(j - i);
+    for (int b = 0; b < bytes; ++b) out.put_byte(static_cast<std::uint8_t>(level >> (8 * b)));
+    i = j;
+  }
+}
+
 }  // namespace
+
+void write_rle_quantized(const DenseVolume<float>& volume, Quantize levels, std::string_view content, ByteSink& sink) {
+  if (levels == Quantize::none) throw Error(ErrorCode::invalid_argument, "write_rle_quantized needs u8 or u16 levels");
+  encode::require_voxels(volume, "RLE writer");
+  const int bytes = levels == Quantize::u8 ? 1 : 2;
+  const Quantizer q = make_quantizer(volume, levels == Quantize::u8 ? 254u : 65534u);
+  nlohmann::ordered_json meta;
+  meta["quantization"] = {{"offset", q.offset}, {"scale", q.scale}, {"levels", q.top + 1}, {"nan_level", q.top + 1},
+                          {"content", std::string(content)}};
+  write_header(volume.grid(), bytes == 1 ? encode::RleValueType::u8 : encode::RleValueType::u16, sink, meta.dump());
+  write_slab_blocks(
+      volume.grid().dims.z, volume.slab_size() * sizeof(float),
+      [&volume, &q, bytes](std::int64_t k, ByteBuffer& out) { encode_quantized_slab(volume, k, q, bytes, out); }, sink);
+}
 
 void write_rle(const DenseVolume<float>& volume, ByteSink& sink) {
   encode::require_voxels(volume, "RLE writer");

@@ -71,7 +71,7 @@ void encode_volume(const BitVolume& volume, VolumeFormat format, ByteSink& sink,
     case VolumeFormat::rle: return write_rle(volume, sink);
     case VolumeFormat::binvox: return write_binvox(volume, sink);
     case VolumeFormat::raw: return write_raw(volume, options.raw_packing, sink);
-    case VolumeFormat::nrrd: return write_nrrd(volume, options.nrrd_content, sink, options.nrrd_encoding);
+    case VolumeFormat::nrrd: return write_nrrd(volume, options.content, sink, options.nrrd_encoding);
   }
   throw Error(ErrorCode::invalid_argument, "unknown volume format");
 }
@@ -92,6 +92,9 @@ std::optional<std::string> format_refusal(const ValueVolume& volume, VolumeForma
   const bool floats = std::holds_alternative<DenseVolume<float>>(volume);
   if (format == VolumeFormat::binvox && floats)
     return "binvox holds bits or bytes, not the float32 values of this volume; ask for rle, raw or nrrd";
+  if (options.quantize != Quantize::none && (format != VolumeFormat::rle || !floats))
+    return std::string("quantize turns float32 values into rle levels; ") +
+           (floats ? "ask for format rle" : "this volume holds " + std::string(value_type_name(volume)) + " values already");
   if (format == VolumeFormat::raw && options.raw_packing == RawPacking::bits)
     return std::string("raw packing bits holds one bit per voxel, not the ") + value_type_name(volume) +
            " values of this volume; ask for packing bytes";
@@ -104,12 +107,15 @@ void encode_volume(const ValueVolume& volume, VolumeFormat format, ByteSink& sin
       [&](const auto& v) {
         using V = std::decay_t<decltype(v)>;
         switch (format) {
-          case VolumeFormat::rle: return write_rle(v, sink);
+          case VolumeFormat::rle:
+            if constexpr (std::is_same_v<V, DenseVolume<float>>)
+              if (options.quantize != Quantize::none) return write_rle_quantized(v, options.quantize, options.content, sink);
+            return write_rle(v, sink);
           case VolumeFormat::binvox:
             if constexpr (std::is_same_v<V, DenseVolume<std::uint8_t>>) return write_binvox(v, sink);
             break;
           case VolumeFormat::raw: return write_raw(v, sink);
-          case VolumeFormat::nrrd: return write_nrrd(v, options.nrrd_content, sink, options.nrrd_encoding);
+          case VolumeFormat::nrrd: return write_nrrd(v, options.content, sink, options.nrrd_encoding);
         }
         throw Error(ErrorCode::invalid_argument, "unknown volume format");
       },
