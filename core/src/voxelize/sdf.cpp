@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -186,9 +187,18 @@ DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, con
   parallel_for(0, grid.dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k)
       for (std::int64_t j = 0; j < ny; ++j) {
+        // A word of the solid at a time: whole words outside (or inside) the
+        // solid are skipped, then the voxels to negate one bit at a time.
         float* row = values.slab(k) + j * nx;
-        for (std::int64_t i = 0; i < nx; ++i)
-          if (row[i] != 0.0f && solid.get(i, j, k) == negate_inside) row[i] = -row[i];
+        const std::uint64_t* bits = solid.row(j, k);
+        for (std::int64_t w = 0; w * 64 < nx; ++w) {
+          std::uint64_t flip = negate_inside ? bits[w] : ~bits[w];
+          if (nx - w * 64 < 64) flip &= (std::uint64_t{1} << (nx - w * 64)) - 1;  // bits past the row
+          for (; flip != 0; flip &= flip - 1) {
+            float& v = row[w * 64 + std::countr_zero(flip)];
+            if (v != 0.0f) v = -v;
+          }
+        }
       }
   });
   progress.report(1.0);
