@@ -617,7 +617,7 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
   ASSERT_EQ(res->status, 200) << res->body;
   EXPECT_EQ(res->get_header_value("Content-Type"), "image/png");
   EXPECT_EQ(res->get_header_value("X-Voxd-Scale"), "1 pixel value = 0.5 model units");
-  json png = read_png(res->body, dir_);
+  json png = read_png(res->body);
   EXPECT_EQ(png.at("width"), 20);
   EXPECT_EQ(png.at("height"), 12);
   EXPECT_EQ(png.at("bit_depth"), 16);
@@ -628,12 +628,12 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
       ASSERT_EQ(png.at("pixels").at(j * 20 + i), inside ? 16 : 0) << i << "," << j;
     }
   // Along x: image columns are y, rows are z.
-  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=x&measure=max").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=x&measure=max").c_str())->body);
   EXPECT_EQ(png.at("width"), 12);
   EXPECT_EQ(png.at("height"), 30);
   EXPECT_EQ(png.at("pixels").at(10 * 12 + 3), 10);
   // False colour for people, statistics for programs.
-  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=y&format=png").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=y&format=png").c_str())->body);
   EXPECT_EQ(png.at("color_type"), 2);
   EXPECT_GT(png.at("height").get<int>(), 30);  // the legend strip below the map
   const json stats = expect_json(http().Get(("/v1/jobs/" + id + "/radiography?axis=y&format=json&unit=model").c_str()), 200,
@@ -644,24 +644,24 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
   // Section through the box at model z = 5 (voxel layer 10), and by index.
   auto sec = http().Get(("/v1/jobs/" + id + "/section?axis=z&coordinate=5.2").c_str());
   ASSERT_EQ(sec->status, 200) << sec->body;
-  png = read_png(sec->body, dir_);
+  png = read_png(sec->body);
   EXPECT_EQ(png.at("text").at("voxd:index"), "10");
   std::uint64_t filled = 0;
   for (const auto& v : png.at("pixels")) filled += v.get<int>() == 255;
   EXPECT_EQ(filled, 60u);
   EXPECT_EQ(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=10").c_str())->body, sec->body);
-  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2").c_str())->body);
   for (const auto& v : png.at("pixels")) ASSERT_EQ(v, 0);
   // After one peel of skin the 10 x 6 section is 8 x 4; two Euclidean peels leave 6 x 2.
   for (const auto& [query, want] : {std::pair<std::string, int>{"peel=1", 32}, {"peel=2&peel_metric=euclidean", 12}}) {
-    png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=10&" + query).c_str())->body, dir_);
+    png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=10&" + query).c_str())->body);
     int n = 0;
     for (const auto& v : png.at("pixels")) n += v.get<int>() == 255;
     EXPECT_EQ(n, want) << query;
     EXPECT_FALSE(png.at("text").at("voxd:peeled").get<std::string>().empty());
   }
   // Radiography after one peel: the ray through the middle crosses 16 - 2 voxels.
-  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=z&measure=total&peel=1").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/radiography?axis=z&measure=total&peel=1").c_str())->body);
   EXPECT_EQ(png.at("pixels").at(4 * 20 + 8), 14);
   EXPECT_EQ(png.at("pixels").at(2 * 20 + 4), 0);  // the skin's corner ray is empty now
   // Bad queries, unknown jobs, unfinished jobs, wrong methods.
@@ -731,7 +731,7 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   auto pre = http().Get(("/v1/jobs/" + id + "/preview?view=%2Bz").c_str());
   ASSERT_EQ(pre->status, 200) << pre->body;
   EXPECT_EQ(pre->get_header_value("Content-Type"), "image/png");
-  json png = read_png(pre->body, dir_);
+  json png = read_png(pre->body);
   EXPECT_EQ(png.at("width"), 20);
   EXPECT_EQ(png.at("height"), 20);
   EXPECT_EQ(png.at("color_type"), 2);
@@ -748,7 +748,7 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   for (int r = 0; r < 20; ++r)
     for (int c = 0; c < 20; ++c) part += !white(c, r);
   EXPECT_EQ(part, 18 * 18);
-  png = read_png(http().Get(("/v1/jobs/" + id + "/preview?view=-x&colour=thickness").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/preview?view=-x&colour=thickness").c_str())->body);
   EXPECT_EQ(png.at("width"), 20);
   EXPECT_GT(png.at("height").get<int>(), 6);  // the legend under the 20 x 6 view
   expect_problem(http().Get(("/v1/jobs/" + id + "/preview?view=up").c_str()), 400, "invalid-query");
@@ -780,10 +780,10 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   EXPECT_EQ(computed, 1u) << log;
 
   // Section coloured by thickness: RGB with a legend, grey without.
-  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2&colour=thickness").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2&colour=thickness").c_str())->body);
   EXPECT_EQ(png.at("color_type"), 2);
   EXPECT_GT(png.at("height").get<int>(), 20);
-  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=2").c_str())->body);
   EXPECT_EQ(png.at("color_type"), 0);
 }
 

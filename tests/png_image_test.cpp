@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "support/run_process.h"
+#include "support/test_checks.h"
 #include "support/test_meshes.h"
 #include "voxd/colour_map.h"
 #include "voxd/error.h"
@@ -27,37 +28,12 @@ namespace voxd {
 namespace {
 
 using nlohmann::json;
-
-std::string temp_png(const std::string& name) {
-  return (std::filesystem::path(::testing::TempDir()) / ("voxd_png_" + std::to_string(::getpid()) + "_" + name + ".png")).string();
-}
-
-// Decodes `png` with read_png.py; fails the test if the reader does.
-json decode(const std::vector<std::uint8_t>& png, bool checksum = false) {
-  const std::string path = temp_png("decode");
-  test::write_file(path, png);
-  const test::ProcessResult r = test::run_process(std::string("/usr/bin/python3 ") + VOXD_SOURCE_DIR +
-                                                  "/tests/tools/read_png.py " + path + (checksum ? " --checksum" : ""));
-  std::filesystem::remove(path);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  if (r.exit_code != 0) return json::object();
-  return json::parse(r.out);
-}
+using test::code_of;
+using test::decode_png;
 
 template <class T>
 std::vector<std::uint32_t> widen(const std::vector<T>& v) {
   return std::vector<std::uint32_t>(v.begin(), v.end());
-}
-
-ErrorCode code_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.code();
-  }
-  ADD_FAILURE() << "no voxd::Error thrown";
-  return ErrorCode::io_error;
 }
 
 // Three steps along x, heights 2, 5 and 9 voxels, depth j 3..8 (as in radiography_test).
@@ -73,7 +49,7 @@ TEST(PngGrey16, ExactSamplesAndScaleText) {
   const std::vector<std::uint32_t> values = {0, 1, 2, 255, 256, 257, 4095, 4096, 30000, 65534, 65535, 12, 0, 7, 65535};
   VectorSink sink;
   write_png_grey16(5, 3, values, PngScale{0.125, "mm"}, {{"voxd:axis", "z"}, {"voxd:map", "max"}}, sink);
-  const json png = decode(sink.data);
+  const json png = decode_png(sink.data);
   EXPECT_EQ(png["width"], 5);
   EXPECT_EQ(png["height"], 3);
   EXPECT_EQ(png["bit_depth"], 16);
@@ -89,7 +65,7 @@ TEST(PngGrey16, RadiographyOfSteppedBlockRoundTrips) {
   const ThicknessImage img = radiography(stepped_block(), 2);
   VectorSink sink;
   write_png_grey16(img.width, img.height, img.total, PngScale{}, {}, sink);
-  const json png = decode(sink.data);
+  const json png = decode_png(sink.data);
   EXPECT_EQ(png["width"], 16);
   EXPECT_EQ(png["height"], 12);
   EXPECT_EQ(png["pixels"].get<std::vector<std::uint32_t>>(), img.total);
@@ -111,7 +87,7 @@ TEST(PngGrey16, LargeRandomImageChecksum) {
   }
   VectorSink sink;
   write_png_grey16(w, h, values, PngScale{0.05, "in"}, {}, sink);
-  const json png = decode(sink.data, true);
+  const json png = decode_png(sink.data, true);
   EXPECT_EQ(png["sample_count"], values.size());
   EXPECT_EQ(png["sample_sum"].get<std::uint64_t>(), sum);
   EXPECT_EQ(png["text"]["voxd:scale"], "1 pixel value = 0.05 in");
@@ -132,7 +108,7 @@ TEST(PngGrey8, CrossSectionRoundTrips) {
   const GreyImage8 s = cross_section(stepped_block(), 1, 4);
   VectorSink sink;
   write_png_grey8(s.width, s.height, s.pixels, {{"voxd:section", "y = 4.5"}}, sink);
-  const json png = decode(sink.data);
+  const json png = decode_png(sink.data);
   EXPECT_EQ(png["width"], 16);
   EXPECT_EQ(png["height"], 13);
   EXPECT_EQ(png["bit_depth"], 8);
@@ -172,7 +148,7 @@ TEST(PngErrors, FailingSinkErrorComesBackThroughLibpng) {
   // And the encoder still works afterwards.
   VectorSink ok;
   write_png_grey8(3, 2, std::vector<std::uint8_t>(6, 9), {}, ok);
-  EXPECT_EQ(decode(ok.data)["pixels"].get<std::vector<std::uint32_t>>(), std::vector<std::uint32_t>(6, 9));
+  EXPECT_EQ(decode_png(ok.data)["pixels"].get<std::vector<std::uint32_t>>(), std::vector<std::uint32_t>(6, 9));
 }
 
 Rgb pixel(const json& png, int x, int y) {
@@ -187,7 +163,7 @@ TEST(ThicknessColourMap, PixelsLegendAndTextOfSteppedBlock) {
   EXPECT_EQ(map.range_max, 9u);
   VectorSink sink;
   write_png_rgb8(map.image, map.text, sink);
-  const json png = decode(sink.data);
+  const json png = decode_png(sink.data);
   ASSERT_EQ(png["width"], 16);
   ASSERT_EQ(png["height"], 12 + kLegendHeight);
   EXPECT_EQ(png["bit_depth"], 8);
@@ -239,7 +215,7 @@ TEST(ThicknessColourMap, ExplicitRangeClampsAndScaleGoesToText) {
   ASSERT_EQ(map.image.height, 2);  // narrower than kLegendMinWidth: no legend
   VectorSink sink;
   write_png_rgb8(map.image, map.text, sink);
-  const json png = decode(sink.data);
+  const json png = decode_png(sink.data);
   const auto& ramp = thickness_ramp();
   const Rgb want[8] = {kNoMaterialColour, ramp[0], ramp[0], ramp[0], ramp[128], ramp[255], kNoMaterialColour, ramp[255]};
   for (int p = 0; p < 8; ++p) EXPECT_EQ(pixel(png, p % 4, p / 4), want[p]) << p;

@@ -19,6 +19,7 @@
 #include <glm/geometric.hpp>
 
 #include "support/run_process.h"
+#include "support/test_checks.h"
 #include "support/test_meshes.h"
 #include "voxd/analysis_images.h"
 #include "voxd/colour_map.h"
@@ -30,20 +31,13 @@ namespace voxd {
 namespace {
 
 using nlohmann::json;
+using test::code_of;
+using test::decode_png;
+using test::kViews;
+using test::view_of;
+using test::ViewCase;
 
-// The camera table, written out independently of the implementation.
-struct ViewCase {
-  const char* name;
-  int axis;
-  bool from_positive;
-  int right_axis, right_sign, up_axis, up_sign;
-};
-constexpr ViewCase kViews[] = {
-    {"+z", 2, true, 0, +1, 1, +1}, {"-z", 2, false, 0, -1, 1, +1}, {"+x", 0, true, 1, +1, 2, +1},
-    {"-x", 0, false, 1, -1, 2, +1}, {"+y", 1, true, 0, -1, 2, +1}, {"-y", 1, false, 0, +1, 2, +1},
-};
-
-View view_of(const ViewCase& v) { return View{v.axis, v.from_positive}; }
+// The camera table (test::kViews) is written out apart from the implementation.
 glm::vec3 unit(int axis, int sign) {
   glm::vec3 u(0.0f);
   u[axis] = static_cast<float>(sign);
@@ -82,28 +76,6 @@ glm::i64vec3 voxel_coords(const BitVolume& v, std::int64_t index) {
 }
 
 std::size_t at(const PreviewImage& img, std::int64_t c, std::int64_t r) { return static_cast<std::size_t>(r * img.width + c); }
-
-ErrorCode code_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.code();
-  }
-  ADD_FAILURE() << "no voxd::Error thrown";
-  return ErrorCode::io_error;
-}
-
-json decode(const std::vector<std::uint8_t>& png) {
-  const std::string path =
-      (std::filesystem::path(::testing::TempDir()) / ("voxd_preview_" + std::to_string(::getpid()) + ".png")).string();
-  test::write_file(path, png);
-  const test::ProcessResult r =
-      test::run_process(std::string("/usr/bin/python3 ") + VOXD_SOURCE_DIR + "/tests/tools/read_png.py " + path);
-  std::filesystem::remove(path);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  if (r.exit_code != 0) return json::object();
-  return json::parse(r.out);
-}
 
 Rgb png_pixel(const json& png, std::int64_t x, std::int64_t y) {
   const std::size_t p = (static_cast<std::size_t>(y) * png["width"].get<std::size_t>() + static_cast<std::size_t>(x)) * 3;
@@ -435,7 +407,7 @@ TEST(PreviewPng, PlainPreviewDecodesWithTextAndWhiteBackground) {
   for (const ViewCase& v : {kViews[0], kViews[5]}) {
     SCOPED_TRACE(v.name);
     const PreviewImage img = render_preview(vol, view_of(v));
-    const json png = decode(preview_png(vol, view_of(v), nullptr, {{"voxd:source", "part.stl"}}));
+    const json png = decode_png(preview_png(vol, view_of(v), nullptr, {{"voxd:source", "part.stl"}}));
     ASSERT_EQ(png["width"], img.width);
     ASSERT_EQ(png["height"], img.height);
     EXPECT_EQ(png["bit_depth"], 8);
@@ -474,7 +446,7 @@ TEST(PreviewPng, ThicknessColoursUseTheWholeMapRange) {
   thickness.at(30, 10, 2) = 16.0f;
 
   const PreviewImage img = render_preview(vol, View{2, true});
-  const json png = decode(preview_png(vol, View{2, true}, &thickness, {{"voxd:source", "plates"}}));
+  const json png = decode_png(preview_png(vol, View{2, true}, &thickness, {{"voxd:source", "plates"}}));
   ASSERT_EQ(png["width"], 40);
   ASSERT_EQ(png["height"], 20 + kLegendHeight);
   const auto& text = png["text"];

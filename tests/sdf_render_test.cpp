@@ -23,6 +23,7 @@
 #include <glm/geometric.hpp>
 
 #include "support/run_process.h"
+#include "support/test_checks.h"
 #include "support/test_meshes.h"
 #include "voxd/analysis_images.h"
 #include "voxd/error.h"
@@ -33,19 +34,13 @@ namespace voxd {
 namespace {
 
 using nlohmann::json;
+using test::code_of;
+using test::decode_png;
+using test::kViews;
+using test::view_of;
+using test::ViewCase;
 
 // The camera table, written out independently of the implementation.
-struct ViewCase {
-  const char* name;
-  int axis;
-  bool from_positive;
-  int right_axis, right_sign, up_axis, up_sign;
-};
-constexpr ViewCase kViews[] = {
-    {"+z", 2, true, 0, +1, 1, +1}, {"-z", 2, false, 0, -1, 1, +1}, {"+x", 0, true, 1, +1, 2, +1},
-    {"-x", 0, false, 1, -1, 2, +1}, {"+y", 1, true, 0, -1, 2, +1}, {"-y", 1, false, 0, +1, 2, +1},
-};
-View view_of(const ViewCase& v) { return View{v.axis, v.from_positive}; }
 glm::dvec3 unit(int axis, int sign) {
   glm::dvec3 u(0.0);
   u[axis] = sign;
@@ -104,29 +99,6 @@ bool same_bits(const SdfRenderImage& a, const SdfRenderImage& b) {
          std::memcmp(a.hit.data(), b.hit.data(), a.hit.size() * sizeof(glm::dvec3)) == 0 &&
          std::memcmp(a.normal.data(), b.normal.data(), a.normal.size() * sizeof(glm::vec3)) == 0 && a.shade == b.shade &&
          a.specular == b.specular && a.hit.size() == b.hit.size() && a.normal.size() == b.normal.size();
-}
-
-ErrorCode code_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.code();
-  }
-  ADD_FAILURE() << "no voxd::Error thrown";
-  return ErrorCode::io_error;
-}
-
-json decode(const std::vector<std::uint8_t>& png) {
-  const std::string path =
-      (std::filesystem::path(::testing::TempDir()) / ("voxd_sdf_render_" + std::to_string(::getpid()) + ".png")).string();
-  test::write_file(path, png);
-  const test::ProcessResult r =
-      test::run_process(std::string("/usr/bin/python3 ") + VOXD_SOURCE_DIR + "/tests/tools/read_png.py " + path);
-  std::filesystem::remove(path);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  if (r.exit_code != 0) return json::object();
-  return json::parse(r.out);
 }
 
 TEST(SdfRender, SphereSilhouetteHitsAndNormalsInEveryView) {
@@ -415,7 +387,7 @@ TEST(SdfRender, PngDecodesWithItsMetadata) {
   const SdfRenderInput in = input_of(f, false, false);
   for (const ViewCase& v : {kViews[1], kViews[4]}) {
     const SdfRenderImage img = render_sdf(in, view_of(v), 0, 2);
-    const json png = decode(sdf_preview_png(in, view_of(v), {{"voxd:job", "abc"}}, 0, 2));
+    const json png = decode_png(sdf_preview_png(in, view_of(v), {{"voxd:job", "abc"}}, 0, 2));
     ASSERT_EQ(png["width"], img.width);
     ASSERT_EQ(png["height"], img.height);
     EXPECT_EQ(png["bit_depth"], 8);

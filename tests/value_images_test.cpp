@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "support/run_process.h"
+#include "support/test_checks.h"
 #include "support/test_meshes.h"
 #include "voxd/colour_map.h"
 #include "voxd/coverage.h"
@@ -27,29 +28,8 @@ namespace voxd {
 namespace {
 
 using nlohmann::json;
-
-json decode(const std::vector<std::uint8_t>& png) {
-  const std::string path =
-      (std::filesystem::path(::testing::TempDir()) / ("voxd_value_images_" + std::to_string(::getpid()) + ".png")).string();
-  test::write_file(path, png);
-  const test::ProcessResult r =
-      test::run_process(std::string("/usr/bin/python3 ") + VOXD_SOURCE_DIR + "/tests/tools/read_png.py " + path);
-  std::filesystem::remove(path);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  if (r.exit_code != 0) return json::object();
-  return json::parse(r.out);
-}
-
-ErrorCode code_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.code();
-  }
-  ADD_FAILURE() << "no voxd::Error thrown";
-  return ErrorCode::io_error;
-}
+using test::code_of;
+using test::decode_png;
 
 // Voxel (i, j, k) shown by pixel (c, r) of a section along `axis` at `index`,
 // as section.h documents: axis 0 -> (j, k), 1 -> (i, k), 2 -> (i, j).
@@ -75,7 +55,7 @@ TEST(CoverageSection, BytesExactlyInEveryPlane) {
   for (int axis = 0; axis < 3; ++axis) {
     for (std::int64_t index = 0; index < kGrid.dims[axis]; ++index) {
       SCOPED_TRACE("axis " + std::to_string(axis) + " index " + std::to_string(index));
-      const json png = decode(coverage_section_png(v, axis, index, {{"voxd:job", "j1"}}));
+      const json png = decode_png(coverage_section_png(v, axis, index, {{"voxd:job", "j1"}}));
       const int w = static_cast<int>(axis == 0 ? kGrid.dims.y : kGrid.dims.x);
       const int h = static_cast<int>(axis == 2 ? kGrid.dims.y : kGrid.dims.z);
       ASSERT_EQ(png["width"], w);
@@ -111,7 +91,7 @@ TEST(CoverageSection, FloatsAsCoverageBytes) {
   const DenseVolume<std::uint8_t> bytes = coverage_bytes(v);
   for (int axis = 0; axis < 3; ++axis) {
     const std::int64_t index = kGrid.dims[axis] - 2;
-    const json png = decode(coverage_section_png(v, axis, index));
+    const json png = decode_png(coverage_section_png(v, axis, index));
     const auto pixels = png["pixels"].get<std::vector<int>>();
     const int w = png["width"], h = png["height"];
     for (int r = 0; r < h; ++r)
@@ -199,7 +179,7 @@ TEST(SdfSection, ColourInsideBlueZeroWhiteOutsideRedInBothConventions) {
     const DenseVolume<float> f = slab_field(g, inside_negative, 0.5);
     const SdfRenderInput in{&f, inside_negative, 0.5, "model units"};
     EXPECT_DOUBLE_EQ(sdf_section_range(in), 2.0);  // |k - 2| <= 4 voxels of 0.5
-    const json png = decode(sdf_section_png(in, 0, 5, true, {{"voxd:job", "j2"}}));
+    const json png = decode_png(sdf_section_png(in, 0, 5, true, {{"voxd:job", "j2"}}));
     ASSERT_EQ(png["width"], 18);
     ASSERT_EQ(png["height"], 7 + kLegendHeight);
     EXPECT_EQ(png["color_type"], 2);
@@ -259,7 +239,7 @@ TEST(SdfSection, GreyIsTheLinearMapOfTheValue) {
     f.at(2, 1, 3) = std::nanf("");
     const SdfRenderInput in{&f, inside_negative, 1.0, "voxel"};
     EXPECT_DOUBLE_EQ(sdf_section_range(in), 4.0);  // NaN skipped
-    const json png = decode(sdf_section_png(in, 1, 1, false));
+    const json png = decode_png(sdf_section_png(in, 1, 1, false));
     ASSERT_EQ(png["width"], 6);
     ASSERT_EQ(png["height"], 7);
     EXPECT_EQ(png["color_type"], 0);
@@ -285,11 +265,11 @@ TEST(SdfSection, AllZeroFieldIsWhiteAndMidGrey) {
   const DenseVolume<float> f(g, 0.0f);
   const SdfRenderInput in{&f, true, 1.0, "voxel"};
   EXPECT_EQ(sdf_section_range(in), 0.0);
-  const json colour = decode(sdf_section_png(in, 2, 0, true));
+  const json colour = decode_png(sdf_section_png(in, 2, 0, true));
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 16; ++c) EXPECT_EQ(pixel(colour, c, r), (Rgb{255, 255, 255}));
   EXPECT_EQ(colour["text"]["voxd:range"], "0 voxel");
-  const json grey = decode(sdf_section_png(in, 2, 1, false));
+  const json grey = decode_png(sdf_section_png(in, 2, 1, false));
   for (const int p : grey["pixels"].get<std::vector<int>>()) EXPECT_EQ(p, 128);
 }
 

@@ -155,7 +155,7 @@ TEST_F(ValueJobsTest, SdfPreviewRendersTheZeroLevelSetAndSectionsShowTheDistance
                                          R"({"grid":{"voxel_size":0.5,"origin":[0,0,0],"dims":[16,16,16]},"mode":"sdf"})"));
   auto res = http().Get(("/v1/jobs/" + id + "/preview?view=%2Bz").c_str());
   ASSERT_EQ(res->status, 200) << res->body;
-  json png = read_png(res->body, dir_);
+  json png = read_png(res->body);
   EXPECT_EQ(png.at("text").at("voxd:render"), "sdf sphere tracing");
   ASSERT_EQ(png.at("width"), 16);
   ASSERT_EQ(png.at("height"), 16);
@@ -187,18 +187,18 @@ TEST_F(ValueJobsTest, SdfPreviewRendersTheZeroLevelSetAndSectionsShowTheDistance
       }
     }
   // The voxel preview is still there with colour=thickness (of the solid).
-  EXPECT_EQ(read_png(http().Get(("/v1/jobs/" + id + "/preview?view=%2Bz&colour=thickness").c_str())->body, dir_)
+  EXPECT_EQ(read_png(http().Get(("/v1/jobs/" + id + "/preview?view=%2Bz&colour=thickness").c_str())->body)
                 .at("text").count("voxd:render"), 0u);
 
   // Grey section through z voxel 5 (centres at z = 2.75): value v maps to
   // round(127.5 + 127.5 v / R), R = 1.5 (the clamped band, the largest |v|).
-  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=5").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=5").c_str())->body);
   ASSERT_EQ(png.at("color_type"), 0);
   EXPECT_EQ(png.at("pixels").at(0), 255);                 // voxel (0, 0): far outside, clamped
   EXPECT_EQ(png.at("pixels").at(3 * 16 + 3), 106);        // voxel (3, 3): 0.25 inside
   EXPECT_EQ(png.at("pixels").at(6 * 16 + 7), 21);         // voxel (7, 6): 1.25 inside
   // The diverging map: blue inside, red outside, a legend below.
-  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=5&colour=distance").c_str())->body, dir_);
+  png = read_png(http().Get(("/v1/jobs/" + id + "/section?axis=z&index=5&colour=distance").c_str())->body);
   ASSERT_EQ(png.at("color_type"), 2);
   EXPECT_GT(png.at("height").get<int>(), 16);
   const auto& d = png.at("pixels");
@@ -300,7 +300,7 @@ TEST_F(ValueJobsTest, CoverageOfABoxAtSubVoxelOffsetsIsTheAnalyticFraction) {
   expect_problem(http().Get(("/v1/jobs/" + bytes_id + "/volume?format=rle&quantize=u8").c_str()), 400, "invalid-query");
 
   // A coverage job's section is its grey levels, byte for byte.
-  const json png = read_png(http().Get(("/v1/jobs/" + bytes_id + "/section?axis=z&index=1").c_str())->body, dir_);
+  const json png = read_png(http().Get(("/v1/jobs/" + bytes_id + "/section?axis=z&index=1").c_str())->body);
   ASSERT_EQ(png.at("width"), 6);
   ASSERT_EQ(png.at("height"), 5);
   for (int j = 0; j < 5; ++j)

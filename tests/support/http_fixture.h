@@ -19,6 +19,7 @@
 #include "support/http_client.h"
 #include "support/run_process.h"
 #include "support/server_process.h"
+#include "support/test_checks.h"
 #include "support/test_meshes.h"
 
 namespace voxd::test {
@@ -26,14 +27,8 @@ namespace voxd::test {
 inline std::vector<std::uint8_t> bytes_of(const std::string& s) { return {s.begin(), s.end()}; }
 inline std::string text_of(const std::vector<std::uint8_t>& b) { return {b.begin(), b.end()}; }
 
-// Decodes a PNG with the independent reader (tests/tools/read_png.py):
-// {width, height, bit_depth, color_type, text: {...}, pixels: [samples]}.
-inline nlohmann::json read_png(const std::string& bytes, const std::string& dir) {
-  write_file(dir + "/image.png", bytes_of(bytes));
-  const auto r = run_process("/usr/bin/python3 " + std::string(VOXD_SOURCE_DIR) + "/tests/tools/read_png.py " + dir + "/image.png");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return nlohmann::json::parse(r.out);
-}
+// A PNG answer as the independent reader decodes it (test::decode_png).
+inline nlohmann::json read_png(const std::string& bytes) { return decode_png(bytes_of(bytes)); }
 
 // An NRRD file: its header fields and the data after the blank line.
 struct Nrrd {
