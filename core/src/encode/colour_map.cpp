@@ -43,6 +43,22 @@ std::uint8_t to_srgb8(double linear) {
   return static_cast<std::uint8_t>(std::lround(e * 255.0));
 }
 
+// The sRGB colour of OKLCh (L, chroma, hue in radians), with the chroma cut
+// to the largest that sRGB holds (bisected; chroma 0, grey, always fits for
+// L <= 1), so every ramp step keeps its lightness and hue.
+Rgb oklch_in_gamut(double L, double chroma, double hue) {
+  if (!in_gamut(oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue)))) {
+    double lo = 0.0, hi = chroma;
+    for (int step = 0; step < 40; ++step) {
+      const double mid = 0.5 * (lo + hi);
+      (in_gamut(oklab_to_linear(L, mid * std::cos(hue), mid * std::sin(hue))) ? lo : hi) = mid;
+    }
+    chroma = lo;
+  }
+  const LinearRgb c = oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue));
+  return {to_srgb8(c.r), to_srgb8(c.g), to_srgb8(c.b)};
+}
+
 std::array<Rgb, 256> build_ramp() {
   std::array<Rgb, 256> ramp{};
   for (int i = 0; i < 256; ++i) {
@@ -50,18 +66,8 @@ std::array<Rgb, 256> build_ramp() {
     const double L = 0.30 + 0.62 * t;
     const double hue = (305.0 - 200.0 * t) * std::numbers::pi / 180.0;
     // Wanted chroma: vivid at both ends, softer through teal (as in viridis).
-    double chroma = 0.13 + 0.05 * t * t - 0.04 * std::sin(std::numbers::pi * t);
-    double lo = 0.0;
-    if (!in_gamut(oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue)))) {
-      double hi = chroma;  // bisect the largest in-gamut chroma: lo always in gamut
-      for (int step = 0; step < 40; ++step) {
-        const double mid = 0.5 * (lo + hi);
-        (in_gamut(oklab_to_linear(L, mid * std::cos(hue), mid * std::sin(hue))) ? lo : hi) = mid;
-      }
-      chroma = lo;
-    }
-    const LinearRgb c = oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue));
-    ramp[static_cast<std::size_t>(i)] = {to_srgb8(c.r), to_srgb8(c.g), to_srgb8(c.b)};
+    const double chroma = 0.13 + 0.05 * t * t - 0.04 * std::sin(std::numbers::pi * t);
+    ramp[static_cast<std::size_t>(i)] = oklch_in_gamut(L, chroma, hue);
   }
   return ramp;
 }
@@ -77,17 +83,7 @@ std::array<Rgb, kDivergingRampSize> build_diverging_ramp() {
     const double s = std::abs(t);
     const double L = 1.0 - 0.5 * s;
     const double hue = (t < 0 ? 265.0 : 25.0) * std::numbers::pi / 180.0;
-    double chroma = 0.19 * std::pow(s, 0.75);
-    if (!in_gamut(oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue)))) {
-      double lo = 0.0, hi = chroma;  // lo always in gamut (grey at L <= 1)
-      for (int step = 0; step < 40; ++step) {
-        const double mid = 0.5 * (lo + hi);
-        (in_gamut(oklab_to_linear(L, mid * std::cos(hue), mid * std::sin(hue))) ? lo : hi) = mid;
-      }
-      chroma = lo;
-    }
-    const LinearRgb c = oklab_to_linear(L, chroma * std::cos(hue), chroma * std::sin(hue));
-    ramp[static_cast<std::size_t>(i)] = {to_srgb8(c.r), to_srgb8(c.g), to_srgb8(c.b)};
+    ramp[static_cast<std::size_t>(i)] = oklch_in_gamut(L, 0.19 * std::pow(s, 0.75), hue);
   }
   ramp[kDivergingCentre] = {255, 255, 255};  // OKLab's white is 1 - 1e-10 off in the published matrices
   return ramp;
