@@ -2,10 +2,9 @@
 
 #include "voxd/mass_properties.h"
 
+#include <algorithm>
 #include <chrono>
 #include <string>
-
-#include <algorithm>
 
 #include "voxd/coverage.h"
 #include "voxd/error.h"

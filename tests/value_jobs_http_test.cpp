@@ -297,6 +297,7 @@ TEST_F(ValueJobsTest, CoverageOfABoxAtSubVoxelOffsetsIsTheAnalyticFraction) {
   auto res = http().Get(("/v1/jobs/" + bits_id + "/volume?format=raw&packing=bytes").c_str());
   EXPECT_EQ(res->get_header_value("X-Voxd-Value-Type"), "bit");
   expect_problem(http().Get(("/v1/jobs/" + bits_id + "/volume?format=rle&quantize=u8").c_str()), 400, "invalid-query");
+  EXPECT_EQ(parse_nrrd(volume(bits_id, "?format=nrrd")).fields.at("content"), "voxels (1 = filled)");
   expect_problem(http().Get(("/v1/jobs/" + bytes_id + "/volume?format=rle&quantize=u8").c_str()), 400, "invalid-query");
 
   // A coverage job's section is its grey levels, byte for byte.

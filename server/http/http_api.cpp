@@ -194,8 +194,9 @@ VolumeRequest read_volume_request(const Request& req) {
 }
 
 // What a job's volume holds, for the NRRD "content:" line.
-std::string volume_content(const json& values) {
-  if (!values.is_object()) return "voxels (1 = filled)";
+std::string volume_content(const JobSnapshot& job) {
+  if (!job.has_value_volume()) return "voxels (1 = filled)";
+  const json& values = job.values;
   std::string text = values.value("quantity", "values");
   if (values.contains("unit")) text += " (" + values.at("unit").get<std::string>();
   if (values.contains("sign_convention")) text += ", " + values.at("sign_convention").get<std::string>();
@@ -439,7 +440,7 @@ void HttpApi::install(httplib::Server& server) {
       throw ProblemError(make_problem(409, "job-not-finished", "The job has no volume yet",
                                       std::string("the job is ") + to_string(job->state) + "; its volume exists once it has succeeded"));
     VolumeRequest request = v;
-    request.options.content = volume_content(job->values);
+    request.options.content = volume_content(*job);
     const std::string filename = id + file_extension(v.format);
     if (job->has_value_volume()) {
       auto values = jobs_.values(id);
@@ -475,7 +476,7 @@ void HttpApi::install(httplib::Server& server) {
     res.set_header("X-Voxd-Dims", std::to_string(job.grid.dims.x) + "," + std::to_string(job.grid.dims.y) + "," + std::to_string(job.grid.dims.z));
     res.set_header("X-Voxd-Filled-Voxels", std::to_string(job.filled_voxels.value_or(0)));
     VolumeRequest request = v;
-    request.options.content = volume_content(job.values);
+    request.options.content = volume_content(job);
     const std::string filename = "voxels" + std::string(file_extension(v.format));
     if (output.values) {
       res.set_header("X-Voxd-Value-Type", value_type_name(*output.values));

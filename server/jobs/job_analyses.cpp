@@ -21,9 +21,9 @@
 #include "voxd/preview.h"
 #include "voxd/radiography.h"
 #include "voxd/sdf_render.h"
-#include "voxd/value_images.h"
 #include "voxd/section.h"
 #include "voxd/skin_removal.h"
+#include "voxd/value_images.h"
 #include "voxd/volume_format.h"
 
 namespace voxd::server {
@@ -152,7 +152,7 @@ std::optional<SdfRenderInput> sdf_input(const JobSnapshot& job, const JobOutput&
 // A coverage or sdf job's section shows its values (colour none or
 // distance); colour thickness and peeled sections show the solid.
 std::optional<std::string> value_job_section(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
-                                         std::int64_t layer, const std::vector<PngText>& text) {
+                                             std::int64_t layer, const std::vector<PngText>& text) {
   const std::optional<SdfRenderInput> sdf = sdf_input(job, output);
   if (r.colour == "distance" && !sdf)
     throw AnalysisRejected("colour=distance shows the distances of an sdf job; this job's mode is " +
