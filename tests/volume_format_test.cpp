@@ -856,6 +856,53 @@ TEST(VolumeFormatIndependent, PythonRleReaderRejectsACorruptStream) {
   EXPECT_NE(run_tool("read_rle.py", stream).status, 0);
 }
 
+// Colours in runs (a slice voxelization's bands), empty voxels between them,
+// and colours that differ in one byte only, so a run must compare all four.
+DenseVolume<Rgba8> random_rgba8_volume(const Grid& grid, unsigned seed) {
+  std::mt19937 rng(seed);
+  DenseVolume<Rgba8> v(grid);
+  const Rgba8 palette[] = {{0, 0, 0, 0}, {255, 0, 0, 255}, {255, 0, 0, 254}, {255, 1, 0, 255}, {0, 0, 1, 255}, {7, 8, 9, 10}};
+  for (std::size_t i = 0; i < v.values().size();) {
+    const Rgba8 c = palette[rng() % 6];
+    for (std::size_t n = 1 + rng() % 20; n > 0 && i < v.values().size(); --n) v.values()[i++] = c;
+  }
+  return v;
+}
+
+Bytes rle_rgba8(const DenseVolume<Rgba8>& v) {
+  VectorSink sink;
+  write_rle(v, sink);
+  return std::move(sink.data);
+}
+
+TEST(VolumeFormatIndependent, Rgba8RleRoundTripsAndThePythonReaderAgrees) {
+  for (const glm::i64vec3 dims : {glm::i64vec3(67, 5, 3), glm::i64vec3(1, 1, 1), glm::i64vec3(300, 200, 9)}) {
+    const DenseVolume<Rgba8> v = random_rgba8_volume(make_grid(dims, {1, 2, 3}, 0.7), 21);
+    const DenseVolume<Rgba8> back = read_rle_rgba8(rle_rgba8(v));
+    expect_same_grid(back.grid(), v.grid());
+    EXPECT_TRUE(back.values() == v.values());
+  }
+  // Spec 8.3's example: one slab of 2 voxels, both opaque red.
+  DenseVolume<Rgba8> red(make_grid({2, 1, 1}), Rgba8{255, 0, 0, 255});
+  const Bytes stream = rle_rgba8(red);
+  const Bytes tail = hex("53 00 05 02 ff 00 00 ff 45 01");
+  ASSERT_GT(stream.size(), tail.size());
+  EXPECT_EQ(Bytes(stream.end() - static_cast<std::ptrdiff_t>(tail.size()), stream.end()), tail);
+  EXPECT_EQ(error_code_of([&] { read_rle_u8(stream); }), ErrorCode::malformed_input);
+  EXPECT_EQ(error_code_of([&] { read_rle_rgba8(rle_u8(DenseVolume<std::uint8_t>(make_grid({2, 1, 1})))); }),
+            ErrorCode::malformed_input);
+  for (std::size_t n = 0; n < stream.size(); ++n)
+    EXPECT_EQ(error_code_of([&] { read_rle_rgba8(std::span(stream.data(), n)); }), ErrorCode::truncated_input) << n;
+  EXPECT_EQ(error_code_of([&] { read_rle_rgba8(stream, ReadLimits{7}); }), ErrorCode::limit_exceeded);
+  // The independent reader, written from the spec alone, decodes the same colours.
+  const DenseVolume<Rgba8> v = random_rgba8_volume(make_grid({67, 5, 3}, {0.5, 0, 0}, 3.0), 22);
+  const ToolRun run = run_tool("read_rle.py", rle_rgba8(v));
+  ASSERT_EQ(run.status, 0) << run.stdout_text;
+  EXPECT_EQ(nlohmann::json::parse(run.stdout_text)["value_type"], "rgba8");
+  ASSERT_EQ(run.voxels.size(), 4 * v.values().size());
+  EXPECT_EQ(std::memcmp(run.voxels.data(), v.values().data(), run.voxels.size()), 0) << "decoded colours differ";
+}
+
 TEST(VolumeFormatIndependent, PythonBinvoxReaderDecodesTheSameVoxelsAndCentres) {
   for (const auto& [name, volume] : test_volumes()) {
     SCOPED_TRACE(name);

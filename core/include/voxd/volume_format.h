@@ -94,6 +94,9 @@ void write_rle(const DenseVolume<float>& volume, ByteSink& sink);
 // volume. Throws Error(invalid_argument) for Quantize::none.
 void write_rle_quantized(const DenseVolume<float>& volume, Quantize levels, std::string_view content, ByteSink& sink);
 void write_raw(const DenseVolume<float>& volume, ByteSink& sink);
+// Colour volumes (slice voxelization, voxd/slice_functions.h): voxd RLE with
+// value_type rgba8, runs of equal colours (all four bytes r, g, b, a equal).
+void write_rle(const DenseVolume<Rgba8>& volume, ByteSink& sink);
 void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink,
                 NrrdEncoding encoding = NrrdEncoding::raw);
 
@@ -110,6 +113,7 @@ BitVolume read_rle_bits(std::span<const std::uint8_t> data, const ReadLimits& li
 DenseVolume<std::uint8_t> read_rle_u8(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 DenseVolume<float> read_rle_f32(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 DenseVolume<std::uint16_t> read_rle_u16(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
+DenseVolume<Rgba8> read_rle_rgba8(std::span<const std::uint8_t> data, const ReadLimits& limits = {});
 // The header's "metadata" object as JSON text ("" when it has none), e.g. to
 // read a quantized stream's offset and scale.
 std::string read_rle_metadata(std::span<const std::uint8_t> data);

@@ -94,7 +94,8 @@ void decode_bit_payload(ByteCursor in, std::uint64_t slab_voxels, const OnOnes& 
   check_covered(in, position, slab_voxels);
 }
 
-// The value of a run: one byte, or four little-endian bytes of a float.
+// The value of a run: one byte, two or four little-endian bytes, or the
+// four bytes r, g, b, a of a colour.
 inline std::uint8_t read_value(ByteCursor& in, std::uint8_t*) { return in.u8("a run value"); }
 inline std::uint16_t read_value(ByteCursor& in, std::uint16_t*) {
   const std::uint16_t lo = in.u8("a run value");
@@ -106,7 +107,16 @@ inline float read_value(ByteCursor& in, float*) {
   return std::bit_cast<float>(bits);
 }
 
-// u8 / u16 / f32 payload: (varint run length, value) pairs; calls
+inline Rgba8 read_value(ByteCursor& in, Rgba8*) {
+  Rgba8 c;
+  c.r = in.u8("a run value");
+  c.g = in.u8("a run value");
+  c.b = in.u8("a run value");
+  c.a = in.u8("a run value");
+  return c;
+}
+
+// u8 / u16 / f32 / rgba8 payload: (varint run length, value) pairs; calls
 // on_run(first_voxel, length, value) for each.
 template <class T, class OnRun>
 void decode_value_payload(ByteCursor in, std::uint64_t slab_voxels, const OnRun& on_run) {
@@ -206,6 +216,10 @@ DenseVolume<float> read_rle_f32(std::span<const std::uint8_t> data, const ReadLi
 
 DenseVolume<std::uint16_t> read_rle_u16(std::span<const std::uint8_t> data, const ReadLimits& limits) {
   return read_rle_values<std::uint16_t>(data, limits, encode::RleValueType::u16, "read_rle_u16");
+}
+
+DenseVolume<Rgba8> read_rle_rgba8(std::span<const std::uint8_t> data, const ReadLimits& limits) {
+  return read_rle_values<Rgba8>(data, limits, encode::RleValueType::rgba8, "read_rle_rgba8");
 }
 
 std::string read_rle_metadata(std::span<const std::uint8_t> data) {

@@ -134,6 +134,24 @@ void encode_f32_slab(const DenseVolume<float>& volume, std::int64_t k, ByteBuffe
   }
 }
 
+// rgba8 slab payload: (varint run length, r, g, b, a) pairs of maximal runs
+// of equal colours (all four bytes equal, spec 5.2).
+void encode_rgba8_slab(const DenseVolume<Rgba8>& volume, std::int64_t k, ByteBuffer& out) {
+  const Rgba8* values = volume.slab(k);
+  const std::size_t n = volume.slab_size();
+  for (std::size_t i = 0; i < n;) {
+    const Rgba8 c = values[i];
+    std::size_t j = i + 1;
+    while (j < n && values[j] == c) ++j;
+    out.put_varint(j - i);
+    out.put_byte(c.r);
+    out.put_byte(c.g);
+    out.put_byte(c.b);
+    out.put_byte(c.a);
+    i = j;
+  }
+}
+
 // Levels of a quantized stream: value = offset + scale * q for q in 0..top;
 // top + 1 marks NaN.
 struct Quantizer {
@@ -214,6 +232,14 @@ void write_rle(const DenseVolume<std::uint8_t>& volume, ByteSink& sink) {
   write_slab_blocks(
       volume.grid().dims.z, volume.slab_size(),
       [&volume](std::int64_t k, ByteBuffer& out) { encode_u8_slab(volume, k, out); }, sink);
+}
+
+void write_rle(const DenseVolume<Rgba8>& volume, ByteSink& sink) {
+  encode::require_voxels(volume, "RLE writer");
+  write_header(volume.grid(), encode::RleValueType::rgba8, sink);
+  write_slab_blocks(
+      volume.grid().dims.z, volume.slab_size() * sizeof(Rgba8),
+      [&volume](std::int64_t k, ByteBuffer& out) { encode_rgba8_slab(volume, k, out); }, sink);
 }
 
 }  // namespace voxd
