@@ -113,20 +113,23 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
     result.volume = voxelize(job.mesh, job.grid, options, control);
     result.timings.add("voxelize", clock.lap());
   } else {
-    // The values take most of the time: the solid gets the first tenth of
-    // the progress bar, the values the rest.
+    // The values take most of the time: a solid of its own gets the first
+    // tenth of the progress bar, the values the rest.
     const double begin = control ? control->span_begin() : 0.0, end = control ? control->span_end() : 1.0;
     const double split = begin + 0.1 * (end - begin);
     auto span = [control](double b, double e) {
       if (control) control->set_span(b, e);
     };
-    if (!job.params.coverage || !job.params.coverage->threshold) {
+    // Coverage's solid is the parity solid of its crossings (a threshold
+    // makes the volume from the values instead); the distance field hands
+    // back the solid that signs it.
+    if (job.params.coverage && !job.params.coverage->threshold) {
       span(begin, split);
-      if (job.params.coverage) options.inside = InsideTest::parity;  // coverage counts parity crossings
+      options.inside = InsideTest::parity;
       result.volume = voxelize(job.mesh, job.grid, options, control);
       result.timings.add("voxelize", clock.lap());
     }
-    span(split, end);
+    span(job.params.coverage ? split : begin, end);
     if (job.params.coverage) {
       const api::CoverageParams& c = *job.params.coverage;
       CoverageOptions o = c.options;
@@ -151,7 +154,7 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
     } else {
       SdfOptions o = *job.params.sdf;
       o.threads = threads;
-      DenseVolume<float> sdf = signed_distance_field(job.mesh, job.grid, o, control);
+      DenseVolume<float> sdf = signed_distance_field(job.mesh, job.grid, o, control, &result.volume);
       result.timings.add("sdf", clock.lap());
       const auto [lo, hi] = std::minmax_element(sdf.values().begin(), sdf.values().end());
       result.values_info = {{"quantity", "signed distance"},

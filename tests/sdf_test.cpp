@@ -340,6 +340,13 @@ TEST(SignedDistanceField, SignFollowsTheChosenInsideTest) {
     SdfOptions o;
     o.inside = inside;
     expect_sign_matches_solid(signed_distance_field(mesh, g, o), mesh, inside);
+    // The solid handed back is that voxelization, and the values the same.
+    BitVolume solid;
+    const DenseVolume<float> with_solid = signed_distance_field(mesh, g, o, nullptr, &solid);
+    const BitVolume expected = voxelize(mesh, g, {VoxelMode::solid, inside, 0});
+    ASSERT_EQ(solid.word_count(), expected.word_count());
+    EXPECT_TRUE(std::equal(solid.data(), solid.data() + solid.word_count(), expected.data()));
+    EXPECT_EQ(with_solid.values(), signed_distance_field(mesh, g, o).values());
   }
   SdfOptions parity, winding;
   winding.inside = InsideTest::winding;

@@ -69,6 +69,11 @@ struct SdfOptions {
 // triangles has no surface to measure: +band everywhere, also with `full`.
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control = nullptr);
+// The same, also handing back in `solid` the solid voxelization that signed
+// it, voxelize(mesh, grid, {solid, options.inside}), so a caller that needs
+// both (a job keeps the solid for its analyses) voxelizes once.
+DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                                         JobControl* control, BitVolume* solid);
 
 // Choices that change the speed, never a value: for the benchmarks and the
 // tests that hold both ways to the same bits.

@@ -121,13 +121,32 @@ double point_triangle_distance2(const dvec3& p, const dvec3& a, const dvec3& b, 
   return sdf::distance2(Triangle(a, b, c), p);
 }
 
+namespace {
+
+DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
+                               const SdfTuning& tuning, BitVolume* solid_out);
+
+}  // namespace
+
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control) {
-  return signed_distance_field(mesh, grid, options, control, SdfTuning{});
+  return compute_sdf(mesh, grid, options, control, SdfTuning{}, nullptr);
+}
+
+DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                                         JobControl* control, BitVolume* solid) {
+  return compute_sdf(mesh, grid, options, control, SdfTuning{}, solid);
 }
 
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control, const SdfTuning& tuning) {
+  return compute_sdf(mesh, grid, options, control, tuning, nullptr);
+}
+
+namespace {
+
+DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
+                               const SdfTuning& tuning, BitVolume* solid_out) {
   if (!(options.band > 0.0) || !std::isfinite(options.band))
     throw Error(ErrorCode::invalid_argument, "the distance band must be a positive number of voxels");
   if (!(grid.voxel_size > 0.0) || !std::isfinite(grid.voxel_size))
@@ -163,7 +182,7 @@ DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, con
     }
   } join{filler};
   const double band_end = options.full ? 0.25 : 1.0;
-  const BitVolume solid = solid_for_sign(mesh, grid, options, progress.part(0.0, 0.15));
+  BitVolume solid = solid_for_sign(mesh, grid, options, progress.part(0.0, 0.15));
   const sdf::BandPlan plan = sdf::plan_band(mesh, grid, s, threads);
   filler.join();
   if (fill_error) std::rethrow_exception(fill_error);
@@ -202,7 +221,10 @@ DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, con
       }
   });
   progress.report(1.0);
+  if (solid_out) *solid_out = std::move(solid);
   return values;
 }
+
+}  // namespace
 
 }  // namespace voxd
