@@ -17,14 +17,14 @@ using test::unit_grid;
 
 // Peeling as the paper describes it: remove every filled voxel with an empty
 // face neighbour (or the grid's outside), layer after layer.
-std::vector<std::uint16_t> erode_layers(const BitVolume& v) {
+VolumeVector<std::uint16_t> erode_layers(const BitVolume& v) {
   const auto d = v.grid().dims;
   auto idx = [&](std::int64_t i, std::int64_t j, std::int64_t k) { return static_cast<std::size_t>(i + d.x * (j + d.y * k)); };
   std::vector<char> cur(static_cast<std::size_t>(d.x * d.y * d.z));
   for (std::int64_t k = 0; k < d.z; ++k)
     for (std::int64_t j = 0; j < d.y; ++j)
       for (std::int64_t i = 0; i < d.x; ++i) cur[idx(i, j, k)] = v.get(i, j, k);
-  std::vector<std::uint16_t> layer(cur.size(), 0);
+  VolumeVector<std::uint16_t> layer(cur.size(), 0);
   for (std::uint16_t l = 1;; ++l) {
     std::vector<char> next = cur;
     bool any = false;

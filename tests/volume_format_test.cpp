@@ -392,7 +392,7 @@ TEST(VolumeFormatRle, QuantizedFloatsRecoverWithinHalfAStepAndZeroStaysZero) {
   const nlohmann::json meta = nlohmann::json::parse(read_rle_metadata(sink.data)).at("quantization");
   EXPECT_EQ(meta.at("offset"), 0.0);
   EXPECT_DOUBLE_EQ(meta.at("scale").get<double>(), 1.0 / 254);
-  EXPECT_EQ(read_rle_u8(sink.data).values(), (std::vector<std::uint8_t>{0, 25, 76, 152, 229, 254}));
+  EXPECT_EQ(read_rle_u8(sink.data).values(), (VolumeVector<std::uint8_t>{0, 25, 76, 152, 229, 254}));
   // Quantizing is for floats in rle: anything else is refused with the reason.
   EncodeOptions quantized;
   quantized.quantize = Quantize::u16;
@@ -416,7 +416,7 @@ TEST(VolumeFormatRle, ReaderAcceptsNonCanonicalRuns) {
   EXPECT_TRUE(v.get(2, 0, 0));
   const std::string u8_header = R"({"dims":[3,1,1],"origin":[0,0,0],"voxel_size":1,"axis_order":"xyz","value_type":"u8"})";
   const auto u8 = read_rle_u8(concat({rle_preamble(u8_header), hex("53 00 08 01 05 00 09 01 05 01 06 45 01")}));
-  EXPECT_EQ(u8.values(), (std::vector<std::uint8_t>{5, 5, 6}));
+  EXPECT_EQ(u8.values(), (VolumeVector<std::uint8_t>{5, 5, 6}));
   // A zero-length run after the slab is covered is still a run of the payload.
   const std::string header = R"({"dims":[3,2,1],"origin":[0,0,0],"voxel_size":1,"axis_order":"xyz","value_type":"bit"})";
   EXPECT_EQ(read_rle_bits(concat({rle_preamble(header), hex("53 00 04 01 03 02 00 45 01")})).count(), 3u);
@@ -810,7 +810,8 @@ TEST(VolumeFormatIndependent, PythonRleReaderDecodesTheSameVoxels) {
   const ToolRun run = run_tool("read_rle.py", rle_u8(u8));
   ASSERT_EQ(run.status, 0) << run.stdout_text;
   EXPECT_EQ(nlohmann::json::parse(run.stdout_text)["value_type"], "u8");
-  EXPECT_TRUE(run.voxels == u8.values()) << "decoded u8 voxels differ";
+  EXPECT_TRUE(std::equal(run.voxels.begin(), run.voxels.end(), u8.values().begin(), u8.values().end()))
+      << "decoded u8 voxels differ";
 }
 
 // The payload examples of section 8.3 of the spec, for the value types the

@@ -1,7 +1,5 @@
 #include "voxd/bit_volume.h"
 
-#include <sys/mman.h>
-
 #include <atomic>
 #include <algorithm>
 #include <bit>
@@ -10,39 +8,23 @@
 
 #include "voxd/error.h"
 #include "voxd/parallel.h"
+#include "voxd/volume_memory.h"
 
 namespace voxd {
-namespace {
-constexpr std::size_t kHeapMaxBytes = std::size_t{1} << 20;
-}  // namespace
 
 BitVolume::BitVolume(const Grid& grid) : grid_(grid), row_words_((grid.dims.x + 63) / 64) {
   if (grid.dims.x <= 0 || grid.dims.y <= 0 || grid.dims.z <= 0)
     throw Error(ErrorCode::invalid_argument, "grid dims must be positive");
   const std::size_t bytes = word_count() * sizeof(std::uint64_t);
-  if (bytes < kHeapMaxBytes) {
-    // Small volumes (the service's quick jobs) come from the heap: an mmap and
-    // munmap per job costs system calls and cross-core TLB flushes.
-    void* h = std::calloc(std::max<std::size_t>(bytes, 1), 1);
-    if (!h) throw Error(ErrorCode::limit_exceeded, "cannot allocate the voxel volume");
-    words_ = std::unique_ptr<std::uint64_t[], Unmap>(static_cast<std::uint64_t*>(h), Unmap{bytes});
-    return;
+  try {
+    words_ = std::unique_ptr<std::uint64_t[], Unmap>(static_cast<std::uint64_t*>(allocate_volume_memory(bytes, true)),
+                                                     Unmap{bytes});
+  } catch (const std::bad_alloc&) {
+    throw Error(ErrorCode::limit_exceeded, "cannot allocate " + std::to_string(bytes >> 20) + " MiB for the voxel volume");
   }
-  void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
-  if (p == MAP_FAILED)
-    throw Error(ErrorCode::limit_exceeded,
-                "cannot allocate " + std::to_string(bytes >> 20) + " MiB for the voxel volume");
-  // Fewer page faults on the first write of a large volume (no-op where
-  // transparent huge pages are disabled).
-  if (bytes >= (std::size_t{8} << 20)) ::madvise(p, bytes, MADV_HUGEPAGE);
-  words_ = std::unique_ptr<std::uint64_t[], Unmap>(static_cast<std::uint64_t*>(p), Unmap{bytes});
 }
 
-void BitVolume::Unmap::operator()(std::uint64_t* p) const {
-  if (!p) return;
-  if (bytes < kHeapMaxBytes) std::free(p);
-  else ::munmap(p, bytes);
-}
+void BitVolume::Unmap::operator()(std::uint64_t* p) const { free_volume_memory(p, bytes); }
 
 // Slabs per parallel chunk: at least 2 MiB of words, so small volumes stay on
 // the calling thread instead of paying for threads.

@@ -1,10 +1,12 @@
 #pragma once
 // Dense volume of one value per voxel (grey levels, distances, palette
-// indices, colours), x fastest, then y, then z, no row padding.
+// indices, colours), x fastest, then y, then z, no row padding. Large
+// volumes live on huge pages (voxd/volume_memory.h).
 #include <cstdint>
 #include <vector>
 
 #include "voxd/grid.h"
+#include "voxd/volume_memory.h"
 
 namespace voxd {
 
@@ -29,12 +31,12 @@ class DenseVolume {
   std::size_t slab_size() const { return static_cast<std::size_t>(grid_.dims.x * grid_.dims.y); }
   const T* slab(std::int64_t k) const { return values_.data() + static_cast<std::size_t>(k) * slab_size(); }
   T* slab(std::int64_t k) { return values_.data() + static_cast<std::size_t>(k) * slab_size(); }
-  std::vector<T>& values() { return values_; }
-  const std::vector<T>& values() const { return values_; }
+  VolumeVector<T>& values() { return values_; }
+  const VolumeVector<T>& values() const { return values_; }
 
  private:
   Grid grid_;
-  std::vector<T> values_;
+  VolumeVector<T> values_;
 };
 
 }  // namespace voxd

@@ -84,7 +84,7 @@ class CentreQueue {
  public:
   CentreQueue(const DenseVolume<std::uint32_t>& edt, int threads, std::uint64_t first_range)
       : edt_(edt), threads_(threads) {
-    const std::vector<std::uint32_t>& d2 = edt.values();
+    const auto& d2 = edt.values();
     std::uint32_t max_d2 = 0;
     for (std::uint32_t v : d2) max_d2 = std::max(max_d2, v);
     histogram_.assign(static_cast<std::size_t>(max_d2) + 1, 0);
@@ -133,7 +133,7 @@ class CentreQueue {
     if (count == 0) return refill();
     // Gather per chunk (chunk order = memory order), then a stable counting
     // sort by level, descending.
-    const std::vector<std::uint32_t>& d2 = edt_.values();
+    const auto& d2 = edt_.values();
     const std::size_t n = d2.size();
     const std::size_t chunk = std::max<std::size_t>(1 << 16, n / (static_cast<std::size_t>(threads_) * 4) + 1);
     std::vector<std::vector<Centre>> parts((n + chunk - 1) / chunk);

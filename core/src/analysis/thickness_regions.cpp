@@ -13,7 +13,7 @@ namespace voxd {
 std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
                                                     float threshold_voxels, std::uint64_t min_voxels) {
   const auto d = thickness.grid().dims;
-  const std::vector<float>& t = thickness.values();
+  const auto& t = thickness.values();
   auto selected = [&](std::size_t idx) {
     const float v = t[idx];
     return kind == ThicknessRegionKind::thin ? (v > 0.0f && v < threshold_voxels) : (v > 0.0f && v > threshold_voxels);

@@ -1,0 +1,53 @@
+// Memory for volumes (voxd/volume_memory.h): heap blocks for small volumes,
+// OS pages for large ones; zeroed when asked, writable to the last byte, and
+// dense volumes built on it behave as vectors do.
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "voxd/bit_volume.h"
+#include "voxd/dense_volume.h"
+#include "voxd/volume_memory.h"
+
+namespace voxd {
+namespace {
+
+TEST(VolumeMemory, SmallAndLargeBlocksAreZeroedWhenAskedAndWritableToTheEnd) {
+  // Below the heap limit, at it, and a multi-page block past the huge-page size.
+  for (const std::size_t bytes : {std::size_t{1}, std::size_t{4096}, std::size_t{1} << 20, (std::size_t{9} << 20) + 3}) {
+    auto* p = static_cast<std::uint8_t*>(allocate_volume_memory(bytes, true));
+    ASSERT_NE(p, nullptr);
+    EXPECT_TRUE(std::all_of(p, p + bytes, [](std::uint8_t b) { return b == 0; })) << bytes;
+    std::memset(p, 0xab, bytes);
+    EXPECT_EQ(p[bytes - 1], 0xab);
+    free_volume_memory(p, bytes);
+  }
+  free_volume_memory(nullptr, 1 << 20);  // a no-op, as free(nullptr)
+}
+
+TEST(VolumeMemory, DenseVolumesFillCopyAndCompareAsVectors) {
+  // 24 MiB of floats: on OS pages.
+  const Grid g{glm::dvec3(0.0), 1.0, glm::i64vec3(256, 256, 96)};
+  DenseVolume<float> a(g, 1.5f);
+  ASSERT_EQ(a.values().size(), g.voxel_count());
+  EXPECT_TRUE(std::all_of(a.values().begin(), a.values().end(), [](float v) { return v == 1.5f; }));
+  DenseVolume<float> b = a;  // a copy owns its own pages
+  b.at(255, 255, 95) = -2.0f;
+  EXPECT_EQ(a.at(255, 255, 95), 1.5f);
+  EXPECT_FALSE(a.values() == b.values());
+  b.at(255, 255, 95) = 1.5f;
+  EXPECT_TRUE(a.values() == b.values());
+  DenseVolume<float> moved = std::move(b);
+  EXPECT_EQ(moved.at(0, 0, 0), 1.5f);
+  // Small volumes (the heap) too.
+  DenseVolume<std::uint8_t> small(Grid{glm::dvec3(0.0), 1.0, glm::i64vec3(3, 2, 1)}, 7);
+  EXPECT_EQ(small.values(), (VolumeVector<std::uint8_t>{7, 7, 7, 7, 7, 7}));
+  // A bit volume larger than the heap limit starts empty.
+  const BitVolume bits(Grid{glm::dvec3(0.0), 1.0, glm::i64vec3(1024, 1024, 16)});
+  EXPECT_EQ(bits.count(), 0u);
+}
+
+}  // namespace
+}  // namespace voxd
