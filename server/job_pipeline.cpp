@@ -136,11 +136,9 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
       o.threads = threads;
       DenseVolume<float> coverage = voxelize_coverage(job.mesh, job.grid, o, control);
       result.timings.add("coverage", clock.lap());
-      double total = 0.0;
-      for (float v : coverage.values()) total += v;
       result.values_info = {{"quantity", "coverage"},
                             {"sampling", to_string(o.sampling)},
-                            {"covered_volume", total * job.grid.voxel_volume()}};
+                            {"covered_volume", covered_voxels(coverage, threads) * job.grid.voxel_volume()}};
       if (c.threshold) {
         result.volume = coverage_threshold(coverage, *c.threshold);
         result.values_info["threshold"] = *c.threshold;
@@ -148,7 +146,7 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
         result.values = std::move(coverage);
         result.values_info["unit"] = "fraction of the voxel";
       } else {
-        result.values = coverage_bytes(coverage);
+        result.values = coverage_bytes(coverage, threads);
         result.values_info["unit"] = "fraction of the voxel x 255";
       }
     } else {

@@ -1,8 +1,10 @@
 // Coverage (anti-aliased) voxelization against analytic fractions: faces at
 // sub-voxel offsets, boxes, a sphere's volume, and each sampling mode.
-#include <gtest/gtest.h>
-
+#include <algorithm>
 #include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
 
 #include "support/test_meshes.h"
 #include "voxd/coverage.h"
@@ -173,6 +175,35 @@ TEST(Coverage, BadOptionsAndCancellation) {
   JobControl done;
   voxelize_coverage(m, unit_grid(4, 4, 4), {}, &done);
   EXPECT_DOUBLE_EQ(done.progress(), 1.0);
+}
+
+TEST(Coverage, BytesAreLroundOfTheFloatProductAndTheTotalIgnoresThreads) {
+  // Every float the rounding could split: the halfway points k + 1/2 of the
+  // product and their float neighbours, plus values outside [0, 1].
+  const Grid g = test::make_grid({257, 3, 7});
+  DenseVolume<float> c(g, 0.0f);
+  std::size_t at = 0;
+  for (int k = 0; k < 255 && at + 3 < c.values().size(); ++k) {
+    const float half = (static_cast<float>(k) + 0.5f) / 255.0f;
+    c.values()[at++] = half;
+    c.values()[at++] = std::nextafter(half, 0.0f);
+    c.values()[at++] = std::nextafter(half, 1.0f);
+  }
+  c.values()[at++] = -0.25f;
+  c.values()[at++] = 1.75f;
+  std::mt19937 rng(5);
+  for (; at < c.values().size(); ++at) c.values()[at] = std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
+  for (int threads : {1, 2, 5}) {
+    const DenseVolume<std::uint8_t> bytes = coverage_bytes(c, threads);
+    for (std::size_t i = 0; i < c.values().size(); ++i)
+      ASSERT_EQ(bytes.values()[i], std::lround(std::clamp(c.values()[i], 0.0f, 1.0f) * 255.0f)) << c.values()[i];
+  }
+  double plain = 0.0;
+  for (float v : c.values()) plain += v;
+  const double total = covered_voxels(c, 1);
+  EXPECT_NEAR(total, plain, 1e-9 * plain);
+  EXPECT_EQ(covered_voxels(c, 2), total);
+  EXPECT_EQ(covered_voxels(c, 7), total);
 }
 
 }  // namespace

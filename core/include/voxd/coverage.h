@@ -47,8 +47,13 @@ struct CoverageOptions {
 DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
                                      JobControl* control = nullptr);
 
-// Thon's byte: round(255 * coverage).
-DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage);
+// Thon's byte: round(255 * coverage). `threads` 0 = all cores.
+DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int threads = 0);
+
+// The sum of the coverages, in voxels (times the voxel volume: the volume
+// the grey levels measure). Summed per slab in double, the slabs added in
+// order, so the total does not depend on `threads` (0 = all cores).
+double covered_voxels(const DenseVolume<float>& coverage, int threads = 0);
 
 // The binary volume of the voxels with coverage >= threshold (Thon: keeps
 // features thinner than a voxel that centre sampling loses, with a threshold

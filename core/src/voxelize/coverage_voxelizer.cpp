@@ -247,13 +247,37 @@ DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const C
   return v.run(control);
 }
 
-DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage) {
+DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int threads) {
   DenseVolume<std::uint8_t> out(coverage.grid(), 0);
-  const auto& in = coverage.values();
-  auto& dst = out.values();
-  for (std::size_t i = 0; i < in.size(); ++i)
-    dst[i] = static_cast<std::uint8_t>(std::lround(std::clamp(in[i], 0.0f, 1.0f) * 255.0f));
+  const std::size_t slab = coverage.slab_size();
+  parallel_for(0, coverage.grid().dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    const float* in = coverage.slab(k0);
+    std::uint8_t* dst = out.slab(k0);
+    for (std::size_t i = 0, n = slab * static_cast<std::size_t>(k1 - k0); i < n; ++i) {
+      // lround of the float product, without the library call: y is in
+      // [0, 255] and y + 0.5 is exact in double, so the floor is lround(y).
+      const float y = std::clamp(in[i], 0.0f, 1.0f) * 255.0f;
+      dst[i] = static_cast<std::uint8_t>(static_cast<double>(y) + 0.5);
+    }
+  });
   return out;
+}
+
+double covered_voxels(const DenseVolume<float>& coverage, int threads) {
+  // A sum per slab, added in slab order: the same total on any thread count.
+  std::vector<double> slab_sums(static_cast<std::size_t>(coverage.grid().dims.z), 0.0);
+  const std::size_t slab = coverage.slab_size();
+  parallel_for(0, coverage.grid().dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k) {
+      const float* v = coverage.slab(k);
+      double sum = 0.0;
+      for (std::size_t i = 0; i < slab; ++i) sum += v[i];
+      slab_sums[static_cast<std::size_t>(k)] = sum;
+    }
+  });
+  double total = 0.0;
+  for (double s : slab_sums) total += s;
+  return total;
 }
 
 BitVolume coverage_threshold(const DenseVolume<float>& coverage, float threshold) {
