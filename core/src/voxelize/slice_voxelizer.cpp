@@ -7,7 +7,6 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
-#include <future>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -279,19 +278,6 @@ DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const Slic
   const SliceFrame frame = make_slice_frame(mesh, options.axis);
   const SliceShader shader(options, frame);
 
-  // The result (4 bytes a voxel: 512 MiB at 512^3) is allocated and
-  // zero-filled in one serial pass over all its memory (a page fault every
-  // 4 KiB), over a second at 512^3 here. Where the colours are expensive (the
-  // noise functions) that runs on a thread of its own while the solid is made
-  // and the colours computed into compact lists per slab, then scattered
-  // into it; the cheap functions colour straight into the result, which
-  // measured faster for them than the extra pass. Same values either way.
-  // Waits for the allocation however this ends.
-  const bool overlap = options.function == SliceFunction::wood || options.function == SliceFunction::marble ||
-                       options.function == SliceFunction::rock;
-  std::future<DenseVolume<Rgba8>> pending;
-  if (overlap) pending = std::async(std::launch::async, [&grid] { return DenseVolume<Rgba8>(grid); });
-
   const SpanRestore restore{control, control ? control->span_begin() : 0.0, control ? control->span_end() : 1.0};
   const double middle = restore.begin + 0.5 * (restore.end - restore.begin);
   if (control) control->set_span(restore.begin, middle);
@@ -299,7 +285,7 @@ DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const Slic
   if (control) control->set_span(middle, restore.end);
 
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
-  if (grid.voxel_count() == 0) return overlap ? pending.get() : DenseVolume<Rgba8>(grid);
+  if (grid.voxel_count() == 0) return DenseVolume<Rgba8>(grid);
   // Along a row the centre moves by voxel_size along x: the frame
   // coordinates by voxel_size * (u.x, v.x, w.x).
   const glm::dvec3 step = grid.voxel_size * glm::dvec3(frame.u.x, frame.v.x, frame.w.x);
@@ -316,42 +302,14 @@ DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const Slic
   };
 
   std::atomic<std::int64_t> slabs_done{0};
-  const auto report = [&](double share) {
-    const std::int64_t done = slabs_done.fetch_add(1, std::memory_order_relaxed) + 1;
-    if (control) control->set_progress(share * static_cast<double>(done) / static_cast<double>(nz));
-  };
-
-  if (!overlap) {
-    DenseVolume<Rgba8> out(grid);
-    parallel_for(0, nz, grain, threads, [&](std::int64_t k0, std::int64_t k1) {
-      for (std::int64_t k = k0; k < k1; ++k) {
-        if (control) control->check_cancelled();
-        Rgba8* slab = out.slab(k);
-        std::int64_t row_j = -1;
-        glm::dvec3 start(0.0);
-        for_each_filled(k, [&](std::int64_t j, std::int64_t i) {
-          if (j != row_j) {
-            row_j = j;
-            start = frame.coordinates(grid.center(0, j, k));
-          }
-          const double x = static_cast<double>(i);
-          slab[j * nx + i] = shader.shade({start.x + x * step.x, start.y + x * step.y, start.z + x * step.z});
-        });
-        report(1.0);
-      }
-    });
-    return out;
-  }
-
-  std::vector<std::vector<Rgba8>> colours(static_cast<std::size_t>(nz));
+  // The colours go straight into the result: on huge pages
+  // (voxd/volume_memory.h) its allocation no longer costs a second of page
+  // faults that would be worth overlapping with the colouring.
+  DenseVolume<Rgba8> out(grid);
   parallel_for(0, nz, grain, threads, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k) {
       if (control) control->check_cancelled();
-      std::vector<Rgba8>& list = colours[static_cast<std::size_t>(k)];
-      std::size_t filled = 0;
-      const std::uint64_t* words = solid.slab(k);
-      for (std::size_t w = 0; w < solid.slab_words(); ++w) filled += static_cast<std::size_t>(std::popcount(words[w]));
-      list.reserve(filled);
+      Rgba8* slab = out.slab(k);
       std::int64_t row_j = -1;
       glm::dvec3 start(0.0);
       for_each_filled(k, [&](std::int64_t j, std::int64_t i) {
@@ -360,23 +318,12 @@ DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const Slic
           start = frame.coordinates(grid.center(0, j, k));
         }
         const double x = static_cast<double>(i);
-        list.push_back(shader.shade({start.x + x * step.x, start.y + x * step.y, start.z + x * step.z}));
+        slab[j * nx + i] = shader.shade({start.x + x * step.x, start.y + x * step.y, start.z + x * step.z});
       });
-      report(0.95);
+      const std::int64_t done = slabs_done.fetch_add(1, std::memory_order_relaxed) + 1;
+      if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(nz));
     }
   });
-
-  DenseVolume<Rgba8> out = pending.get();
-  parallel_for(0, nz, grain, threads, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k) {
-      std::vector<Rgba8>& list = colours[static_cast<std::size_t>(k)];
-      Rgba8* slab = out.slab(k);
-      std::size_t n = 0;
-      for_each_filled(k, [&](std::int64_t j, std::int64_t i) { slab[j * nx + i] = list[n++]; });
-      std::vector<Rgba8>().swap(list);
-    }
-  });
-  if (control) control->set_progress(1.0);
   return out;
 }
 
