@@ -40,7 +40,7 @@ using test::kViews;
 using test::view_of;
 using test::ViewCase;
 
-// The camera table, written out independently of the implementation.
+// The camera table (test::kViews) is written out apart from the implementation.
 glm::dvec3 unit(int axis, int sign) {
   glm::dvec3 u(0.0);
   u[axis] = sign;
