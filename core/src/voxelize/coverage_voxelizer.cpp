@@ -10,40 +10,17 @@
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 #include "voxelize/fixed_point_mesh.h"
+#include "voxelize/row_rays.h"
+#include "voxelize/splitmix.h"
 #include "voxelize/triangle_bins.h"
 
 namespace voxd {
 namespace {
 
-using detail::FixedPoint;
 using detail::kFixedOne;
-using i128 = __int128;
-
-// A ray of one column crossing the surface: x in voxel units (voxel i spans
-// [i, i + 1) along the ray axis).
-struct Crossing {
-  std::int32_t column;  // j, along y
-  std::int32_t ray;     // a * k + b
-  double x;
-};
-
-// splitmix64: the stochastic ray positions are a pure function of (seed,
-// column, ray), so runs repeat and threads need no shared generator.
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ull;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-double unit(std::uint64_t h) { return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0); }
-
-// Sign of an edge function after displacing the point by (eps, eps^2) in
-// (u, v): never zero for a non-degenerate edge (simulation of simplicity).
-int displaced_sign(i128 e, std::int64_t du, std::int64_t dv) {
-  if (e != 0) return e > 0 ? 1 : -1;
-  if (dv != 0) return dv > 0 ? -1 : 1;
-  return du > 0 ? 1 : -1;
-}
+using detail::RayCrossing;
+using detail::splitmix_hash;
+using detail::unit_interval;
 
 class CoverageVoxelizer {
  public:
@@ -68,17 +45,18 @@ class CoverageVoxelizer {
     std::atomic<std::int64_t> rows_done{0};
     parallel_for(0, nz, per_chunk, threads, [&](std::int64_t k0, std::int64_t k1) {
       const std::int64_t chunk = k0 / per_chunk;
-      std::vector<Crossing> crossings;
+      std::vector<RayCrossing> crossings;
       std::vector<std::pair<double, float>> events;
       for (std::int64_t k = k0; k < k1; ++k) {
         if (control) control->check_cancelled();
+        const auto position = [&](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
+          ray_position(j, k, r / k_, r % k_, pu, pv);
+        };
         crossings.clear();
         for (std::uint32_t t = bins.offsets[static_cast<std::size_t>(chunk)];
              t < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++t)
-          cross_triangle(bins.triangles[t], k, crossings);
-        std::sort(crossings.begin(), crossings.end(), [](const Crossing& a, const Crossing& b) {
-          return a.column != b.column ? a.column < b.column : a.ray != b.ray ? a.ray < b.ray : a.x < b.x;
-        });
+          detail::cross_row_rays(fixed_, bins.triangles[t], k, grid_.dims.y, k_ * k_, position, crossings);
+        detail::sort_crossings(crossings);
         for (std::size_t c = 0; c < crossings.size();) {
           std::size_t e = c;
           while (e < crossings.size() && crossings[e].column == crossings[c].column) ++e;
@@ -101,66 +79,26 @@ class CoverageVoxelizer {
       pv = k * kFixedOne + regular_[static_cast<std::size_t>(b)];
       return;
     }
-    const std::uint64_t h = mix(options_.seed ^ mix(static_cast<std::uint64_t>(j) * 0x100000001b3ull ^
-                                                    mix(static_cast<std::uint64_t>(k) << 20 ^
-                                                        static_cast<std::uint64_t>(a * k_ + b))));
+    const std::uint64_t ray = static_cast<std::uint64_t>(k) << 20 ^ static_cast<std::uint64_t>(a * k_ + b);
+    const std::uint64_t h = splitmix_hash(
+        options_.seed ^ splitmix_hash(static_cast<std::uint64_t>(j) * 0x100000001b3ull ^ splitmix_hash(ray)));
     const double one = static_cast<double>(kFixedOne);
-    pu = j * kFixedOne + static_cast<std::int64_t>(std::floor(((a + unit(h)) / k_ - 0.5) * one));
-    pv = k * kFixedOne + static_cast<std::int64_t>(std::floor(((b + unit(mix(h))) / k_ - 0.5) * one));
-  }
-
-  void cross_triangle(std::uint32_t t, std::int64_t k, std::vector<Crossing>& out) const {
-    const auto& tri = fixed_.triangles()[t];
-    const FixedPoint A = fixed_.vertex(tri[0]), B = fixed_.vertex(tri[1]), C = fixed_.vertex(tri[2]);
-    const std::int64_t au = A[1], av = A[2], bu = B[1], bv = B[2], cu = C[1], cv = C[2];
-    const i128 det = static_cast<i128>(bu - au) * (cv - av) - static_cast<i128>(bv - av) * (cu - au);
-    if (det == 0) return;  // edge-on to the rays
-    const int sigma = det > 0 ? 1 : -1;
-    const std::int64_t minu = std::min({au, bu, cu}), maxu = std::max({au, bu, cu});
-    const std::int64_t minv = std::min({av, bv, cv}), maxv = std::max({av, bv, cv});
-    const std::int64_t half = kFixedOne / 2;
-    // Row k's rays lie in [k - 1/2, k + 1/2) voxel along v.
-    if (maxv < k * kFixedOne - half || minv >= k * kFixedOne + half) return;
-    const std::int64_t j0 = std::max<std::int64_t>(0, detail::floor_fixed(minu + half));
-    const std::int64_t j1 = std::min<std::int64_t>(grid_.dims.y - 1, detail::floor_fixed(maxu + half));
-    if (j0 > j1) return;
-    // The plane: x(u, v) = ax + gu (u - au) + gv (v - av), as in the parity
-    // scan converter (voxelize/column_scan.h).
-    const double e1x = static_cast<double>(B[0] - A[0]), e1u = static_cast<double>(bu - au), e1v = static_cast<double>(bv - av);
-    const double e2x = static_cast<double>(C[0] - A[0]), e2u = static_cast<double>(cu - au), e2v = static_cast<double>(cv - av);
-    const double nx = static_cast<double>(det);
-    const double gu = -(e1v * e2x - e1x * e2v) / nx, gv = -(e1x * e2u - e1u * e2x) / nx;
-    const std::int64_t P[3][2] = {{au, av}, {bu, bv}, {cu, cv}};
-    for (std::int64_t j = j0; j <= j1; ++j)
-      for (int a = 0; a < k_; ++a)
-        for (int b = 0; b < k_; ++b) {
-          std::int64_t pu, pv;
-          ray_position(j, k, a, b, pu, pv);
-          if (pu < minu || pu > maxu || pv < minv || pv > maxv) continue;
-          bool inside = true;
-          for (int e = 0; e < 3 && inside; ++e) {
-            const std::int64_t du = P[(e + 1) % 3][0] - P[e][0], dv = P[(e + 1) % 3][1] - P[e][1];
-            const i128 f = static_cast<i128>(du) * (pv - P[e][1]) - static_cast<i128>(dv) * (pu - P[e][0]);
-            inside = sigma * displaced_sign(f, du, dv) > 0;
-          }
-          if (!inside) continue;
-          const double x = static_cast<double>(A[0]) + gu * static_cast<double>(pu - au) + gv * static_cast<double>(pv - av);
-          out.push_back({static_cast<std::int32_t>(j), a * k_ + b, x / static_cast<double>(kFixedOne) + 0.5});
-        }
+    pu = j * kFixedOne + static_cast<std::int64_t>(std::floor(((a + unit_interval(h)) / k_ - 0.5) * one));
+    pv = k * kFixedOne + static_cast<std::int64_t>(std::floor(((b + unit_interval(splitmix_hash(h))) / k_ - 0.5) * one));
   }
 
   // One column: pair each ray's sorted crossings into inside runs, then
   // integrate (exact) or sample (uniform) them into the column's voxels.
-  void fill_column(const Crossing* begin, const Crossing* end, float* row,
+  void fill_column(const RayCrossing* begin, const RayCrossing* end, float* row,
                    std::vector<std::pair<double, float>>& events) const {
     const double nx = static_cast<double>(grid_.dims.x);
     const float w = 1.0f / static_cast<float>(k_ * k_);
     events.clear();
-    for (const Crossing* r = begin; r != end;) {
-      const Crossing* e = r;
+    for (const RayCrossing* r = begin; r != end;) {
+      const RayCrossing* e = r;
       while (e != end && e->ray == r->ray) ++e;
       // An odd count (open mesh) leaves the last crossing unpaired.
-      for (const Crossing* c = r; c + 1 < e; c += 2) {
+      for (const RayCrossing* c = r; c + 1 < e; c += 2) {
         const double x0 = std::clamp(c->x, 0.0, nx), x1 = std::clamp((c + 1)->x, 0.0, nx);
         if (x1 > x0) {
           events.emplace_back(x0, w);

@@ -5,16 +5,10 @@
 #include <cmath>
 #include <utility>
 
+#include "voxelize/splitmix.h"
+
 namespace voxd::detail {
 namespace {
-
-std::uint64_t splitmix64(std::uint64_t& state) {
-  state += 0x9e3779b97f4a7c15ull;
-  std::uint64_t z = state;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
 
 inline double fade(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
 inline double lerp(double t, double a, double b) { return a + t * (b - a); }

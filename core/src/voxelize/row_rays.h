@@ -1,0 +1,87 @@
+#pragma once
+// Rays along x at arbitrary places inside the voxel columns of one row: the
+// exact crossings of one triangle with them. Shared by the coverage
+// voxelizer (k x k rays per column) and the palette voxelizer (t random rays
+// per column).
+//
+// Exactness: ray positions are fixed-point (voxelize/fixed_point_mesh.h)
+// and tested against the triangle with integer edge functions, ties broken
+// by simulation of simplicity as in the parity scan converter, so a ray
+// through a shared edge or vertex of a closed mesh crosses it exactly once.
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "voxelize/fixed_point_mesh.h"
+
+namespace voxd::detail {
+
+// A ray of one column crossing the surface: x in voxel units (voxel i spans
+// [i, i + 1) along the ray axis).
+struct RayCrossing {
+  std::int32_t column;  // j, along y
+  std::int32_t ray;     // the ray's index within its column
+  double x;
+};
+
+// Sign of an edge function after displacing the point by (eps, eps^2) in
+// (u, v): never zero for a non-degenerate edge (simulation of simplicity).
+inline int displaced_sign(__int128 e, std::int64_t du, std::int64_t dv) {
+  if (e != 0) return e > 0 ? 1 : -1;
+  if (dv != 0) return dv > 0 ? -1 : 1;
+  return du > 0 ? 1 : -1;
+}
+
+// Sorts a row's crossings by column, then ray, then x.
+inline void sort_crossings(std::vector<RayCrossing>& crossings) {
+  std::sort(crossings.begin(), crossings.end(), [](const RayCrossing& a, const RayCrossing& b) {
+    return a.column != b.column ? a.column < b.column : a.ray != b.ray ? a.ray < b.ray : a.x < b.x;
+  });
+}
+
+// Appends the crossings of triangle `t` with the rays of row k (columns
+// 0..ny-1, `rays` rays each). position(j, r, pu, pv) gives ray r of column
+// j in fixed point (u = y, v = z); every ray must lie within half a voxel
+// of its column's centre line, i.e. in [j - 1/2, j + 1/2) x [k - 1/2, k + 1/2).
+template <typename RayPosition>
+void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std::int64_t ny, int rays,
+                    const RayPosition& position, std::vector<RayCrossing>& out) {
+  using i128 = __int128;
+  const auto& tri = fixed.triangles()[t];
+  const FixedPoint A = fixed.vertex(tri[0]), B = fixed.vertex(tri[1]), C = fixed.vertex(tri[2]);
+  const std::int64_t au = A[1], av = A[2], bu = B[1], bv = B[2], cu = C[1], cv = C[2];
+  const i128 det = static_cast<i128>(bu - au) * (cv - av) - static_cast<i128>(bv - av) * (cu - au);
+  if (det == 0) return;  // edge-on to the rays
+  const int sigma = det > 0 ? 1 : -1;
+  const std::int64_t minu = std::min({au, bu, cu}), maxu = std::max({au, bu, cu});
+  const std::int64_t minv = std::min({av, bv, cv}), maxv = std::max({av, bv, cv});
+  const std::int64_t half = kFixedOne / 2;
+  if (maxv < k * kFixedOne - half || minv >= k * kFixedOne + half) return;
+  const std::int64_t j0 = std::max<std::int64_t>(0, floor_fixed(minu + half));
+  const std::int64_t j1 = std::min<std::int64_t>(ny - 1, floor_fixed(maxu + half));
+  if (j0 > j1) return;
+  // The plane: x(u, v) = ax + gu (u - au) + gv (v - av), as in the parity
+  // scan converter (voxelize/column_scan.h).
+  const double e1x = static_cast<double>(B[0] - A[0]), e1u = static_cast<double>(bu - au), e1v = static_cast<double>(bv - av);
+  const double e2x = static_cast<double>(C[0] - A[0]), e2u = static_cast<double>(cu - au), e2v = static_cast<double>(cv - av);
+  const double nx = static_cast<double>(det);
+  const double gu = -(e1v * e2x - e1x * e2v) / nx, gv = -(e1x * e2u - e1u * e2x) / nx;
+  const std::int64_t P[3][2] = {{au, av}, {bu, bv}, {cu, cv}};
+  for (std::int64_t j = j0; j <= j1; ++j)
+    for (int r = 0; r < rays; ++r) {
+      std::int64_t pu, pv;
+      position(j, r, pu, pv);
+      if (pu < minu || pu > maxu || pv < minv || pv > maxv) continue;
+      bool inside = true;
+      for (int e = 0; e < 3 && inside; ++e) {
+        const std::int64_t du = P[(e + 1) % 3][0] - P[e][0], dv = P[(e + 1) % 3][1] - P[e][1];
+        const i128 f = static_cast<i128>(du) * (pv - P[e][1]) - static_cast<i128>(dv) * (pu - P[e][0]);
+        inside = sigma * displaced_sign(f, du, dv) > 0;
+      }
+      if (!inside) continue;
+      const double x = static_cast<double>(A[0]) + gu * static_cast<double>(pu - au) + gv * static_cast<double>(pv - av);
+      out.push_back({static_cast<std::int32_t>(j), r, x / static_cast<double>(kFixedOne) + 0.5});
+    }
+}
+
+}  // namespace voxd::detail
