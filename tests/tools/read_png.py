@@ -3,7 +3,8 @@
 
 Usage: read_png.py FILE [--checksum]
 Prints JSON {width, height, bit_depth, color_type, text: {key: value},
-pixels: [samples...]} with samples row-major (RGB as r, g, b per pixel).
+pixels: [samples...]} with samples row-major (RGB as r, g, b per pixel,
+RGBA as r, g, b, a).
 --checksum replaces pixels with sample_count and sample_sum (large images).
 Checks the signature, every chunk CRC, IHDR fields and the IEND chunk, and
 exits 1 with a message on anything it does not understand.
@@ -14,7 +15,7 @@ import sys
 import zlib
 
 SIGNATURE = b"\x89PNG\r\n\x1a\n"
-CHANNELS = {0: 1, 2: 3}  # greyscale, RGB (the only types voxd writes)
+CHANNELS = {0: 1, 2: 3, 6: 4}  # greyscale, RGB, RGBA (the only types voxd writes)
 
 
 def fail(msg):

@@ -51,4 +51,9 @@ void write_png_grey8(int width, int height, std::span<const std::uint8_t> pixels
 // 8-bit RGB, e.g. a false-colour thickness map (voxd/colour_map.h).
 void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out);
 
+// 8-bit RGBA, 4 bytes per pixel (r, g, b, a), row-major, straight (not
+// premultiplied) alpha, e.g. one layer of a colour volume (voxd/png_stack.h).
+void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
+                     ByteSink& out);
+
 }  // namespace voxd

@@ -184,4 +184,14 @@ void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, Byt
          row_pointers(bytes, image.height, static_cast<std::size_t>(image.width) * 3), text, out);
 }
 
+void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
+                     ByteSink& out) {
+  if (pixels.size() % 4 != 0) {
+    throw Error(ErrorCode::invalid_argument, "RGBA image has " + std::to_string(pixels.size()) + " bytes, not a multiple of 4");
+  }
+  check_size(width, height, pixels.size() / 4, "RGBA image");
+  std::vector<std::uint8_t> bytes(pixels.begin(), pixels.end());
+  encode(width, height, 8, PNG_COLOR_TYPE_RGBA, row_pointers(bytes, height, static_cast<std::size_t>(width) * 4), text, out);
+}
+
 }  // namespace voxd
