@@ -11,7 +11,11 @@
 #include "api/analysis_request.h"
 #include "voxd/coverage.h"
 #include "voxd/grid.h"
+#include "voxd/palette.h"
+#include "voxd/palette_render.h"
 #include "voxd/sdf.h"
+#include "voxd/slice_functions.h"
+#include "voxd/volume_format.h"
 #include "voxd/voxelize.h"
 
 namespace voxd::api {
@@ -21,6 +25,14 @@ struct CoverageParams {
   CoverageOptions options;          // sampling, rays, points, seed (threads set by the runner)
   std::optional<float> threshold;   // set: the job's volume is the bits coverage >= threshold
   bool float_values = false;        // "values": "f32" (fractions 0..1) instead of "u8" (Thon's byte)
+};
+
+// "mode": "palette" (Cavagnino & Gribaudo) and its "palette" object.
+struct PaletteParams {
+  PaletteOptions options;              // palette, metric, rays, points, seed (threads set by the runner)
+  std::string palette_name = "46";     // "2", "10", "46", "78" or "custom"
+  glm::dvec3 voxel_aspect{1.0};        // the voxel's edges over the grid's voxel_size (anisotropic voxels)
+  RenderPalette render;                // display objects by element and similarity (may be empty)
 };
 
 struct JobParams {
@@ -33,14 +45,20 @@ struct JobParams {
   InsideTest inside = InsideTest::parity;  // also the sign of an sdf job
   std::optional<CoverageParams> coverage;  // set iff "mode": "coverage"
   std::optional<SdfOptions> sdf;           // set iff "mode": "sdf" (inside = the job's inside)
+  std::optional<PaletteParams> palette;    // set iff "mode": "palette"
+  std::optional<SliceOptions> slice;       // set iff "mode": "slice" (inside = the job's inside)
 
-  // The job's "mode" as written: solid, surface, solid+surface, coverage, sdf.
+  // The job's "mode" as written: solid, surface, solid+surface, coverage, sdf, palette, slice.
   std::string mode_name() const;
-  // Whether the job's result is a volume of values (u8 or f32) rather than bits.
-  bool has_values() const { return sdf || (coverage && !coverage->threshold); }
+  // Whether the job's result is a volume of values (u8, f32 or rgba8) rather than bits.
+  bool has_values() const { return sdf || palette || slice || (coverage && !coverage->threshold); }
   // Analyses the worker prepares once the volume exists (api/analysis_request.h).
   std::vector<AnalysisRequest> analyses;
 };
+
+// An empty volume of the value type a value job produces (u8, f32 or
+// rgba8), to ask format_refusal() before any work; nullopt for a job of bits.
+std::optional<ValueVolume> value_type_probe(const JobParams& params);
 
 // Validates and converts. Unknown keys, wrong types and out-of-range values
 // are all reported together in InvalidParams.

@@ -152,21 +152,33 @@ int analyze_command(int argc, char** argv) {
   // surface rendered from its distances.
   std::optional<SdfRenderInput> sdf;
   if (params.sdf) sdf = sdf_render_input(std::get<DenseVolume<float>>(*result.values), *params.sdf);
-  if (result.values) {
+  if (result.values && !params.palette) {
     for (int axis = 0; axis < 3; ++axis) {
       const std::string a(1, "xyz"[axis]);
       const std::int64_t middle = result.grid.dims[axis] / 2;
       if (sdf) {
         write_png("section-" + a + "-distance.png", sdf_section_png(*sdf, axis, middle, true));
+      } else if (params.slice) {
+        write_png("section-" + a + "-colour.png", colour_section_png(std::get<DenseVolume<Rgba8>>(*result.values), axis, middle));
       } else {
         write_png("section-" + a + "-coverage.png",
-                  std::visit([&](const auto& v) { return coverage_section_png(v, axis, middle); }, *result.values));
+                  std::visit(
+                      [&](const auto& v) {
+                        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, DenseVolume<Rgba8>>)
+                          return colour_section_png(v, axis, middle);
+                        else
+                          return coverage_section_png(v, axis, middle);
+                      },
+                      *result.values));
       }
     }
   }
   for (const char* name : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
     const View view = *parse_view(name);
     if (sdf) write_png(std::string("preview-sdf-from") + name + ".png", sdf_preview_png(*sdf, view, {}, threads));
+    if (params.slice)
+      write_png(std::string("preview-colour-from") + name + ".png",
+                colour_preview_png(result.volume, std::get<DenseVolume<Rgba8>>(*result.values), view, {}, threads));
     write_png(std::string("preview-from") + name + ".png", preview_png(result.volume, view, nullptr, {}, threads));
     if (map) write_png(std::string("preview-from") + name + "-thickness.png", preview_png(result.volume, view, &*map, {}, threads));
   }
@@ -203,7 +215,9 @@ int analyze_command(int argc, char** argv) {
     // Non-owning views of this run's volumes (they outlive the loop).
     const server::JobOutput output{
         std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
-        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr};
+        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr,
+        result.similarity ? std::shared_ptr<const DenseVolume<std::uint8_t>>(std::shared_ptr<void>(), &*result.similarity)
+                          : nullptr};
     std::filesystem::create_directories(*out_dir + "/analyses");
     for (std::size_t i = 0; i < params.analyses.size(); ++i) {
       const api::AnalysisRequest& request = params.analyses[i];

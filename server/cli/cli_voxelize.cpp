@@ -36,7 +36,9 @@ volume to OUT ("-" for standard output).
   --mode M               solid | surface | solid+surface | coverage | sdf
                          (their options in --params: "coverage": {...}, "sdf": {...})
   --inside T             parity | vote | winding (for sdf: the sign)
-  --format F             rle | binvox | raw | nrrd (default: from OUT's extension)
+  --format F             rle | binvox | raw | nrrd | vox | png-stack | stl | glb
+                         (default: from OUT's extension; vox and png-stack (.zip)
+                         for mode slice, stl and glb for mode palette)
   --raw-packing P        bytes (default) | bits, for --format raw
   --nrrd-encoding E      raw (default) | gzip, for --format nrrd
   --quantize Q           none (default) | u8 | u16: float values as rle levels
@@ -83,11 +85,12 @@ int voxelize_command(int argc, char** argv) {
   std::optional<VolumeFormat> format;
   if (auto f = args.value("format")) {
     format = volume_format_from_string(*f);
-    if (!format) throw UsageError("--format must be rle, binvox, raw or nrrd, got '" + *f + "'");
+    if (!format) throw UsageError("--format must be rle, binvox, raw, nrrd, vox, png-stack, stl or glb, got '" + *f + "'");
   } else {
     format = volume_format_from_path(*out_path);
     if (!format)
-      throw UsageError("cannot tell the output format from '" + *out_path + "'; use --format rle|binvox|raw|nrrd");
+      throw UsageError("cannot tell the output format from '" + *out_path +
+                       "'; use --format rle|binvox|raw|nrrd|vox|png-stack|stl|glb");
   }
   EncodeOptions encode_options;
   if (auto p = args.value("raw-packing")) {
@@ -106,10 +109,11 @@ int voxelize_command(int argc, char** argv) {
   if (encode_options.quantize != Quantize::none && !params.has_values())
     throw UsageError("--quantize applies to the float values of modes coverage (f32) and sdf, not to bits");
   // A format that cannot hold the values is refused before any work.
-  if (params.has_values()) {
-    const bool floats = params.sdf || params.coverage->float_values;
-    const ValueVolume empty = floats ? ValueVolume(DenseVolume<float>()) : ValueVolume(DenseVolume<std::uint8_t>());
-    if (auto refusal = format_refusal(empty, *format, encode_options)) throw UsageError("mode " + params.mode_name() + ": " + *refusal);
+  const bool palette_mesh = params.palette && (*format == VolumeFormat::stl || *format == VolumeFormat::glb);
+  if (const auto probe = api::value_type_probe(params); probe && !palette_mesh) {
+    if (auto refusal = format_refusal(*probe, *format, encode_options)) throw UsageError("mode " + params.mode_name() + ": " + *refusal);
+  } else if (!probe) {
+    if (auto refusal = format_refusal(BitVolume(), *format)) throw UsageError("mode " + params.mode_name() + ": " + *refusal);
   }
   const int threads = thread_count(args);
 
@@ -132,7 +136,9 @@ int voxelize_command(int argc, char** argv) {
                                                     result.values_info.value("unit", "") + ")"
                                               : "voxels (1 = filled)";
   auto encode = [&](ByteSink& sink) {
-    if (result.values)
+    if (palette_mesh)
+      write_palette_mesh(*params.palette, std::get<DenseVolume<std::uint8_t>>(*result.values), *format, sink);
+    else if (result.values)
       encode_volume(*result.values, *format, sink, encode_options);
     else
       encode_volume(result.volume, *format, sink, encode_options);

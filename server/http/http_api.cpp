@@ -13,6 +13,8 @@
 #include "api/result_json.h"
 #include "server/http/analysis_routes.h"
 #include "server/http/problem.h"
+#include "server/job_pipeline.h"
+#include "server/http/value_routes.h"
 #include "server/http/volume_stream.h"
 #include "server/jobs/job_record.h"
 
@@ -165,7 +167,8 @@ VolumeRequest read_volume_request(const Request& req) {
     const auto f = volume_format_from_string(req.get_param_value("format"));
     if (!f)
       throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter",
-                                      "format must be rle, binvox, raw or nrrd, got '" + req.get_param_value("format") + "'"));
+                                      "format must be rle, binvox, raw, nrrd, vox, png-stack, stl or glb, got '" +
+                                          req.get_param_value("format") + "'"));
     v.format = *f;
   }
   if (req.has_param("quantize")) {
@@ -212,10 +215,15 @@ void refuse_quantized_bits(const VolumeRequest& v) {
 
 // Refuses a format that cannot hold a value job's values before any work.
 void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {
-  if (!params.has_values()) return refuse_quantized_bits(v);
-  const bool floats = params.sdf || (params.coverage && params.coverage->float_values);
-  const ValueVolume empty = floats ? ValueVolume(DenseVolume<float>()) : ValueVolume(DenseVolume<std::uint8_t>());
-  if (auto refusal = format_refusal(empty, v.format, v.options))
+  if (params.palette && (v.format == VolumeFormat::stl || v.format == VolumeFormat::glb)) return;
+  const std::optional<ValueVolume> probe = api::value_type_probe(params);
+  if (!probe) {
+    refuse_quantized_bits(v);
+    if (auto refusal = format_refusal(BitVolume(), v.format))
+      throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
+    return;
+  }
+  if (auto refusal = format_refusal(*probe, v.format, v.options))
     throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
 }
 
@@ -442,6 +450,26 @@ void HttpApi::install(httplib::Server& server) {
     VolumeRequest request = v;
     request.options.content = volume_content(*job);
     const std::string filename = id + file_extension(v.format);
+    if (v.format == VolumeFormat::stl || v.format == VolumeFormat::glb) {
+      const api::JobParams params = api::parse_job_params(job->params);
+      if (!params.palette)
+        throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *format_refusal(BitVolume(), v.format)));
+      auto values = jobs_.values(id);
+      if (!values) throw unknown_job(id);
+      return stream_encoded(
+          res, media_type(v.format),
+          [values, palette = *params.palette, format = v.format](ByteSink& sink) {
+            write_palette_mesh(palette, std::get<DenseVolume<std::uint8_t>>(*values), format, sink);
+          },
+          accepts_gzip(req), filename, &metrics_);
+    }
+    if (req.has_param("layer")) {
+      auto layer = palette_layer(jobs_, *job, req.get_param_value("layer"));
+      if (auto refusal = format_refusal(*layer, v.format, v.options))
+        throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
+      res.set_header("X-Voxd-Value-Type", value_type_name(*layer));
+      return stream_volume(res, std::move(layer), v.format, request.options, accepts_gzip(req), filename, &metrics_);
+    }
     if (job->has_value_volume()) {
       auto values = jobs_.values(id);
       if (!values) throw unknown_job(id);
@@ -451,6 +479,8 @@ void HttpApi::install(httplib::Server& server) {
       return stream_volume(res, std::move(values), v.format, request.options, accepts_gzip(req), filename, &metrics_);
     }
     refuse_quantized_bits(v);
+    if (auto refusal = format_refusal(BitVolume(), v.format))
+      throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
     auto volume = jobs_.volume(id);
     if (!volume) throw unknown_job(id);
     res.set_header("X-Voxd-Value-Type", "bit");
@@ -459,6 +489,8 @@ void HttpApi::install(httplib::Server& server) {
   allow_only(job_path + "/volume", "GET");
 
   for (const std::string& pattern : install_analysis_routes(server, jobs_, job_path, [guarded](PlainHandler h) { return guarded(h); }))
+    allow_only(pattern, "GET");
+  for (const std::string& pattern : install_value_routes(server, jobs_, job_path, [guarded](PlainHandler h) { return guarded(h); }))
     allow_only(pattern, "GET");
 
   server.Post("/v1/voxelize", guarded_upload([this](const Request& req, Response& res, const httplib::ContentReader& reader) {

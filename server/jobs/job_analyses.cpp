@@ -158,11 +158,21 @@ std::optional<std::string> value_job_section(const AnalysisRequest& r, const Job
     throw AnalysisRejected("colour=distance shows the distances of an sdf job; this job's mode is " +
                            api::parse_job_params(job.params).mode_name() + ": use colour none or thickness");
   if (!output.values || r.colour == "thickness") return std::nullopt;
+  // A palette job's element indices are not an image: its sections show the solid.
+  if (std::holds_alternative<DenseVolume<std::uint8_t>>(*output.values) && api::parse_job_params(job.params).palette)
+    return std::nullopt;
   if (r.peel > 0)
     throw AnalysisRejected("peel removes skin from the solid; a section of the job's values takes no peel "
                            "(use colour=thickness for the peeled solid)");
   if (sdf) return to_bytes(sdf_section_png(*sdf, r.axis, layer, r.colour == "distance", text));
-  return std::visit([&](const auto& v) { return to_bytes(coverage_section_png(v, r.axis, layer, text)); }, *output.values);
+  return std::visit(
+      [&](const auto& v) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, DenseVolume<Rgba8>>)
+          return to_bytes(colour_section_png(v, r.axis, layer, text));
+        else
+          return to_bytes(coverage_section_png(v, r.axis, layer, text));
+      },
+      *output.values);
 }
 
 std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, const ArtifactAccess& artifacts,
@@ -233,6 +243,12 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
       // An sdf job's surface is its zero level set, rendered directly.
       if (const auto sdf = sdf_input(job, output); sdf && r.colour == "none") {
         bytes = to_bytes(sdf_preview_png(*sdf, *parse_view(r.view), {{"voxd:job", job.id}}));
+        break;
+      }
+      // A slice job's preview shows its colours.
+      if (output.values && std::holds_alternative<DenseVolume<Rgba8>>(*output.values) && r.colour == "none") {
+        bytes = to_bytes(colour_preview_png(volume, std::get<DenseVolume<Rgba8>>(*output.values), *parse_view(r.view),
+                                            {{"voxd:job", job.id}}));
         break;
       }
       std::optional<DenseVolume<float>> map;

@@ -104,9 +104,11 @@ struct JobManager::Impl {
   double recent_job_seconds = 1.0;  // moving average, for Retry-After
 
   // Recently used result volumes (a job's solid under its id, its values
-  // under id + kValuesKey), so streaming a fresh result reads no disk.
+  // under id + kValuesKey, a palette job's similarity under id +
+  // kSimilarityKey), so streaming a fresh result reads no disk.
   static constexpr std::size_t kCacheBytes = std::size_t{1} << 30;
   static constexpr const char* kValuesKey = "/values";
+  static constexpr const char* kSimilarityKey = "/similarity";
   struct CacheEntry {
     std::string key;
     std::shared_ptr<const void> item;
@@ -172,6 +174,7 @@ struct JobManager::Impl {
   }
   void cache_put(const std::string& id, const JobOutput& output) {
     if (output.values) cache_put(id + kValuesKey, output.values, byte_size(*output.values));
+    if (output.similarity) cache_put(id + kSimilarityKey, output.similarity, output.similarity->values().size());
     cache_put(id, output.solid, output.solid->byte_size());
   }
   void cache_erase(const std::string& key) {
@@ -185,6 +188,7 @@ struct JobManager::Impl {
   void cache_drop(const std::string& id) {
     cache_erase(id);
     cache_erase(id + kValuesKey);
+    cache_erase(id + kSimilarityKey);
   }
   template <class T>
   std::shared_ptr<const T> cache_get(const std::string& key) {
@@ -282,9 +286,11 @@ struct JobManager::Impl {
         JobOutput output;
         output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
         if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
+        if (r.similarity) output.similarity = std::make_shared<const DenseVolume<std::uint8_t>>(std::move(*r.similarity));
         if (!job->ephemeral) {
           store.save_volume(job->snap.id, *output.solid);
           if (output.values) store.save_values(job->snap.id, *output.values);
+          if (output.similarity) store.save_similarity(job->snap.id, *output.similarity);
         }
         nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
         std::lock_guard lock(mutex);
@@ -639,6 +645,22 @@ std::shared_ptr<const ValueVolume> JobManager::values(const std::string& id) {
   if (v) {
     std::lock_guard lock(impl_->mutex);
     if (impl_->jobs.count(id)) impl_->cache_put(key, v, byte_size(*v));
+  }
+  return v;
+}
+
+std::shared_ptr<const DenseVolume<std::uint8_t>> JobManager::similarity(const std::string& id) {
+  const std::string key = id + Impl::kSimilarityKey;
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto it = impl_->jobs.find(id);
+    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
+    if (auto v = impl_->cache_get<DenseVolume<std::uint8_t>>(key)) return v;
+  }
+  auto v = impl_->store.load_similarity(id);
+  if (v) {
+    std::lock_guard lock(impl_->mutex);
+    if (impl_->jobs.count(id)) impl_->cache_put(key, v, v->values().size());
   }
   return v;
 }

@@ -70,6 +70,7 @@ struct JobSnapshot {
 struct JobOutput {
   std::shared_ptr<const BitVolume> solid;
   std::shared_ptr<const ValueVolume> values;
+  std::shared_ptr<const DenseVolume<std::uint8_t>> similarity;  // a palette job's
 };
 
 struct JobManagerConfig {
@@ -141,6 +142,8 @@ class JobManager {
   std::shared_ptr<const BitVolume> volume(const std::string& id);
   // A succeeded coverage or sdf job's values; nullptr for other jobs.
   std::shared_ptr<const ValueVolume> values(const std::string& id);
+  // A succeeded palette job's similarity volume; nullptr for other jobs.
+  std::shared_ptr<const DenseVolume<std::uint8_t>> similarity(const std::string& id);
 
   // Submits and waits for the result (POST /v1/voxelize). The job goes
   // through the same queue, so it cannot starve asynchronous jobs, but it is

@@ -102,9 +102,14 @@ void JobStore::save_values(const std::string& id, const ValueVolume& values) con
   write_atomically(job_dir(id) / name, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
 }
 
+void JobStore::save_similarity(const std::string& id, const DenseVolume<std::uint8_t>& similarity) const {
+  fs::create_directories(job_dir(id));
+  write_atomically(job_dir(id) / "similarity.u8.rle", [&](ByteSink& sink) { write_rle(similarity, sink); });
+}
+
 void JobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
   fs::create_directories(job_dir(to_id));
-  for (const char* name : {"volume.rle", "values.u8.rle", "values.f32.rle"}) {
+  for (const char* name : {"volume.rle", "values.u8.rle", "values.f32.rle", "values.rgba8.rle", "similarity.u8.rle"}) {
     const fs::path from = job_dir(from_id) / name, to = job_dir(to_id) / name;
     // The volume must be there (else the original is gone: throw); values only for value jobs.
     if (std::string_view(name) != "volume.rle" && !fs::exists(from)) continue;
@@ -139,7 +144,15 @@ std::shared_ptr<const ValueVolume> JobStore::load_values(const std::string& id) 
     return std::make_shared<const ValueVolume>(read_rle_u8(*bytes, kStoredVolumeLimits));
   if (const auto bytes = read_file(job_dir(id) / "values.f32.rle"))
     return std::make_shared<const ValueVolume>(read_rle_f32(*bytes, kStoredVolumeLimits));
+  if (const auto bytes = read_file(job_dir(id) / "values.rgba8.rle"))
+    return std::make_shared<const ValueVolume>(read_rle_rgba8(*bytes, kStoredVolumeLimits));
   return nullptr;
+}
+
+std::shared_ptr<const DenseVolume<std::uint8_t>> JobStore::load_similarity(const std::string& id) const {
+  const auto bytes = read_file(job_dir(id) / "similarity.u8.rle");
+  if (!bytes) return nullptr;
+  return std::make_shared<const DenseVolume<std::uint8_t>>(read_rle_u8(*bytes, kStoredVolumeLimits));
 }
 
 void JobStore::remove(const std::string& id) const {

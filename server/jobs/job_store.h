@@ -1,7 +1,8 @@
 #pragma once
 // The embedded job store: one directory per job under DATA_DIR/jobs/ID with
 // record.json (the job snapshot) and, once succeeded, volume.rle (and, for a
-// coverage or sdf job, values.u8.rle or values.f32.rle). Every file is
+// value job, values.u8.rle, values.f32.rle or values.rgba8.rle, and for a
+// palette job similarity.u8.rle). Every file is
 // written to a temporary name, flushed to disk and renamed, so a crash or a
 // kill never leaves a half-written record or result behind.
 #include <filesystem>
@@ -29,6 +30,9 @@ class JobStore {
   // A coverage or sdf job's values, as RLE beside the volume.
   void save_values(const std::string& id, const ValueVolume& values) const;
   std::shared_ptr<const ValueVolume> load_values(const std::string& id) const;
+  // A palette job's similarity volume.
+  void save_similarity(const std::string& id, const DenseVolume<std::uint8_t>& similarity) const;
+  std::shared_ptr<const DenseVolume<std::uint8_t>> load_similarity(const std::string& id) const;
   // Shares a finished result (volume and values) with a job created from an
   // identical submission: hard links, so deleting either job leaves the
   // other's files intact.

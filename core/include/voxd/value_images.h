@@ -39,6 +39,12 @@ std::vector<std::uint8_t> coverage_section_png(const DenseVolume<std::uint8_t>& 
 std::vector<std::uint8_t> coverage_section_png(const DenseVolume<float>& coverage, int axis, std::int64_t index,
                                                std::vector<PngText> text = {});
 
+// A slice job's colours in a section, 8-bit RGB: each voxel's colour over a
+// white background (alpha blended: c * a / 255 + 255 * (1 - a / 255),
+// rounded), so empty voxels are white. Same layout as the other sections.
+std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, int axis, std::int64_t index,
+                                             std::vector<PngText> text = {});
+
 // The symmetric range of a field's sections: the largest |value| over the
 // whole field (non-finite values skipped; with a clamped narrow band, the
 // band), so every section of one field shares one scale; 0 for a field of

@@ -13,6 +13,11 @@
 //  - nrrd:   NRRD 0004 (ParaView, 3D Slicer, ITK): a text header placing the
 //            voxel centres in model space, then the raw data, uncompressed or
 //            gzip; bits as uchar 0/1, u8 as uchar, f32 as float
+//  - vox:       MagicaVoxel (voxd/magica_vox.h), colour volumes only
+//  - png-stack: a ZIP of one RGBA PNG per z layer (voxd/png_stack.h), colour volumes only
+//  - stl, glb:  a palette job's reconstruction as a mesh (voxd/palette_export.h);
+//               they need the palette, so encode_volume refuses them and the
+//               caller writes them
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -26,7 +31,7 @@
 
 namespace voxd {
 
-enum class VolumeFormat { rle, binvox, raw, nrrd };
+enum class VolumeFormat { rle, binvox, raw, nrrd, vox, png_stack, stl, glb };
 enum class RawPacking { bytes, bits };
 enum class NrrdEncoding { raw, gzip };
 
@@ -36,7 +41,8 @@ std::optional<VolumeFormat> volume_format_from_string(std::string_view name);
 std::optional<VolumeFormat> volume_format_from_path(std::string_view path);
 // MIME type used when serving the format.
 const char* media_type(VolumeFormat format) noexcept;
-// File extension with the dot (".rle", ".binvox", ".raw", ".nrrd").
+// File extension with the dot (".rle", ".binvox", ".raw", ".nrrd", ".vox",
+// ".zip" for png-stack, ".stl", ".glb").
 const char* file_extension(VolumeFormat format) noexcept;
 
 // Float values in RLE as integer levels (far smaller than f32 runs inside a
@@ -50,22 +56,26 @@ struct EncodeOptions {
   Quantize quantize = Quantize::none;   // rle of f32 values only
 };
 
-// A volume of one value per voxel: coverage bytes or fractions, distances.
-using ValueVolume = std::variant<DenseVolume<std::uint8_t>, DenseVolume<float>>;
+// A volume of one value per voxel: coverage bytes or fractions, distances,
+// palette element indices, slice colours.
+using ValueVolume = std::variant<DenseVolume<std::uint8_t>, DenseVolume<float>, DenseVolume<Rgba8>>;
 const Grid& grid_of(const ValueVolume& volume);
-// "u8" or "f32", the RLE value type names.
+// "u8", "f32" or "rgba8", the RLE value type names.
 const char* value_type_name(const ValueVolume& volume);
 std::size_t byte_size(const ValueVolume& volume);
 
 void encode_volume(const BitVolume& volume, VolumeFormat format, ByteSink& sink,
                    const EncodeOptions& options = {});
-// u8: rle, binvox (version 2), raw, nrrd. f32: rle, raw, nrrd. Throws
+// u8: rle, binvox (version 2), raw, nrrd. f32: rle, raw, nrrd. rgba8: rle,
+// raw (4 bytes a voxel: r, g, b, a), vox, png-stack. Throws
 // Error(invalid_argument) with format_refusal's message otherwise.
 void encode_volume(const ValueVolume& volume, VolumeFormat format, ByteSink& sink,
                    const EncodeOptions& options = {});
 // Why `format` (with `options`) cannot hold `volume`, said so a user can pick
 // another; nullopt when it can. Lets a server refuse before streaming.
 std::optional<std::string> format_refusal(const ValueVolume& volume, VolumeFormat format, const EncodeOptions& options);
+// The same for a bit volume: vox, png-stack, stl and glb are refused.
+std::optional<std::string> format_refusal(const BitVolume& volume, VolumeFormat format);
 
 void write_rle(const BitVolume& volume, ByteSink& sink);
 void write_rle(const DenseVolume<std::uint8_t>& volume, ByteSink& sink);
@@ -94,6 +104,7 @@ void write_rle(const DenseVolume<float>& volume, ByteSink& sink);
 // volume. Throws Error(invalid_argument) for Quantize::none.
 void write_rle_quantized(const DenseVolume<float>& volume, Quantize levels, std::string_view content, ByteSink& sink);
 void write_raw(const DenseVolume<float>& volume, ByteSink& sink);
+void write_raw(const DenseVolume<Rgba8>& volume, ByteSink& sink);
 // Colour volumes (slice voxelization, voxd/slice_functions.h): voxd RLE with
 // value_type rgba8, runs of equal colours (all four bytes r, g, b, a equal).
 void write_rle(const DenseVolume<Rgba8>& volume, ByteSink& sink);

@@ -114,9 +114,15 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
   return std::move(out.data);
 }
 
-std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
-                                      std::vector<PngText> text, int threads) {
+namespace {
+
+// The preview in the part's grey-blue, coloured by thickness, or in each
+// visible voxel's own colour.
+std::vector<std::uint8_t> render_preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
+                                             const DenseVolume<Rgba8>* colours, std::vector<PngText> text, int threads) {
   const Grid& g = volume.grid();
+  if (colours && colours->grid().dims != g.dims)
+    throw Error(ErrorCode::invalid_argument, "preview: the colour volume's grid does not match the volume's");
   if (thickness && thickness->grid().dims != g.dims) {
     throw Error(ErrorCode::invalid_argument, "preview: the thickness map's grid does not match the volume's");
   }
@@ -138,8 +144,15 @@ std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const 
     image.height = preview.height;
     image.pixels.assign(pixels * 3, 255);
     for (std::size_t p = 0; p < pixels; ++p) {
-      if (preview.voxel[p] >= 0) shade_into(&image.pixels[3 * p], kPreviewPartColour, preview.shade[p]);
+      if (preview.voxel[p] < 0) continue;
+      Rgb c = kPreviewPartColour;
+      if (colours) {
+        const Rgba8 v = colours->values()[static_cast<std::size_t>(preview.voxel[p])];
+        c = {v.r, v.g, v.b};
+      }
+      shade_into(&image.pixels[3 * p], c, preview.shade[p]);
     }
+    if (colours) chunks.push_back({"voxd:colour", "each visible voxel's own colour (its alpha ignored), shaded"});
   } else {
     // Range over the whole map, not the visible voxels: the legend then
     // matches the thickness report and the other views of the same part.
@@ -162,6 +175,18 @@ std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const 
   VectorSink out;
   write_png_rgb8(image, chunks, out);
   return std::move(out.data);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
+                                      std::vector<PngText> text, int threads) {
+  return render_preview_png(volume, view, thickness, nullptr, std::move(text), threads);
+}
+
+std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
+                                             std::vector<PngText> text, int threads) {
+  return render_preview_png(volume, view, nullptr, &colours, std::move(text), threads);
 }
 
 }  // namespace voxd

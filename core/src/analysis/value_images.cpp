@@ -99,6 +99,22 @@ std::vector<std::uint8_t> coverage_section_png(const DenseVolume<float>& coverag
   return grey_png(s, plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
 }
 
+std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, int axis, std::int64_t index,
+                                             std::vector<PngText> text) {
+  const ValueSection<Rgba8> s = extract(colours, axis, index);
+  RgbImage image{s.width, s.height, std::vector<std::uint8_t>(s.values.size() * 3)};
+  for (std::size_t p = 0; p < s.values.size(); ++p) {
+    const Rgba8 c = s.values[p];
+    const std::uint8_t rgb[3] = {c.r, c.g, c.b};
+    for (int ch = 0; ch < 3; ++ch)
+      image.pixels[3 * p + static_cast<std::size_t>(ch)] =
+          static_cast<std::uint8_t>((rgb[ch] * c.a + 255 * (255 - c.a) + 127) / 255);
+  }
+  VectorSink out;
+  write_png_rgb8(image, plane_text(colours.grid(), axis, index, {{"voxd:colour", "the voxel's colour over white"}}, text), out);
+  return std::move(out.data);
+}
+
 double sdf_section_range(const SdfRenderInput& input) {
   if (!input.sdf) throw Error(ErrorCode::invalid_argument, "sdf section: no signed distance field given");
   float range = 0.0f;

@@ -36,6 +36,12 @@ void write_raw(const DenseVolume<std::uint8_t>& volume, ByteSink& sink) {
   for (std::int64_t k = 0; k < volume.grid().dims.z; ++k) sink.write(volume.slab(k), volume.slab_size());
 }
 
+void write_raw(const DenseVolume<Rgba8>& volume, ByteSink& sink) {
+  encode::require_voxels(volume, "raw writer");
+  static_assert(sizeof(Rgba8) == 4, "r, g, b, a bytes in that order, no padding");
+  for (std::int64_t k = 0; k < volume.grid().dims.z; ++k) sink.write(volume.slab(k), volume.slab_size() * sizeof(Rgba8));
+}
+
 void write_raw(const DenseVolume<float>& volume, ByteSink& sink) {
   encode::require_voxels(volume, "raw writer");
   write_float_data(volume, sink);

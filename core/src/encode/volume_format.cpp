@@ -7,11 +7,18 @@
 #include <type_traits>
 
 #include "voxd/error.h"
+#include "voxd/magica_vox.h"
+#include "voxd/png_stack.h"
 
 namespace voxd {
 namespace {
 
-constexpr VolumeFormat kAllFormats[] = {VolumeFormat::rle, VolumeFormat::binvox, VolumeFormat::raw, VolumeFormat::nrrd};
+constexpr VolumeFormat kAllFormats[] = {VolumeFormat::rle, VolumeFormat::binvox,    VolumeFormat::raw, VolumeFormat::nrrd,
+                                        VolumeFormat::vox, VolumeFormat::png_stack, VolumeFormat::stl, VolumeFormat::glb};
+
+// Formats that only a palette job's reconstruction has.
+bool palette_mesh(VolumeFormat f) { return f == VolumeFormat::stl || f == VolumeFormat::glb; }
+bool colour_only(VolumeFormat f) { return f == VolumeFormat::vox || f == VolumeFormat::png_stack; }
 
 bool equals_ignoring_case(std::string_view a, std::string_view b) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
@@ -27,6 +34,10 @@ const char* to_string(VolumeFormat format) noexcept {
     case VolumeFormat::binvox: return "binvox";
     case VolumeFormat::raw: return "raw";
     case VolumeFormat::nrrd: return "nrrd";
+    case VolumeFormat::vox: return "vox";
+    case VolumeFormat::png_stack: return "png-stack";
+    case VolumeFormat::stl: return "stl";
+    case VolumeFormat::glb: return "glb";
   }
   return "unknown";
 }
@@ -43,6 +54,10 @@ const char* file_extension(VolumeFormat format) noexcept {
     case VolumeFormat::binvox: return ".binvox";
     case VolumeFormat::raw: return ".raw";
     case VolumeFormat::nrrd: return ".nrrd";
+    case VolumeFormat::vox: return ".vox";
+    case VolumeFormat::png_stack: return ".zip";
+    case VolumeFormat::stl: return ".stl";
+    case VolumeFormat::glb: return ".glb";
   }
   return "";
 }
@@ -62,16 +77,31 @@ const char* media_type(VolumeFormat format) noexcept {
     case VolumeFormat::binvox: return "application/x-binvox";
     case VolumeFormat::raw: return "application/octet-stream";
     case VolumeFormat::nrrd: return "application/x-nrrd";
+    case VolumeFormat::vox: return "application/octet-stream";
+    case VolumeFormat::png_stack: return "application/zip";
+    case VolumeFormat::stl: return "model/stl";
+    case VolumeFormat::glb: return "model/gltf-binary";
   }
   return "application/octet-stream";
 }
 
+std::optional<std::string> format_refusal(const BitVolume&, VolumeFormat format) {
+  if (colour_only(format))
+    return std::string(to_string(format)) + " holds colours (a slice job's result), not bits; ask for rle, binvox, raw or nrrd";
+  if (palette_mesh(format))
+    return std::string(to_string(format)) +
+           " exports a palette job's reconstruction (\"mode\": \"palette\"); ask for rle, binvox, raw or nrrd";
+  return std::nullopt;
+}
+
 void encode_volume(const BitVolume& volume, VolumeFormat format, ByteSink& sink, const EncodeOptions& options) {
+  if (auto refusal = format_refusal(volume, format)) throw Error(ErrorCode::invalid_argument, *refusal);
   switch (format) {
     case VolumeFormat::rle: return write_rle(volume, sink);
     case VolumeFormat::binvox: return write_binvox(volume, sink);
     case VolumeFormat::raw: return write_raw(volume, options.raw_packing, sink);
     case VolumeFormat::nrrd: return write_nrrd(volume, options.content, sink, options.nrrd_encoding);
+    default: break;
   }
   throw Error(ErrorCode::invalid_argument, "unknown volume format");
 }
@@ -81,7 +111,9 @@ const Grid& grid_of(const ValueVolume& volume) {
 }
 
 const char* value_type_name(const ValueVolume& volume) {
-  return std::holds_alternative<DenseVolume<float>>(volume) ? "f32" : "u8";
+  if (std::holds_alternative<DenseVolume<float>>(volume)) return "f32";
+  if (std::holds_alternative<DenseVolume<Rgba8>>(volume)) return "rgba8";
+  return "u8";
 }
 
 std::size_t byte_size(const ValueVolume& volume) {
@@ -90,6 +122,16 @@ std::size_t byte_size(const ValueVolume& volume) {
 
 std::optional<std::string> format_refusal(const ValueVolume& volume, VolumeFormat format, const EncodeOptions& options) {
   const bool floats = std::holds_alternative<DenseVolume<float>>(volume);
+  const bool colours = std::holds_alternative<DenseVolume<Rgba8>>(volume);
+  if (colours && (format == VolumeFormat::binvox || format == VolumeFormat::nrrd))
+    return std::string(to_string(format)) + " does not hold the rgba8 colours of this volume; ask for rle, raw, vox or png-stack";
+  if (!colours && colour_only(format))
+    return std::string(to_string(format)) + " holds colours (a slice job's result), not the " + value_type_name(volume) +
+           " values of this volume; ask for rle, raw or nrrd";
+  if (palette_mesh(format))
+    return std::string(to_string(format)) +
+           " exports a palette job's reconstruction (\"mode\": \"palette\"), written from the palette; "
+           "this volume alone cannot be";
   if (format == VolumeFormat::binvox && floats)
     return "binvox holds bits or bytes, not the float32 values of this volume; ask for rle, raw or nrrd";
   if (options.quantize != Quantize::none && (format != VolumeFormat::rle || !floats))
@@ -115,7 +157,17 @@ void encode_volume(const ValueVolume& volume, VolumeFormat format, ByteSink& sin
             if constexpr (std::is_same_v<V, DenseVolume<std::uint8_t>>) return write_binvox(v, sink);
             break;
           case VolumeFormat::raw: return write_raw(v, sink);
-          case VolumeFormat::nrrd: return write_nrrd(v, options.content, sink, options.nrrd_encoding);
+          case VolumeFormat::nrrd:
+            if constexpr (!std::is_same_v<V, DenseVolume<Rgba8>>) return write_nrrd(v, options.content, sink, options.nrrd_encoding);
+            break;
+          case VolumeFormat::vox:
+            if constexpr (std::is_same_v<V, DenseVolume<Rgba8>>) return write_vox(v, sink);
+            break;
+          case VolumeFormat::png_stack:
+            if constexpr (std::is_same_v<V, DenseVolume<Rgba8>>) return write_png_stack_zip(v, sink);
+            break;
+          case VolumeFormat::stl:
+          case VolumeFormat::glb: break;
         }
         throw Error(ErrorCode::invalid_argument, "unknown volume format");
       },
