@@ -33,8 +33,9 @@ volume to OUT ("-" for standard output).
   --origin X,Y,Z         minimum corner of voxel (0,0,0) (with --voxel-size, --dims)
   --dims NX,NY,NZ        grid size in voxels (with --voxel-size, --origin)
   --padding P            empty voxels added on every side
-  --mode M               solid | surface | solid+surface | coverage | sdf
-                         (their options in --params: "coverage": {...}, "sdf": {...})
+  --mode M               solid | surface | solid+surface | coverage | sdf | palette | slice
+                         (their options in --params: "coverage": {...}, "sdf": {...},
+                         "palette": {...}, "slice": {...}; slice needs "function")
   --inside T             parity | vote | winding (for sdf: the sign)
   --format F             rle | binvox | raw | nrrd | vox | png-stack | stl | glb
                          (default: from OUT's extension; vox and png-stack (.zip)

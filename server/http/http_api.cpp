@@ -496,7 +496,8 @@ void HttpApi::install(httplib::Server& server) {
   server.Post("/v1/voxelize", guarded_upload([this](const Request& req, Response& res, const httplib::ContentReader& reader) {
     const VolumeRequest v = read_volume_request(req);
     Submission s = read_submission(req, reader, metrics_, config_.max_upload_bytes);
-    check_format_holds(api::parse_job_params(s.params), v);
+    const api::JobParams params = api::parse_job_params(s.params);
+    check_format_holds(params, v);
     JobSnapshot job;
     JobOutput output = jobs_.run_sync(std::move(s.mesh), s.filename, s.params, &job, config_.sync_max_voxels);
     if (!output.solid) {
@@ -510,6 +511,14 @@ void HttpApi::install(httplib::Server& server) {
     VolumeRequest request = v;
     request.options.content = volume_content(job);
     const std::string filename = "voxels" + std::string(file_extension(v.format));
+    if (output.values && params.palette && (v.format == VolumeFormat::stl || v.format == VolumeFormat::glb)) {
+      return stream_encoded(
+          res, media_type(v.format),
+          [values = output.values, palette = *params.palette, format = v.format](ByteSink& sink) {
+            write_palette_mesh(palette, std::get<DenseVolume<std::uint8_t>>(*values), format, sink);
+          },
+          accepts_gzip(req), filename, &metrics_);
+    }
     if (output.values) {
       res.set_header("X-Voxd-Value-Type", value_type_name(*output.values));
       return stream_volume(res, std::move(output.values), v.format, request.options, accepts_gzip(req), filename, &metrics_);

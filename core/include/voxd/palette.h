@@ -40,7 +40,11 @@
 //    would leave object material uncovered), else the share where they agree.
 //  - inner ("best inner box"): B = -inf if a point of E is outside O (E
 //    would cover empty space), else the share where they agree.
-// The element with the largest B wins; ties go to the lower index. When
+// The element with the largest B wins. Equal estimates (frequent with few
+// points: a pyramid inside a wedge-shaped content can match every sample the
+// wedge does) go to the element whose exact volume is closest to the
+// occupancy statistic, the share of the points inside the object, then to
+// the lower index. When
 // every element is -inf (a custom palette without a full element under
 // outer, or without an empty one under inner), the voxel takes the nearest
 // element and similarity 0.

@@ -13,6 +13,7 @@
 
 #include "voxd/error.h"
 #include "voxd/palette.h"
+#include "voxd/palette_geometry.h"
 #include "voxd/parallel.h"
 #include "voxelize/fixed_point_mesh.h"
 #include "voxelize/row_rays.h"
@@ -57,7 +58,9 @@ class PaletteVoxelizer {
         n_(options.rays * options.points),
         words_((n_ + 63) / 64),
         full_(first_full(options.palette)),
-        empty_(first_empty(options.palette)) {}
+        empty_(first_empty(options.palette)) {
+    for (const PaletteElement& e : options.palette.elements) volumes_.push_back(element_volume(e));
+  }
 
   PaletteVolume run(JobControl* control) {
     const Choice outside = empty_ ? Choice{static_cast<std::uint8_t>(*empty_), 255} : Choice{};
@@ -170,6 +173,14 @@ class PaletteVoxelizer {
   // The best element for the inside points `inside` (voxd/palette.h).
   Choice evaluate(const std::vector<Word>& inside, const std::vector<Word>& masks) const {
     const std::size_t count = options_.palette.elements.size();
+    // The occupancy statistic: the share of points inside, against which
+    // equal scores are told apart by the elements' exact volumes.
+    int inside_points = 0;
+    for (const Word w : inside) inside_points += std::popcount(w);
+    const double occupancy = static_cast<double>(inside_points) / n_;
+    const auto closer = [&](std::size_t e, int than) {
+      return std::abs(volumes_[e] - occupancy) < std::abs(volumes_[static_cast<std::size_t>(than)] - occupancy);
+    };
     int best = -1, best_score = -1, nearest = 0, nearest_score = -1;
     for (std::size_t e = 0; e < count; ++e) {
       const Word* m = masks.data() + e * static_cast<std::size_t>(words_);
@@ -182,11 +193,11 @@ class PaletteVoxelizer {
         if (options_.metric == PaletteMetric::inner) violations += std::popcount(extra);
       }
       const int score = n_ - mismatch;
-      if (score > nearest_score) {
+      if (score > nearest_score || (score == nearest_score && closer(e, nearest))) {
         nearest_score = score;
         nearest = static_cast<int>(e);
       }
-      if (violations == 0 && score > best_score) {
+      if (violations == 0 && (score > best_score || (score == best_score && closer(e, best)))) {
         best_score = score;
         best = static_cast<int>(e);
       }
@@ -298,6 +309,7 @@ class PaletteVoxelizer {
   const PaletteOptions& options_;
   int t_, p_, n_, words_;
   std::optional<std::size_t> full_, empty_;
+  std::vector<double> volumes_;  // exact, by element
 };
 
 }  // namespace
