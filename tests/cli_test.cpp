@@ -268,5 +268,43 @@ TEST_F(CliTest, ValueModesWriteTheirValuesAndSummarizeThem) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+TEST_F(CliTest, PaletteAndSliceWriteTheirMeshesAndColours) {
+  // A box on voxel boundaries: every voxel is full or empty, so the palette
+  // reconstruction encloses exactly the box.
+  const std::string mesh = write_mesh("box.stl", test::make_box({1, 1, 1}, {5, 4, 3}));
+  const std::string grid = R"("grid":{"voxel_size":1,"origin":[0,0,0],"dims":[6,5,4]})";
+  auto r = run_process(kVoxd + " voxelize " + mesh + " --params '{" + grid + R"(,"mode":"palette"}' -o )" + path("b.stl") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out).at("values").at("palette"), "46");
+  const auto stl = test::read_file(path("b.stl"));
+  std::uint32_t triangles = 0;
+  std::memcpy(&triangles, stl.data() + 80, 4);
+  EXPECT_EQ(triangles, 2u * (4 * 3 + 4 * 2 + 3 * 2) * 2);  // the box's exposed unit squares, two triangles each
+  double volume = 0;
+  for (std::uint32_t t = 0; t < triangles; ++t) {
+    float f[12];
+    std::memcpy(f, stl.data() + 84 + 50 * t, 48);
+    volume += (f[3] * (f[7] * f[11] - f[8] * f[10]) - f[4] * (f[6] * f[11] - f[8] * f[9]) + f[5] * (f[6] * f[10] - f[7] * f[9])) / 6;
+  }
+  EXPECT_NEAR(volume, 24.0, 1e-4);
+
+  // A slice job: the .vox holds one voxel per filled voxel; a palette mesh
+  // format is refused for it, in one line.
+  const std::string slice = "'{" + grid + R"(,"mode":"slice","slice":{"function":"checker","checker_size":1}}')";
+  r = run_process(kVoxd + " voxelize " + mesh + " --params " + slice + " -o " + path("c.vox") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out).at("filled_voxels"), 24);
+  const auto vox = test::read_file(path("c.vox"));
+  const std::string text(vox.begin(), vox.end());
+  const std::size_t xyzi = text.find("XYZI");
+  ASSERT_NE(xyzi, std::string::npos);
+  std::uint32_t voxels = 0;
+  std::memcpy(&voxels, vox.data() + xyzi + 12, 4);
+  EXPECT_EQ(voxels, 24u);
+  r = run_process(kVoxd + " voxelize " + mesh + " --params " + slice + " -o " + path("c.glb"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("palette job's reconstruction"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace voxd
