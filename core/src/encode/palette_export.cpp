@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <bitset>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -276,10 +275,12 @@ void write_palette_glb(const Palette& palette, const DenseVolume<std::uint8_t>& 
   const Reconstruction r(palette, element, voxel_scale, "GLB writer");
   const glm::i64vec3& d = r.grid().dims;
 
-  // Counting pass: instances per element, their extent, and which slabs hold
-  // which elements (so the writing pass skips the others).
+  // One pass: each element's instances (voxel indices, x-fastest), their
+  // count and extent. The indices take at most what their translations will
+  // take in the file (bounded by GLB's 4 GiB), and the writing pass then
+  // reads no voxel again.
   std::vector<Instances> instances(r.element_count());
-  std::vector<std::bitset<256>> slab_holds(static_cast<std::size_t>(d.z));
+  std::vector<std::vector<glm::u32vec3>> voxels(r.element_count());  // grid dims < 2^32
   for (std::int64_t k = 0; k < d.z; ++k) {
     const std::uint8_t* s = r.slab(k);
     for (std::int64_t j = 0; j < d.y; ++j)
@@ -290,7 +291,7 @@ void write_palette_glb(const Palette& palette, const DenseVolume<std::uint8_t>& 
         ++in.count;
         in.min = glm::min(in.min, glm::i64vec3(i, j, k));
         in.max = glm::max(in.max, glm::i64vec3(i, j, k));
-        slab_holds[static_cast<std::size_t>(k)].set(e);
+        voxels[e].emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(k));
       }
   }
 
@@ -406,15 +407,12 @@ void write_palette_glb(const Palette& palette, const DenseVolume<std::uint8_t>& 
     out.put_bytes(mesh_data.data(), mesh_data.size());
     // Translations, element after element, in x-fastest voxel order.
     for (const std::uint8_t e : used) {
-      for (std::int64_t k = 0; k < d.z; ++k) {
-        if (!slab_holds[static_cast<std::size_t>(k)].test(e)) continue;
-        const std::uint8_t* s = r.slab(k);
-        for (std::int64_t j = 0; j < d.y; ++j) {
-          for (std::int64_t i = 0; i < d.x; ++i)
-            if (s[i + d.x * j] == e && instanced(r, e, i, j, k)) put_float3(out, r.corner(i, j, k));
-          flush_if_large(out, sink);
-        }
+      for (std::size_t n = 0; n < voxels[e].size(); ++n) {
+        const glm::u32vec3& v = voxels[e][n];
+        put_float3(out, r.corner(v.x, v.y, v.z));
+        if (n % 4096 == 4095) flush_if_large(out, sink);
       }
+      flush_if_large(out, sink);
     }
     const std::uint8_t zeros[3] = {};
     out.put_bytes(zeros, padded4(bin_size) - bin_size);

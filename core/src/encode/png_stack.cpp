@@ -1,6 +1,6 @@
 // PNG stack writing: each layer is flipped into image rows (y descending),
-// encoded into memory, and added to the ZIP at once, so only one layer's
-// pixels and PNG are held at a time.
+// encoded into memory on a worker thread, and added to the ZIP in order, so
+// only a few layers' PNGs are held at a time.
 #include "voxd/png_stack.h"
 
 #include <cmath>
@@ -8,9 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "encode/ordered_pipeline.h"
 #include "encode/volume_checks.h"
 #include "voxd/error.h"
 #include "voxd/number_text.h"
+#include "voxd/parallel.h"
 #include "voxd/png_image.h"
 #include "voxd/zip_archive.h"
 
@@ -79,12 +81,17 @@ void write_png_stack_zip(const DenseVolume<Rgba8>& volume, ByteSink& sink) {
   ZipWriter zip(sink);
   const std::string text = manifest(g);
   zip.add("manifest.json", std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()), true);
-  VectorSink png;
-  for (std::int64_t k = 0; k < g.dims.z; ++k) {
-    png.data.clear();
-    encode_layer(volume, k, png);
-    zip.add(png_layer_name(k), png.data, false);
-  }
+  // PNG compression is most of the time: layers are encoded on all cores
+  // and added to the archive in order, on this thread.
+  const int threads = default_thread_count();
+  std::vector<VectorSink> slots(static_cast<std::size_t>(2 * threads));
+  encode::run_ordered_pipeline(
+      g.dims.z, threads, slots.size(),
+      [&](std::int64_t k, std::size_t slot) {
+        slots[slot].data.clear();
+        encode_layer(volume, k, slots[slot]);
+      },
+      [&](std::int64_t k, std::size_t slot) { zip.add(png_layer_name(k), slots[slot].data, false); });
   zip.finish();
 }
 
