@@ -319,14 +319,14 @@ void parse_slice(Validator& val, const json& d, SliceOptions& out) {
   const std::string path = "/slice";
   if (!val.is_object(d, path)) return;
   val.allow_keys(d, path, {"function", "axis", "color", "ramp", "corners", "checker_colors", "checker_size", "seed",
-                           "noise_scale", "octaves", "period", "turbulence", "noise_colors"});
+                           "noise_scale", "octaves", "period", "turbulence", "noise_colors", "lookup"});
   if (!d.contains("function")) {
     val.fail(path + "/function",
-             "required: one of single_color, color_ramp, interpolated_colors, checker, wood, marble, rock");
+             "required: one of single_color, color_ramp, interpolated_colors, checker, wood, marble, rock, custom");
     return;
   }
   const auto f = val.one_of(d, path, "function",
-                            {"single_color", "color_ramp", "interpolated_colors", "checker", "wood", "marble", "rock"});
+                            {"single_color", "color_ramp", "interpolated_colors", "checker", "wood", "marble", "rock", "custom"});
   if (!f) return;
   out.function = *slice_function_from_string(*f);
   if (auto a = val.vec3(d, path, "axis")) {
@@ -388,6 +388,32 @@ void parse_slice(Validator& val, const json& d, SliceOptions& out) {
     if (auto x = val.number(d, path, "turbulence", 0.0, 1e6, false)) out.turbulence = *x;
   if (only_for("noise_colors", noise, "wood, marble or rock"))
     if (auto c = parse_colors(val, d, path, "noise_colors", 2, 3)) out.noise_colors = *c;
+  if (out.function == SliceFunction::custom && !d.contains("lookup"))
+    val.fail(path + "/lookup", "required with function custom: {\"dims\": [nx, ny, nz], \"colors\": [...]}");
+  if (only_for("lookup", out.function == SliceFunction::custom, "custom")) {
+    const json& l = d.at("lookup");
+    const std::string lp = path + "/lookup";
+    if (val.is_object(l, lp)) {
+      val.allow_keys(l, lp, {"dims", "colors"});
+      const json* dims = l.contains("dims") ? &l.at("dims") : nullptr;
+      if (!dims || !dims->is_array() || dims->size() != 3) {
+        val.fail(lp + "/dims", "required: [nx, ny, nz], 1 to 64 cells each along the frame's a, b, c");
+      } else {
+        bool ok = true;
+        for (std::size_t i = 0; i < 3; ++i)
+          if (auto n = val.integer_value((*dims)[i], lp + "/dims/" + std::to_string(i), 1, 64))
+            out.lookup_dims[i] = static_cast<int>(*n);
+          else
+            ok = false;
+        const std::size_t cells = static_cast<std::size_t>(out.lookup_dims[0]) *
+                                  static_cast<std::size_t>(out.lookup_dims[1]) * static_cast<std::size_t>(out.lookup_dims[2]);
+        if (ok) {
+          if (auto c = parse_colors(val, l, lp, "colors", cells, cells)) out.lookup_colors = *c;
+          else if (!l.contains("colors")) val.fail(lp + "/colors", "required: nx * ny * nz colours, x fastest");
+        }
+      }
+    }
+  }
   try {
     validate(out);  // what the checks above cannot see, e.g. a zero-extent ramp
   } catch (const Error& e) {

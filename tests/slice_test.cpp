@@ -32,7 +32,7 @@ using test::make_grid;
 
 constexpr SliceFunction kAll[] = {SliceFunction::single_color, SliceFunction::color_ramp,
                                   SliceFunction::interpolated_colors, SliceFunction::checker,
-                                  SliceFunction::wood, SliceFunction::marble, SliceFunction::rock};
+                                  SliceFunction::wood, SliceFunction::marble, SliceFunction::rock, SliceFunction::custom};
 
 Mesh torus() {
   Mesh m = test::make_torus({0.1, -0.2, 0.05}, 1.0, 0.4, 48, 24);
@@ -59,6 +59,9 @@ SliceOptions options_for(SliceFunction f) {
   o.period = 0.6;
   o.octaves = 3;
   o.seed = 7;
+  o.lookup_dims = {2, 1, 3};
+  o.lookup_colors = {{255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255},
+                     {255, 255, 0, 255}, {0, 255, 255, 255}, {255, 0, 255, 128}};
   return o;
 }
 
@@ -220,8 +223,8 @@ bool near_checker_boundary(const SliceOptions& o, const Frame& f, const glm::dve
 // -------------------------------------------------------------- tests --
 
 TEST(SliceFunctions, NamesRoundTrip) {
-  const char* names[] = {"single_color", "color_ramp", "interpolated_colors", "checker", "wood", "marble", "rock"};
-  for (std::size_t i = 0; i < 7; ++i) {
+  const char* names[] = {"single_color", "color_ramp", "interpolated_colors", "checker", "wood", "marble", "rock", "custom"};
+  for (std::size_t i = 0; i < 8; ++i) {
     EXPECT_STREQ(to_string(kAll[i]), names[i]);
     EXPECT_EQ(slice_function_from_string(names[i]), kAll[i]);
   }
@@ -372,6 +375,37 @@ TEST(SliceVoxelize, CheckerCellsOfTheGivenSizeAlternate) {
   // n = 0 - 1 + 0 odd.
   EXPECT_EQ(c.at(4, 4, 4), o.checker_colors[1]);
   EXPECT_EQ(c.at(4, 3, 4), o.checker_colors[0]);  // a = -0.5: n = -2
+}
+
+TEST(SliceVoxelize, CustomLookupCellsSplitThePartsExtentEvenly) {
+  // Box [0, 8]^3, axis z: (a, b, c) = (y - 4, -(x - 4), z - 4), each
+  // spanning [-4, 4]. Two cells along a split at y = 4, four along c at
+  // every 2 voxels of z.
+  const Mesh box = test::make_box({0, 0, 0}, {8, 8, 8});
+  SliceOptions o;
+  o.function = SliceFunction::custom;
+  o.lookup_dims = {2, 1, 4};
+  for (std::uint8_t c = 0; c < 8; ++c) o.lookup_colors.push_back(Rgba8{static_cast<std::uint8_t>(10 * c), 0, 0, 255});
+  o.lookup_colors.erase(o.lookup_colors.begin());  // the default's single cell
+  ASSERT_EQ(o.lookup_colors.size(), 8u);
+  const DenseVolume<Rgba8> c = voxelize_slice(box, make_grid({8, 8, 8}), o);
+  for (std::int64_t k = 0; k < 8; ++k)
+    for (std::int64_t j = 0; j < 8; ++j)
+      for (std::int64_t i = 0; i < 8; ++i) {
+        const std::size_t cell = static_cast<std::size_t>(j >= 4) + 2 * static_cast<std::size_t>(k / 2);
+        ASSERT_EQ(c.at(i, j, k), o.lookup_colors[cell]) << i << "," << j << "," << k;
+      }
+  // Refusals name the field and what it must be.
+  o.lookup_dims = {2, 1, 65};
+  EXPECT_THROW(validate(o), Error);
+  o.lookup_dims = {2, 1, 4};
+  o.lookup_colors.pop_back();
+  try {
+    validate(o);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("nx * ny * nz = 8"), std::string::npos) << e.what();
+  }
 }
 
 // The box and a tilted torus, and the same rotated by -90 degrees about x,

@@ -64,6 +64,7 @@ valid = [
     {"mode": "slice", "slice": {"function": "checker", "checker_colors": [[0, 0, 0], [255, 255, 255]], "checker_size": 0.5}},
     {"mode": "slice", "slice": {"function": "marble", "seed": 0, "noise_scale": 1, "octaves": 16, "period": 2, "turbulence": 0, "noise_colors": ["#ffffff", "#808080", "#202020"]}},
     {"mode": "slice", "slice": {"function": "rock", "seed": 3, "noise_scale": 0.1, "octaves": 1, "noise_colors": [[90, 90, 90], [200, 200, 190]]}},
+    {"mode": "slice", "slice": {"function": "custom", "lookup": {"dims": [2, 1, 1], "colors": ["#ff0000", [0, 0, 255, 128]]}}},
 ]
 for doc in valid:
     errors = list(validator.iter_errors(doc))
@@ -124,6 +125,9 @@ invalid += [
     {"mode": "slice", "slice": {"function": "single_color", "seed": 3}},
     {"mode": "slice", "slice": {"function": "color_ramp", "noise_scale": 1}},
     {"mode": "slice", "slice": {"function": "rock", "period": 1}},
+    {"mode": "slice", "slice": {"function": "custom"}},
+    {"mode": "slice", "slice": {"function": "custom", "lookup": {"dims": [1, 1, 65], "colors": [[1, 2, 3]]}}},
+    {"mode": "slice", "slice": {"function": "marble", "lookup": {"dims": [1, 1, 1], "colors": [[1, 2, 3]]}}},
     {"mode": "slice", "slice": {"function": "rock", "turbulence": 1}},
     {"mode": "slice", "slice": {"function": "wood", "octaves": 0}},
     {"mode": "slice", "slice": {"function": "wood", "octaves": 17}},

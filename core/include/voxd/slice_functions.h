@@ -58,6 +58,14 @@
 //             bands across the axis, `period` apart, veined by the noise.
 //     rock:   t = clamp(1/2 + 1/2 F(q)): fractal noise.
 //     then ramp(noise_colors, t) (two or three colours).
+//  - custom:              a small 3D lookup image stretched over the part's
+//                         extent in the frame, nearest cell: with s, t as for
+//                         interpolated_colors and u = clamp((c - lo.c) /
+//                         (hi.c - lo.c)) (0 for a zero extent), the colour of
+//                         cell (min(floor(s nx), nx - 1), min(floor(t ny),
+//                         ny - 1), min(floor(u nz), nz - 1)), lookup_colors
+//                         x fastest. Nearest, not interpolated, so a part
+//                         prints in exactly the lookup's colours.
 //
 // Permutation of the noise: p = 0, 1, ..., 255, shuffled by Fisher-Yates with
 // splitmix64 (state = seed; next: state += 0x9e3779b97f4a7c15, z = state,
@@ -83,10 +91,10 @@
 
 namespace voxd {
 
-enum class SliceFunction { single_color, color_ramp, interpolated_colors, checker, wood, marble, rock };
+enum class SliceFunction { single_color, color_ramp, interpolated_colors, checker, wood, marble, rock, custom };
 
 // The contract names: "single_color", "color_ramp", "interpolated_colors",
-// "checker", "wood", "marble", "rock".
+// "checker", "wood", "marble", "rock", "custom".
 const char* to_string(SliceFunction function) noexcept;
 std::optional<SliceFunction> slice_function_from_string(std::string_view name);
 
@@ -126,6 +134,11 @@ struct SliceOptions {
   // Two or three colours, low to high t (default dark brown, tan, cream).
   std::vector<Rgba8> noise_colors{{92, 51, 23, 255}, {181, 130, 80, 255}, {240, 220, 180, 255}};
 
+  // custom: the lookup image's cells along a, b, c (each 1..64) and their
+  // colours, nx * ny * nz of them, x fastest (default one light grey cell).
+  std::array<int, 3> lookup_dims{1, 1, 1};
+  std::vector<Rgba8> lookup_colors{{200, 200, 200, 255}};
+
   InsideTest inside = InsideTest::parity;  // which voxels are interior (voxd/voxelize.h)
   int threads = 0;                         // 0 = all cores
 };
@@ -149,7 +162,8 @@ SliceFrame make_slice_frame(const Mesh& mesh, const glm::dvec3& axis);
 // options the chosen function cannot use: a zero axis, fewer than 2 ramp
 // stops or positions outside [0, 1] or decreasing, a colour with alpha 0,
 // non-positive or non-finite sizes, octaves outside 1..16, a negative
-// turbulence, other than 2 or 3 noise colours.
+// turbulence, other than 2 or 3 noise colours, lookup dims outside 1..64 or
+// a colour count other than their product.
 void validate(const SliceOptions& options);
 
 // The function of `options` at a model point (formulas above): what

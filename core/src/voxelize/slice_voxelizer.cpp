@@ -37,6 +37,7 @@ constexpr FunctionName kFunctionNames[] = {
     {SliceFunction::wood, "wood"},
     {SliceFunction::marble, "marble"},
     {SliceFunction::rock, "rock"},
+    {SliceFunction::custom, "custom"},
 };
 
 [[noreturn]] void bad(const std::string& message) { throw Error(ErrorCode::invalid_argument, message); }
@@ -129,6 +130,17 @@ class SliceShader {
       case SliceFunction::rock: {
         const double F = noise_->fbm(abc.x * inv_scale_, abc.y * inv_scale_, abc.z * inv_scale_, o_.octaves);
         return ramp_even(clamp01(0.5 + 0.5 * F));
+      }
+      case SliceFunction::custom: {
+        std::size_t index = 0, stride = 1;
+        for (int i = 0; i < 3; ++i) {
+          const int n = o_.lookup_dims[static_cast<std::size_t>(i)];
+          const double t = clamp01((abc[i] - frame_.lo[i]) * inv_extent_[i]);
+          const auto cell = std::min(static_cast<std::size_t>(t * n), static_cast<std::size_t>(n - 1));
+          index += cell * stride;
+          stride *= static_cast<std::size_t>(n);
+        }
+        return o_.lookup_colors[index];
       }
     }
     return o_.color;
@@ -263,6 +275,18 @@ void validate(const SliceOptions& o) {
       for (std::size_t i = 0; i < o.noise_colors.size(); ++i)
         check_alpha(o.noise_colors[i], "noise_colors[" + std::to_string(i) + "]");
       break;
+    case SliceFunction::custom: {
+      std::size_t cells = 1;
+      for (int n : o.lookup_dims) {
+        if (n < 1 || n > 64) bad("lookup dims must be 1..64 cells per axis, got " + std::to_string(n));
+        cells *= static_cast<std::size_t>(n);
+      }
+      if (o.lookup_colors.size() != cells)
+        bad("lookup colors must hold nx * ny * nz = " + std::to_string(cells) + " colours (x fastest), got " +
+            std::to_string(o.lookup_colors.size()));
+      for (std::size_t i = 0; i < cells; ++i) check_alpha(o.lookup_colors[i], "lookup colors[" + std::to_string(i) + "]");
+      break;
+    }
     default: bad("unknown slice function " + std::to_string(static_cast<int>(o.function)));
   }
 }
