@@ -207,6 +207,10 @@ TEST_F(PaletteSliceTest, PaletteJobJsonErrorsPointAtTheField) {
   EXPECT_NE(e.at(0).at("message").get<std::string>().find("alpha 0"), std::string::npos);
   e = errors(R"({"mode":"slice","slice":{"function":"color_ramp","ramp":[{"position":0.5,"color":"#ff0000"},{"position":0.2,"color":"#00ff00"}]}})");
   EXPECT_EQ(e.at(0).at("path"), "/slice/ramp/1/position");
+  e = errors(R"({"mode":"slice","slice":{"function":"custom"}})");
+  EXPECT_EQ(e.at(0).at("path"), "/slice/lookup");
+  e = errors(R"({"mode":"slice","slice":{"function":"custom","lookup":{"dims":[2,1,1],"colors":["#ff0000"]}}})");
+  EXPECT_EQ(e.at(0).at("path"), "/slice/lookup/colors");
   e = errors(R"({"mode":"solid","slice":{"function":"rock"}})");
   EXPECT_EQ(e.at(0).at("path"), "/slice");
 }
