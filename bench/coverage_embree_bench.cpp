@@ -16,12 +16,13 @@
 // CoverageSampling::stochastic with seed 1 (the exactness pass also seeds 2
 // and 3, and a non-ROBUST scene).
 //
-// The engine's ray placement, fixed-point quantization, triangle binning,
-// crossing test and run integration are internal to core/src (not installed
-// headers), so they are replicated here verbatim (namespace `replica`). The
-// replica is checked against voxelize_coverage: it must give the same volume
-// bit for bit, which is what makes its per-ray crossings a fair reference and
-// its crossing-only timing a fair isolation of the engine's ray part.
+// The engine's fixed-point quantization, triangle binning and crossing test
+// are used from core/src (internal headers, on this benchmark's include
+// path); its ray placement and run integration are replicated around them
+// (namespace `replica`), so the ray part can be timed alone. The replica is
+// checked against voxelize_coverage: it must give the same volume bit for
+// bit, which is what makes its per-ray crossings a fair reference and its
+// crossing-only timing a fair isolation of the engine's ray part.
 //
 // Embree is given the engine's own quantized vertices and ray positions (the
 // 2^-20 voxel lattice), in voxel units centred on the grid to keep float
@@ -72,6 +73,10 @@
 
 #include "bench_mesh.h"
 #include "voxd/coverage.h"
+#include "voxelize/fixed_point_mesh.h"
+#include "voxelize/row_rays.h"
+#include "voxelize/splitmix.h"
+#include "voxelize/triangle_bins.h"
 #include "voxd/grid.h"
 #include "voxd/parallel.h"
 
@@ -81,158 +86,50 @@ namespace {
 constexpr std::uint64_t kSeed = 1;  // CoverageOptions' default
 
 // ---------------------------------------------------------------------------
-// Replica of core/src/voxelize/{fixed_point_mesh,triangle_bins,coverage_voxelizer}.cpp
+// The engine's fixed-point mesh, binning and exact crossings (core/src
+// internals, on this benchmark's include path), and a replica of
+// coverage_voxelizer.cpp's ray placement and run integration around them.
 namespace replica {
 
-using i128 = __int128;
-constexpr int kFixedBits = 20;
-constexpr std::int64_t kFixedOne = std::int64_t{1} << kFixedBits;
-using FixedPoint = std::array<std::int64_t, 3>;
-inline std::int64_t floor_fixed(std::int64_t q) { return q >> kFixedBits; }
-inline std::int64_t ceil_fixed(std::int64_t q) { return -((-q) >> kFixedBits); }
-
-struct FixedMesh {
-  FixedMesh(const Mesh& m, const Grid& g)
-      : mesh(&m), origin(g.origin), scale(static_cast<double>(kFixedOne) / g.voxel_size) {}
-  FixedPoint vertex(std::uint32_t v) const {
-    constexpr double half = 0.5 * static_cast<double>(kFixedOne);
-    FixedPoint out;
-    for (int a = 0; a < 3; ++a) {
-      const double q = (static_cast<double>(mesh->vertices[v][a]) - origin[a]) * scale - half;
-      out[a] = static_cast<std::int64_t>(std::floor(q + 0.5));
-    }
-    return out;
-  }
-  const Mesh* mesh;
-  glm::dvec3 origin;
-  double scale;
-};
-
-struct Bins {
-  std::vector<std::uint32_t> offsets, triangles;
-};
-
-Bins bin_triangles(const FixedMesh& mesh, int axis, std::int64_t rows, std::int64_t per_chunk, std::int64_t margin,
-                   int threads) {
-  Bins bins;
-  const std::int64_t chunks = (rows + per_chunk - 1) / per_chunk;
-  const auto& tris = mesh.mesh->triangles;
-  const auto n = static_cast<std::int64_t>(tris.size());
-  std::vector<std::int32_t> first(static_cast<std::size_t>(n)), last(static_cast<std::size_t>(n));
-  parallel_for(0, n, 1 << 15, threads, [&](std::int64_t b, std::int64_t e) {
-    for (std::int64_t t = b; t < e; ++t) {
-      const auto& tri = tris[static_cast<std::size_t>(t)];
-      const std::int64_t a = mesh.vertex(tri[0])[axis], bb = mesh.vertex(tri[1])[axis], c = mesh.vertex(tri[2])[axis];
-      const std::int64_t r0 = std::max<std::int64_t>(0, ceil_fixed(std::min({a, bb, c})) - margin);
-      const std::int64_t r1 = std::min<std::int64_t>(rows - 1, floor_fixed(std::max({a, bb, c})) + margin);
-      if (r0 > r1) {
-        first[t] = -1;
-        last[t] = -2;
-      } else {
-        first[t] = static_cast<std::int32_t>(r0 / per_chunk);
-        last[t] = static_cast<std::int32_t>(r1 / per_chunk);
-      }
-    }
-  });
-  std::vector<std::uint64_t> counts(static_cast<std::size_t>(chunks) + 1, 0);
-  for (std::int64_t t = 0; t < n; ++t)
-    for (std::int32_t c = first[t]; c <= last[t]; ++c) ++counts[static_cast<std::size_t>(c) + 1];
-  for (std::size_t c = 1; c < counts.size(); ++c) counts[c] += counts[c - 1];
-  bins.offsets.assign(counts.begin(), counts.end());
-  bins.triangles.resize(counts.back());
-  std::vector<std::uint32_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
-  for (std::int64_t t = 0; t < n; ++t)
-    for (std::int32_t c = first[t]; c <= last[t]; ++c)
-      bins.triangles[cursor[static_cast<std::size_t>(c)]++] = static_cast<std::uint32_t>(t);
-  return bins;
-}
-
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ull;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-double unit(std::uint64_t h) { return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0); }
-
-int displaced_sign(i128 e, std::int64_t du, std::int64_t dv) {
-  if (e != 0) return e > 0 ? 1 : -1;
-  if (dv != 0) return dv > 0 ? -1 : 1;
-  return du > 0 ? 1 : -1;
-}
+using detail::FixedMesh;
+using detail::FixedPoint;
+using detail::kFixedOne;
+using Bins = detail::TriangleBins;
+using Crossing = detail::RayCrossing;
+using detail::splitmix_hash;
+using detail::unit_interval;
 
 // The stochastic ray position of ray a * kk + b of column j, row k, in fixed
 // point (u = y, v = z): CoverageVoxelizer::ray_position.
 inline void ray_position(std::uint64_t seed, int kk, std::int64_t j, std::int64_t k, int a, int b, std::int64_t& pu,
                          std::int64_t& pv) {
-  const std::uint64_t h = mix(seed ^ mix(static_cast<std::uint64_t>(j) * 0x100000001b3ull ^
-                                         mix(static_cast<std::uint64_t>(k) << 20 ^ static_cast<std::uint64_t>(a * kk + b))));
+  const std::uint64_t ray = static_cast<std::uint64_t>(k) << 20 ^ static_cast<std::uint64_t>(a * kk + b);
+  const std::uint64_t h =
+      splitmix_hash(seed ^ splitmix_hash(static_cast<std::uint64_t>(j) * 0x100000001b3ull ^ splitmix_hash(ray)));
   const double one = static_cast<double>(kFixedOne);
-  pu = j * kFixedOne + static_cast<std::int64_t>(std::floor(((a + unit(h)) / kk - 0.5) * one));
-  pv = k * kFixedOne + static_cast<std::int64_t>(std::floor(((b + unit(mix(h))) / kk - 0.5) * one));
-}
-
-struct Crossing {
-  std::int32_t column;
-  std::int32_t ray;
-  double x;
-};
-inline bool crossing_less(const Crossing& a, const Crossing& b) {
-  return a.column != b.column ? a.column < b.column : a.ray != b.ray ? a.ray < b.ray : a.x < b.x;
+  pu = j * kFixedOne + static_cast<std::int64_t>(std::floor(((a + unit_interval(h)) / kk - 0.5) * one));
+  pv = k * kFixedOne + static_cast<std::int64_t>(std::floor(((b + unit_interval(splitmix_hash(h))) / kk - 0.5) * one));
 }
 
 class Voxelizer {
  public:
   Voxelizer(const Mesh& mesh, const Grid& grid, int k, std::uint64_t seed)
-      : fixed_(mesh, grid), grid_(grid), k_(k), seed_(seed) {}
+      : mesh_(&mesh), fixed_(mesh, grid), grid_(grid), k_(k), seed_(seed) {}
 
   std::int64_t per_chunk(int threads) const { return std::max<std::int64_t>(1, grid_.dims.z / (threads * 8)); }
-  Bins bins(int threads) const { return bin_triangles(fixed_, 2, grid_.dims.z, per_chunk(threads), 1, threads); }
+  Bins bins(int threads) const { return detail::bin_triangles(fixed_, 2, grid_.dims.z, per_chunk(threads), 1, threads); }
 
   // Row k's crossings, sorted by (column, ray, x).
   void row_crossings(const Bins& bins, std::int64_t chunk, std::int64_t k, std::vector<Crossing>& out) const {
     out.clear();
     for (std::uint32_t t = bins.offsets[static_cast<std::size_t>(chunk)];
          t < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++t)
-      cross_triangle(bins.triangles[t], k, out);
-    std::sort(out.begin(), out.end(), crossing_less);
-  }
-
-  void cross_triangle(std::uint32_t t, std::int64_t k, std::vector<Crossing>& out) const {
-    const auto& tri = fixed_.mesh->triangles[t];
-    const FixedPoint A = fixed_.vertex(tri[0]), B = fixed_.vertex(tri[1]), C = fixed_.vertex(tri[2]);
-    const std::int64_t au = A[1], av = A[2], bu = B[1], bv = B[2], cu = C[1], cv = C[2];
-    const i128 det = static_cast<i128>(bu - au) * (cv - av) - static_cast<i128>(bv - av) * (cu - au);
-    if (det == 0) return;
-    const int sigma = det > 0 ? 1 : -1;
-    const std::int64_t minu = std::min({au, bu, cu}), maxu = std::max({au, bu, cu});
-    const std::int64_t minv = std::min({av, bv, cv}), maxv = std::max({av, bv, cv});
-    const std::int64_t half = kFixedOne / 2;
-    if (maxv < k * kFixedOne - half || minv >= k * kFixedOne + half) return;
-    const std::int64_t j0 = std::max<std::int64_t>(0, floor_fixed(minu + half));
-    const std::int64_t j1 = std::min<std::int64_t>(grid_.dims.y - 1, floor_fixed(maxu + half));
-    if (j0 > j1) return;
-    const double e1x = static_cast<double>(B[0] - A[0]), e1u = static_cast<double>(bu - au), e1v = static_cast<double>(bv - av);
-    const double e2x = static_cast<double>(C[0] - A[0]), e2u = static_cast<double>(cu - au), e2v = static_cast<double>(cv - av);
-    const double nx = static_cast<double>(det);
-    const double gu = -(e1v * e2x - e1x * e2v) / nx, gv = -(e1x * e2u - e1u * e2x) / nx;
-    const std::int64_t P[3][2] = {{au, av}, {bu, bv}, {cu, cv}};
-    for (std::int64_t j = j0; j <= j1; ++j)
-      for (int a = 0; a < k_; ++a)
-        for (int b = 0; b < k_; ++b) {
-          std::int64_t pu, pv;
-          ray_position(seed_, k_, j, k, a, b, pu, pv);
-          if (pu < minu || pu > maxu || pv < minv || pv > maxv) continue;
-          bool inside = true;
-          for (int e = 0; e < 3 && inside; ++e) {
-            const std::int64_t du = P[(e + 1) % 3][0] - P[e][0], dv = P[(e + 1) % 3][1] - P[e][1];
-            const i128 f = static_cast<i128>(du) * (pv - P[e][1]) - static_cast<i128>(dv) * (pu - P[e][0]);
-            inside = sigma * displaced_sign(f, du, dv) > 0;
-          }
-          if (!inside) continue;
-          const double x = static_cast<double>(A[0]) + gu * static_cast<double>(pu - au) + gv * static_cast<double>(pv - av);
-          out.push_back({static_cast<std::int32_t>(j), a * k_ + b, x / static_cast<double>(kFixedOne) + 0.5});
-        }
+      detail::cross_row_rays(fixed_, bins.triangles[t], k, grid_.dims.y, k_ * k_,
+                             [&](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
+                               ray_position(seed_, k_, j, k, r / k_, r % k_, pu, pv);
+                             },
+                             out);
+    detail::sort_crossings(out);
   }
 
   // A sorted row of crossings into the row's voxels (fill_column +
@@ -284,12 +181,14 @@ class Voxelizer {
     for (std::int64_t i = 0; i < grid_.dims.x; ++i) row[i] = std::clamp(row[i], 0.0f, 1.0f);
   }
 
+  const Mesh& mesh() const { return *mesh_; }
   const FixedMesh& fixed() const { return fixed_; }
   const Grid& grid() const { return grid_; }
   int k() const { return k_; }
   std::uint64_t seed() const { return seed_; }
 
  private:
+  const Mesh* mesh_;
   FixedMesh fixed_;
   Grid grid_;
   int k_;
@@ -358,7 +257,7 @@ class EmbreeTracer {
     rtcSetSceneFlags(scene_, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
     RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    const Mesh& m = *v.fixed().mesh;
+    const Mesh& m = v.mesh();
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                            3 * sizeof(float), m.vertices.size()));
     auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,

@@ -20,16 +20,7 @@ namespace {
 
 using nlohmann::json;
 
-class PaletteSliceTest : public HttpServiceTest {
- protected:
-  std::string finished(const json& job) {
-    const std::string id = job.at("id");
-    const json done = wait_for_job(http(), id);
-    EXPECT_EQ(done.at("state"), "succeeded") << done.dump();
-    schemas_->add("JobStatus", done.dump());
-    return id;
-  }
-};
+using PaletteSliceTest = HttpServiceTest;
 
 std::span<const std::uint8_t> span_of(const std::string& s) {
   return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};

@@ -22,16 +22,7 @@ namespace {
 
 using nlohmann::json;
 
-class ValueJobsTest : public HttpServiceTest {
- protected:
-  std::string finished(const json& job) {
-    const std::string id = job.at("id");
-    const json done = wait_for_job(http(), id);
-    EXPECT_EQ(done.at("state"), "succeeded") << done.dump();
-    schemas_->add("JobStatus", done.dump());
-    return id;
-  }
-};
+using ValueJobsTest = HttpServiceTest;
 
 std::string gunzip(const std::string& in) {
   z_stream z{};

@@ -114,6 +114,16 @@ class HttpServiceTest : public ::testing::Test {
     return expect_json(post_multipart(http(), "/v1/jobs", mesh, filename, params), 202, "JobStatus");
   }
 
+  // Waits for a submitted job, expects it to succeed (its final status is
+  // checked against the OpenAPI schema with the rest) and returns its id.
+  std::string finished(const nlohmann::json& job) {
+    const std::string id = job.at("id");
+    const nlohmann::json done = wait_for_job(http(), id);
+    EXPECT_EQ(done.at("state"), "succeeded") << done.dump();
+    schemas_->add("JobStatus", done.dump());
+    return id;
+  }
+
   std::string volume(const std::string& id, const std::string& query = "") {
     auto res = http().Get(("/v1/jobs/" + id + "/volume" + query).c_str());
     EXPECT_TRUE(res);
