@@ -13,6 +13,15 @@
 #include "voxd/parallel.h"
 #include "voxelize/sdf_triangle.h"
 
+// Loops over a cluster's lanes, cloned for AVX-512 and AVX2 and chosen at
+// load time by the CPU (GCC's function multiversioning); the portable build
+// targets x86-64-v2, which has neither.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define VOXD_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define VOXD_VECTOR_CLONES
+#endif
+
 namespace voxd::sdf {
 namespace {
 
@@ -228,33 +237,84 @@ inline float round_up(double v) {
   return static_cast<double>(f) >= v ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
 }
 
-// What scatter_cluster tests each triangle of a cluster with, made once per
-// cluster and chunk.
-struct Probe {
-  Triangle t;
-  dvec3 unit{0.0};  // unit normal; 0 when degenerate
-  double inv_ab = 0.0, inv_bc = 0.0, inv_ca = 0.0;  // 1 / |in_ab| ...
-  explicit Probe(const Triangle& tri) : t(tri) {
-    if (t.degenerate) return;
-    unit = t.n / std::sqrt(t.nn);
-    inv_ab = 1.0 / glm::length(t.in_ab);
-    inv_bc = 1.0 / glm::length(t.in_bc);
-    inv_ca = 1.0 / glm::length(t.in_ca);
+// A cluster's triangles as structure of arrays: the lower bounds of one
+// voxel against all of them are then one straight loop the compiler turns
+// into vector code (lower_bounds), where an array of triangle structs kept it
+// scalar. Lanes past `count` hold zeros; their bounds are ignored.
+struct ProbeBlock {
+  std::size_t count = 0;
+  std::vector<Triangle> triangles;  // for the exact distances
+  alignas(64) double ax[kClusterSize], ay[kClusterSize], az[kClusterSize];
+  double ux[kClusterSize], uy[kClusterSize], uz[kClusterSize];  // unit normal; 0 when degenerate
+  // In-plane edge normals divided by their length (0 when degenerate), and
+  // the edges' start vertices b and c (a is above).
+  double abx[kClusterSize], aby[kClusterSize], abz[kClusterSize];
+  double bx[kClusterSize], by[kClusterSize], bz[kClusterSize], bcx[kClusterSize], bcy[kClusterSize], bcz[kClusterSize];
+  double cx[kClusterSize], cy[kClusterSize], cz[kClusterSize], cax[kClusterSize], cay[kClusterSize], caz[kClusterSize];
+  // Centroids, for the seeding pass's upper bounds.
+  double gx[kClusterSize], gy[kClusterSize], gz[kClusterSize];
+
+  ProbeBlock() { clear(); }
+  void clear() {
+    count = 0;
+    triangles.clear();
+    for (double* v : {ax, ay, az, ux, uy, uz, abx, aby, abz, bx, by, bz, bcx, bcy, bcz, cx, cy, cz, cax, cay, caz, gx, gy, gz})
+      std::fill(v, v + kClusterSize, 0.0);
+  }
+  // The seeding pass needs the centroids only.
+  void add_centroid(const dvec3& g) {
+    const std::size_t x = count++;
+    gx[x] = g.x, gy[x] = g.y, gz[x] = g.z;
+  }
+  void add(const Triangle& t) {
+    const std::size_t x = count++;
+    triangles.push_back(t);
+    ax[x] = t.a.x, ay[x] = t.a.y, az[x] = t.a.z;
+    bx[x] = t.b.x, by[x] = t.b.y, bz[x] = t.b.z;
+    cx[x] = t.c.x, cy[x] = t.c.y, cz[x] = t.c.z;
+    const dvec3 g = (t.a + t.b + t.c) / 3.0;
+    gx[x] = g.x, gy[x] = g.y, gz[x] = g.z;
+    if (t.degenerate) return;  // bound 0: always tested exactly
+    const dvec3 u = t.n / std::sqrt(t.nn);
+    const dvec3 iab = t.in_ab / glm::length(t.in_ab), ibc = t.in_bc / glm::length(t.in_bc),
+                ica = t.in_ca / glm::length(t.in_ca);
+    ux[x] = u.x, uy[x] = u.y, uz[x] = u.z;
+    abx[x] = iab.x, aby[x] = iab.y, abz[x] = iab.z;
+    bcx[x] = ibc.x, bcy[x] = ibc.y, bcz[x] = ibc.z;
+    cax[x] = ica.x, cay[x] = ica.y, caz[x] = ica.z;
   }
 };
 
-// A lower bound of distance2(q.t, p), without branches or divisions: the
-// point's height over the plane and, in the plane, how far its projection
-// lies outside the farthest edge line (the distance to that half-plane,
-// which holds the triangle). The factor and the term in |ap|^2 cover the
-// rounding (relative 1e-15 of |ap|), far below a float's resolution.
-inline double lower_bound2(const Probe& q, const dvec3& p) {
-  if (q.t.degenerate) return 0.0;
-  const dvec3 ap = p - q.t.a;
-  const double h = glm::dot(q.unit, ap);
-  const double e = std::max({0.0, -glm::dot(q.t.in_ab, ap) * q.inv_ab, -glm::dot(q.t.in_bc, p - q.t.b) * q.inv_bc,
-                             -glm::dot(q.t.in_ca, p - q.t.c) * q.inv_ca});
-  return (h * h + e * e) * (1.0 - 1e-9) - 1e-12 * glm::dot(ap, ap);
+// Lower bounds of distance2(triangle, p) for every lane, without branches or
+// divisions: the point's height over the plane and, in the plane, how far
+// its projection lies outside the farthest edge line (the distance to that
+// half-plane, which holds the triangle). The factor and the term in |ap|^2
+// cover the rounding (relative 1e-15 of |ap|; also with fused multiply-adds),
+// far below a float's resolution. Degenerate lanes give a bound <= 0.
+// Vector clones (VOXD_VECTOR_CLONES); the exact distances stay in the
+// baseline code, so their bits do not depend on the machine.
+VOXD_VECTOR_CLONES void lower_bounds(const ProbeBlock& q, double px, double py, double pz, double* out) {
+  for (std::size_t x = 0; x < kClusterSize; ++x) {
+    const double apx = px - q.ax[x], apy = py - q.ay[x], apz = pz - q.az[x];
+    const double bpx = px - q.bx[x], bpy = py - q.by[x], bpz = pz - q.bz[x];
+    const double cpx = px - q.cx[x], cpy = py - q.cy[x], cpz = pz - q.cz[x];
+    const double h = q.ux[x] * apx + q.uy[x] * apy + q.uz[x] * apz;
+    const double e1 = -(q.abx[x] * apx + q.aby[x] * apy + q.abz[x] * apz);
+    const double e2 = -(q.bcx[x] * bpx + q.bcy[x] * bpy + q.bcz[x] * bpz);
+    const double e3 = -(q.cax[x] * cpx + q.cay[x] * cpy + q.caz[x] * cpz);
+    double e = e1 > 0.0 ? e1 : 0.0;
+    e = e2 > e ? e2 : e;
+    e = e3 > e ? e3 : e;
+    out[x] = (h * h + e * e) * (1.0 - 1e-9) - 1e-12 * (apx * apx + apy * apy + apz * apz);
+  }
+}
+
+// Squared distances from p to every lane's centroid.
+VOXD_VECTOR_CLONES void centroid_distances(const ProbeBlock& q, double px, double py, double pz, double* out) {
+  for (std::size_t x = 0; x < kClusterSize; ++x) {
+    const double dx = px - q.gx[x], dy = py - q.gy[x], dz = pz - q.gz[x];
+    out[x] = dx * dx + dy * dy + dz * dz;
+  }
 }
 
 // Lowers each voxel of slabs [z0, z1) within the band of the flat cluster c
@@ -263,14 +323,20 @@ inline double lower_bound2(const Probe& q, const dvec3& p) {
 // and of the slab along the mean normal; per voxel, the distance to the
 // oriented box bounds all its triangles'.
 template <bool kSeed>
-void scatter_cluster(const Cluster& c, const std::vector<Probe>& probes, const std::vector<dvec3>& centroids,
-                     const Grid& g, const BandSetup& s, std::int64_t z0, std::int64_t z1, DenseVolume<float>& values) {
+void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, const BandSetup& s, std::int64_t z0,
+                     std::int64_t z1, DenseVolume<float>& values) {
   const IndexSpace index_of(g);
   const double band = s.band * index_of.inv_voxel, band2 = band * band;  // voxels
   const dvec3 centre_i = index_of(c.centre);
   const double reach = band + c.radius * index_of.inv_voxel, reach2 = reach * reach;
-  const double slab = band + c.half.z * index_of.inv_voxel;
-  const double inv_n_x = std::abs(c.n.x) > 1e-3 ? 1.0 / c.n.x : 0.0;
+  // The band of the oriented box lies within three slabs, one along each
+  // of its axes: |axis . (p - centre)| <= half + band.
+  const std::array<dvec3, 3> axes{c.u, c.w, c.n};
+  std::array<double, 3> slab{}, inv_x{};
+  for (int a = 0; a < 3; ++a) {
+    slab[a] = band + c.half[a] * index_of.inv_voxel;
+    inv_x[a] = std::abs(axes[a].x) > 1e-3 ? 1.0 / axes[a].x : 0.0;
+  }
 
   const std::int64_t k0 = std::max(z0, IndexSpace::first(c.lo.z - band, g.dims.z));
   const std::int64_t k1 = std::min(z1 - 1, IndexSpace::last(c.hi.z + band, g.dims.z));
@@ -287,9 +353,11 @@ void scatter_cluster(const Cluster& c, const std::vector<Probe>& probes, const s
       if (box_rest2 < 0.0 || sphere_rest2 < 0.0) continue;
       const double bx = std::sqrt(box_rest2), sx = std::sqrt(sphere_rest2);
       double from = std::max(c.lo.x - bx, centre_i.x - sx), to = std::min(c.hi.x + bx, centre_i.x + sx);
-      if (inv_n_x != 0.0) {  // |n . (p - centre)| <= slab
-        const double plane_yz_i = c.n.y * (jj - centre_i.y) + c.n.z * (kk - centre_i.z);
-        const double p0 = centre_i.x + (-slab - plane_yz_i) * inv_n_x, p1 = centre_i.x + (slab - plane_yz_i) * inv_n_x;
+      for (int a = 0; a < 3; ++a) {
+        if (inv_x[a] == 0.0) continue;  // the axis is nearly across the row: no restriction
+        const dvec3& e = axes[a];
+        const double yz = e.y * (jj - centre_i.y) + e.z * (kk - centre_i.z);
+        const double p0 = centre_i.x + (-slab[a] - yz) * inv_x[a], p1 = centre_i.x + (slab[a] - yz) * inv_x[a];
         from = std::max(from, std::min(p0, p1));
         to = std::min(to, std::max(p0, p1));
       }
@@ -310,9 +378,11 @@ void scatter_cluster(const Cluster& c, const std::vector<Probe>& probes, const s
         // a float's resolution, which the factor covers.
         if ((qu * qu + qw * qw + qn * qn) * (1.0 - 1e-9) >= limit * limit) continue;
         const dvec3 p(cx, cy, cz);
+        std::array<double, kClusterSize> bound2;
         if constexpr (kSeed) {
+          centroid_distances(probes, cx, cy, cz, bound2.data());
           double u2 = kInfinity;
-          for (const dvec3& q : centroids) u2 = std::min(u2, glm::dot(p - q, p - q));
+          for (std::size_t x = 0; x < probes.count; ++x) u2 = std::min(u2, bound2[x]);
           // Strictly above the distance (a centroid is a point of the
           // surface), so the nearest triangle still beats it.
           const double bound = std::sqrt(u2) * (1.0 + 1e-6);
@@ -321,21 +391,29 @@ void scatter_cluster(const Cluster& c, const std::vector<Probe>& probes, const s
         }
         // The triangles by increasing lower bound, until it reaches the
         // value: usually one exact distance, the nearest.
-        std::array<double, kClusterSize> bound2;
-        for (std::size_t x = 0; x < probes.size(); ++x) bound2[x] = lower_bound2(probes[x], p);
+        lower_bounds(probes, cx, cy, cz, bound2.data());
+        for (std::size_t x = probes.count; x < kClusterSize; ++x) bound2[x] = kInfinity;
         for (;;) {
           std::size_t best = 0;
-          for (std::size_t x = 1; x < probes.size(); ++x)
+          for (std::size_t x = 1; x < probes.count; ++x)
             if (bound2[x] < bound2[best]) best = x;
           if (!(bound2[best] < limit * limit)) break;
           bound2[best] = kInfinity;
-          const double d2 = distance2(probes[best].t, p);
+          const double d2 = distance2(probes.triangles[best], p);
           if (d2 >= limit * limit) continue;
           row[i] = std::min(row[i], static_cast<float>(std::sqrt(d2) * s.to_output));
           limit = static_cast<double>(row[i]) * s.to_model;
         }
       }
     }
+  }
+}
+
+void load(const Mesh& mesh, const ClusterSet& set, const Cluster& c, ProbeBlock& probes) {
+  probes.clear();
+  for (std::uint32_t y = c.begin; y < c.end; ++y) {
+    const std::size_t t = set.order[y];
+    probes.add(Triangle(corner(mesh, t, 0), corner(mesh, t, 1), corner(mesh, t, 2)));
   }
 }
 
@@ -387,8 +465,7 @@ void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const Ban
   for (const std::uint32_t c : bins.clusters) total += set.clusters[c].end - set.clusters[c].begin;
   std::atomic<std::uint64_t> done{0};
   parallel_for(0, bins.chunk_count, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
-    std::vector<Probe> probes;
-    std::vector<dvec3> centroids;
+    ProbeBlock probes;
     for (std::int64_t chunk = c0; chunk < c1; ++chunk) {
       progress.check_cancelled();
       const std::int64_t z0 = chunk * bins.slabs_per_chunk, z1 = std::min(g.dims.z, z0 + bins.slabs_per_chunk);
@@ -397,23 +474,19 @@ void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const Ban
            x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
         const Cluster& c = set.clusters[bins.clusters[x]];
         if (!c.flat) continue;
-        centroids.clear();
+        probes.clear();
         for (std::uint32_t y = c.begin; y < c.end; ++y) {
           const std::size_t t = set.order[y];
-          centroids.push_back((corner(mesh, t, 0) + corner(mesh, t, 1) + corner(mesh, t, 2)) / 3.0);
+          probes.add_centroid((corner(mesh, t, 0) + corner(mesh, t, 1) + corner(mesh, t, 2)) / 3.0);
         }
-        scatter_cluster<true>(c, probes, centroids, g, s, z0, z1, values);
+        scatter_cluster<true>(c, probes, g, s, z0, z1, values);
       }
       for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
            x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
         const Cluster& c = set.clusters[bins.clusters[x]];
         if (c.flat) {
-          probes.clear();
-          for (std::uint32_t y = c.begin; y < c.end; ++y) {
-            const std::size_t t = set.order[y];
-            probes.emplace_back(Triangle(corner(mesh, t, 0), corner(mesh, t, 1), corner(mesh, t, 2)));
-          }
-          scatter_cluster<false>(c, probes, centroids, g, s, z0, z1, values);
+          load(mesh, set, c, probes);
+          scatter_cluster<false>(c, probes, g, s, z0, z1, values);
         } else {
           for (std::uint32_t y = c.begin; y < c.end; ++y) {
             const std::size_t t = set.order[y];
