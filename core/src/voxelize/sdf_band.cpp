@@ -4,11 +4,16 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <vector>
 
 #include <glm/geometric.hpp>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 #include "voxd/parallel.h"
 #include "voxelize/sdf_triangle.h"
@@ -317,6 +322,72 @@ VOXD_VECTOR_CLONES void centroid_distances(const ProbeBlock& q, double px, doubl
   }
 }
 
+// The per-voxel test of a row against a cluster's oriented box, the bulk of
+// the band's work (each band voxel meets a few dozen clusters, nearly all of
+// which this test turns away). Rows are short (the band's width and a
+// cluster's), too short for the compiler's vector loops, so the AVX2 form
+// takes four voxels at a time with a masked tail. Both forms set bit m of
+// `mask` when voxel i0 + m of row[i0, i0 + n) may be lowered by the cluster:
+// its distance to the box, a lower bound of every triangle's (to rounding far
+// below a float's resolution, which the factor covers), is below its value.
+struct RowBox {
+  double origin_x, voxel;   // centre of voxel i: origin_x + (i + 1/2) voxel
+  double centre_x;          // the box's centre
+  double u_yz, w_yz, n_yz;  // the row's y, z part of the box frame coordinates
+  double ux, wx, nx;        // the frame axes' x components
+  double hu, hw, hn;        // half-extents
+  double to_model;
+};
+
+void box_mask_scalar(const RowBox& b, const float* row, std::int64_t i0, std::int64_t n, std::uint64_t* mask) {
+  for (std::int64_t m = 0; m < n; ++m) {
+    const double ex = b.origin_x + (static_cast<double>(i0 + m) + 0.5) * b.voxel - b.centre_x;
+    const double limit = static_cast<double>(row[m]) * b.to_model;
+    const double qu = std::max(std::abs(b.u_yz + b.ux * ex) - b.hu, 0.0);
+    const double qw = std::max(std::abs(b.w_yz + b.wx * ex) - b.hw, 0.0);
+    const double qn = std::max(std::abs(b.n_yz + b.nx * ex) - b.hn, 0.0);
+    if ((qu * qu + qw * qw + qn * qn) * (1.0 - 1e-9) < limit * limit) mask[m >> 6] |= std::uint64_t{1} << (m & 63);
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("avx2,fma"))) void box_mask_avx2(const RowBox& b, const float* row, std::int64_t i0,
+                                                        std::int64_t n, std::uint64_t* mask) {
+  const __m256d voxel = _mm256_set1_pd(b.voxel), origin = _mm256_set1_pd(b.origin_x), centre = _mm256_set1_pd(b.centre_x);
+  const __m256d u_yz = _mm256_set1_pd(b.u_yz), w_yz = _mm256_set1_pd(b.w_yz), n_yz = _mm256_set1_pd(b.n_yz);
+  const __m256d ux = _mm256_set1_pd(b.ux), wx = _mm256_set1_pd(b.wx), nx = _mm256_set1_pd(b.nx);
+  const __m256d hu = _mm256_set1_pd(b.hu), hw = _mm256_set1_pd(b.hw), hn = _mm256_set1_pd(b.hn);
+  const __m256d to_model = _mm256_set1_pd(b.to_model), shrink = _mm256_set1_pd(1.0 - 1e-9);
+  const __m256d zero = _mm256_setzero_pd(), sign = _mm256_set1_pd(-0.0), lane = _mm256_setr_pd(0.0, 1.0, 2.0, 3.0);
+  const __m128i lane_index = _mm_setr_epi32(0, 1, 2, 3);
+  for (std::int64_t m = 0; m < n; m += 4) {
+    // Lanes past the row's end read nothing (their limit is 0: never pass).
+    const __m128i in_row = _mm_cmpgt_epi32(_mm_set1_epi32(static_cast<int>(std::min<std::int64_t>(n - m, 4))), lane_index);
+    const __m256d limit = _mm256_mul_pd(_mm256_cvtps_pd(_mm_maskload_ps(row + m, in_row)), to_model);
+    const __m256d index = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(i0 + m) + 0.5), lane);
+    const __m256d ex = _mm256_sub_pd(_mm256_add_pd(origin, _mm256_mul_pd(index, voxel)), centre);
+    const __m256d au = _mm256_andnot_pd(sign, _mm256_add_pd(u_yz, _mm256_mul_pd(ux, ex)));
+    const __m256d aw = _mm256_andnot_pd(sign, _mm256_add_pd(w_yz, _mm256_mul_pd(wx, ex)));
+    const __m256d an = _mm256_andnot_pd(sign, _mm256_add_pd(n_yz, _mm256_mul_pd(nx, ex)));
+    const __m256d qu = _mm256_max_pd(_mm256_sub_pd(au, hu), zero);
+    const __m256d qw = _mm256_max_pd(_mm256_sub_pd(aw, hw), zero);
+    const __m256d qn = _mm256_max_pd(_mm256_sub_pd(an, hn), zero);
+    const __m256d q2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(qu, qu), _mm256_mul_pd(qw, qw)), _mm256_mul_pd(qn, qn));
+    const __m256d pass = _mm256_cmp_pd(_mm256_mul_pd(q2, shrink), _mm256_mul_pd(limit, limit), _CMP_LT_OQ);
+    const auto bits = static_cast<std::uint64_t>(_mm256_movemask_pd(pass));
+    mask[m >> 6] |= bits << (m & 63);  // m is a multiple of 4: the 4 bits stay in one word
+  }
+}
+#endif
+
+void box_mask(const RowBox& b, const float* row, std::int64_t i0, std::int64_t n, std::uint64_t* mask) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (avx2) return box_mask_avx2(b, row, i0, n, mask);
+#endif
+  box_mask_scalar(b, row, i0, n, mask);
+}
+
 // Lowers each voxel of slabs [z0, z1) within the band of the flat cluster c
 // to its distance to c's triangles if smaller, like scatter_triangle: rows
 // restricted in index space by the band of the box, of the bounding sphere
@@ -324,7 +395,7 @@ VOXD_VECTOR_CLONES void centroid_distances(const ProbeBlock& q, double px, doubl
 // oriented box bounds all its triangles'.
 template <bool kSeed>
 void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, const BandSetup& s, std::int64_t z0,
-                     std::int64_t z1, DenseVolume<float>& values) {
+                     std::int64_t z1, DenseVolume<float>& values, std::vector<std::uint64_t>& mask) {
   const IndexSpace index_of(g);
   const double band = s.band * index_of.inv_voxel, band2 = band * band;  // voxels
   const dvec3 centre_i = index_of(c.centre);
@@ -366,17 +437,17 @@ void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, 
 
       const double cy = centre_coordinate(g, 1, j);
       const double ey = cy - c.centre.y, ez = cz - c.centre.z;
-      const double u_yz = c.u.y * ey + c.u.z * ez, w_yz = c.w.y * ey + c.w.z * ez, n_yz = c.n.y * ey + c.n.z * ez;
+      const RowBox box{g.origin.x, g.voxel_size, c.centre.x, c.u.y * ey + c.u.z * ez, c.w.y * ey + c.w.z * ez,
+                       c.n.y * ey + c.n.z * ez, c.u.x, c.w.x, c.n.x, c.half.x, c.half.y, c.half.z, s.to_model};
       float* row = slab_values + j * g.dims.x;
-      for (std::int64_t i = i0; i <= i1; ++i) {
-        const double cx = centre_coordinate(g, 0, i), ex = cx - c.centre.x;
+      const std::int64_t n = i1 - i0 + 1;
+      mask.assign(static_cast<std::size_t>((n + 63) / 64), 0);
+      box_mask(box, row + i0, i0, n, mask.data());
+      for (std::size_t word = 0; word < mask.size(); ++word)
+        for (std::uint64_t bits = mask[word]; bits != 0; bits &= bits - 1) {
+        const std::int64_t i = i0 + static_cast<std::int64_t>(word * 64) + std::countr_zero(bits);
+        const double cx = centre_coordinate(g, 0, i);
         double limit = static_cast<double>(row[i]) * s.to_model;
-        const double qu = std::max(std::abs(u_yz + c.u.x * ex) - c.half.x, 0.0);
-        const double qw = std::max(std::abs(w_yz + c.w.x * ex) - c.half.y, 0.0);
-        const double qn = std::max(std::abs(n_yz + c.n.x * ex) - c.half.z, 0.0);
-        // A lower bound of every triangle's distance, to rounding far below
-        // a float's resolution, which the factor covers.
-        if ((qu * qu + qw * qw + qn * qn) * (1.0 - 1e-9) >= limit * limit) continue;
         const dvec3 p(cx, cy, cz);
         std::array<double, kClusterSize> bound2;
         if constexpr (kSeed) {
@@ -466,6 +537,7 @@ void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const Ban
   std::atomic<std::uint64_t> done{0};
   parallel_for(0, bins.chunk_count, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
     ProbeBlock probes;
+    std::vector<std::uint64_t> mask;  // scatter_cluster's box test of a row
     for (std::int64_t chunk = c0; chunk < c1; ++chunk) {
       progress.check_cancelled();
       const std::int64_t z0 = chunk * bins.slabs_per_chunk, z1 = std::min(g.dims.z, z0 + bins.slabs_per_chunk);
@@ -479,14 +551,14 @@ void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const Ban
           const std::size_t t = set.order[y];
           probes.add_centroid((corner(mesh, t, 0) + corner(mesh, t, 1) + corner(mesh, t, 2)) / 3.0);
         }
-        scatter_cluster<true>(c, probes, g, s, z0, z1, values);
+        scatter_cluster<true>(c, probes, g, s, z0, z1, values, mask);
       }
       for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
            x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
         const Cluster& c = set.clusters[bins.clusters[x]];
         if (c.flat) {
           load(mesh, set, c, probes);
-          scatter_cluster<false>(c, probes, g, s, z0, z1, values);
+          scatter_cluster<false>(c, probes, g, s, z0, z1, values, mask);
         } else {
           for (std::uint32_t y = c.begin; y < c.end; ++y) {
             const std::size_t t = set.order[y];
