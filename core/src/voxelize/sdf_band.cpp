@@ -236,10 +236,11 @@ ClusterSet make_clusters(const Mesh& mesh, const Grid& g, int threads) {
   return set;
 }
 
-// The float at or above v.
+// The float at or above v (v >= 0 and finite: the next float up is the
+// next bit pattern).
 inline float round_up(double v) {
   const auto f = static_cast<float>(v);
-  return static_cast<double>(f) >= v ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
+  return static_cast<double>(f) >= v ? f : std::bit_cast<float>(std::bit_cast<std::uint32_t>(f) + 1u);
 }
 
 // A cluster's triangles as structure of arrays: the lower bounds of one
@@ -256,15 +257,16 @@ struct ProbeBlock {
   double abx[kClusterSize], aby[kClusterSize], abz[kClusterSize];
   double bx[kClusterSize], by[kClusterSize], bz[kClusterSize], bcx[kClusterSize], bcy[kClusterSize], bcz[kClusterSize];
   double cx[kClusterSize], cy[kClusterSize], cz[kClusterSize], cax[kClusterSize], cay[kClusterSize], caz[kClusterSize];
-  // Centroids, for the seeding pass's upper bounds.
+  // Centroids, for the seeding pass's upper bounds (infinite in unused lanes).
   double gx[kClusterSize], gy[kClusterSize], gz[kClusterSize];
 
   ProbeBlock() { clear(); }
   void clear() {
     count = 0;
     triangles.clear();
-    for (double* v : {ax, ay, az, ux, uy, uz, abx, aby, abz, bx, by, bz, bcx, bcy, bcz, cx, cy, cz, cax, cay, caz, gx, gy, gz})
+    for (double* v : {ax, ay, az, ux, uy, uz, abx, aby, abz, bx, by, bz, bcx, bcy, bcz, cx, cy, cz, cax, cay, caz})
       std::fill(v, v + kClusterSize, 0.0);
+    for (double* v : {gx, gy, gz}) std::fill(v, v + kClusterSize, kInfinity);
   }
   // The seeding pass needs the centroids only.
   void add_centroid(const dvec3& g) {
@@ -314,12 +316,18 @@ VOXD_VECTOR_CLONES void lower_bounds(const ProbeBlock& q, double px, double py, 
   }
 }
 
-// Squared distances from p to every lane's centroid.
-VOXD_VECTOR_CLONES void centroid_distances(const ProbeBlock& q, double px, double py, double pz, double* out) {
+// The squared distance from p to the nearest lane's centroid (lanes past
+// `count` hold infinite centroids), the minimum taken pairwise so that it
+// stays vector code.
+VOXD_VECTOR_CLONES double nearest_centroid2(const ProbeBlock& q, double px, double py, double pz) {
+  double d[kClusterSize];
   for (std::size_t x = 0; x < kClusterSize; ++x) {
     const double dx = px - q.gx[x], dy = py - q.gy[x], dz = pz - q.gz[x];
-    out[x] = dx * dx + dy * dy + dz * dz;
+    d[x] = dx * dx + dy * dy + dz * dz;
   }
+  for (std::size_t width = kClusterSize / 2; width > 0; width /= 2)
+    for (std::size_t x = 0; x < width; ++x) d[x] = d[x + width] < d[x] ? d[x + width] : d[x];
+  return d[0];
 }
 
 // The per-voxel test of a row against a cluster's oriented box, the bulk of
@@ -451,9 +459,7 @@ void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, 
         const dvec3 p(cx, cy, cz);
         std::array<double, kClusterSize> bound2;
         if constexpr (kSeed) {
-          centroid_distances(probes, cx, cy, cz, bound2.data());
-          double u2 = kInfinity;
-          for (std::size_t x = 0; x < probes.count; ++x) u2 = std::min(u2, bound2[x]);
+          const double u2 = nearest_centroid2(probes, cx, cy, cz);
           // Strictly above the distance (a centroid is a point of the
           // surface), so the nearest triangle still beats it.
           const double bound = std::sqrt(u2) * (1.0 + 1e-6);
