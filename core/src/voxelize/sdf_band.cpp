@@ -459,11 +459,11 @@ void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, 
         const dvec3 p(cx, cy, cz);
         std::array<double, kClusterSize> bound2;
         if constexpr (kSeed) {
-          const double u2 = nearest_centroid2(probes, cx, cy, cz);
           // Strictly above the distance (a centroid is a point of the
-          // surface), so the nearest triangle still beats it.
-          const double bound = std::sqrt(u2) * (1.0 + 1e-6);
-          if (bound < limit) row[i] = std::min(row[i], round_up(bound * s.to_output));
+          // surface), so the nearest triangle still beats it; the root only
+          // when it would lower the value.
+          const double u2 = nearest_centroid2(probes, cx, cy, cz) * ((1.0 + 1e-6) * (1.0 + 1e-6));
+          if (u2 < limit * limit) row[i] = std::min(row[i], round_up(std::sqrt(u2) * s.to_output));
           continue;
         }
         // The triangles by increasing lower bound, until it reaches the
