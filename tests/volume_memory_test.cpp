@@ -27,6 +27,33 @@ TEST(VolumeMemory, SmallAndLargeBlocksAreZeroedWhenAskedAndWritableToTheEnd) {
   free_volume_memory(nullptr, 1 << 20);  // a no-op, as free(nullptr)
 }
 
+TEST(VolumeMemory, LargeBlocksAreReusedForTheSameSizeAndZeroedWhenAsked) {
+  const std::size_t bytes = std::size_t{80} << 20;
+  auto* a = static_cast<std::uint8_t*>(allocate_volume_memory(bytes, false));
+  std::memset(a, 0xcd, bytes);
+  free_volume_memory(a, bytes);
+  // The same size gets the kept block back, cleared when asked.
+  auto* b = static_cast<std::uint8_t*>(allocate_volume_memory(bytes, true));
+  EXPECT_EQ(b, a);
+  EXPECT_TRUE(std::all_of(b, b + bytes, [](std::uint8_t x) { return x == 0; }));
+  std::memset(b, 0xef, bytes);
+  free_volume_memory(b, bytes);
+  auto* c = static_cast<std::uint8_t*>(allocate_volume_memory(bytes, false));
+  EXPECT_EQ(c, a);
+  EXPECT_EQ(c[bytes - 1], 0xef);  // not cleared when not asked: the caller fills it
+  free_volume_memory(c, bytes);
+  // Another size maps fresh (zero) pages.
+  const std::size_t other = bytes + 4096;
+  auto* d = static_cast<std::uint8_t*>(allocate_volume_memory(other, true));
+  EXPECT_TRUE(std::all_of(d, d + other, [](std::uint8_t x) { return x == 0; }));
+  free_volume_memory(d, other);
+  // A float volume built on a reused block holds its fill everywhere.
+  const Grid g{glm::dvec3(0.0), 1.0, glm::i64vec3(512, 256, 160)};  // 80 MiB of floats
+  { DenseVolume<float> first(g, -7.0f); }
+  const DenseVolume<float> second(g, 2.5f);
+  EXPECT_TRUE(std::all_of(second.values().begin(), second.values().end(), [](float v) { return v == 2.5f; }));
+}
+
 TEST(VolumeMemory, DenseVolumesFillCopyAndCompareAsVectors) {
   // 24 MiB of floats: on OS pages.
   const Grid g{glm::dvec3(0.0), 1.0, glm::i64vec3(256, 256, 96)};

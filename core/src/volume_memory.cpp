@@ -3,12 +3,72 @@
 #include <sys/mman.h>
 
 #include <cstdlib>
+#include <cstring>
+#include <mutex>
+#include <vector>
 
 namespace voxd {
 namespace {
 
 constexpr std::size_t kHeapMaxBytes = std::size_t{1} << 20;
 constexpr std::size_t kHugePageMinBytes = std::size_t{8} << 20;
+
+// Large blocks just given back, kept for the next volume of the same size:
+// a service running one grid after another (and a benchmark's repeated
+// runs) then skips the kernel's page faults and clearing, which on the
+// 2-core benchmark VM cost about 1 s of CPU per GB. Only exact sizes are
+// reused, and mapping any new block first returns the kept ones, so the
+// process never holds kept memory while it grows.
+class KeptBlocks {
+ public:
+  static constexpr std::size_t kMinBytes = std::size_t{64} << 20;
+  static constexpr std::size_t kMaxBytes = std::size_t{1} << 30;
+  static constexpr std::size_t kMaxBlocks = 4;
+
+  void* take(std::size_t bytes) {
+    std::lock_guard lock(mutex_);
+    for (std::size_t b = 0; b < blocks_.size(); ++b)
+      if (blocks_[b].bytes == bytes) {
+        void* p = blocks_[b].p;
+        kept_ -= bytes;
+        blocks_.erase(blocks_.begin() + static_cast<std::ptrdiff_t>(b));
+        return p;
+      }
+    // About to map new memory: give the kept blocks back first.
+    for (const Block& block : blocks_) ::munmap(block.p, block.bytes);
+    blocks_.clear();
+    kept_ = 0;
+    return nullptr;
+  }
+
+  // True when kept (the caller must not unmap it).
+  bool keep(void* p, std::size_t bytes) noexcept {
+    if (bytes < kMinBytes || bytes > kMaxBytes) return false;
+    std::lock_guard lock(mutex_);
+    if (blocks_.size() == kMaxBlocks || kept_ + bytes > kMaxBytes) return false;
+    try {
+      blocks_.push_back({p, bytes});
+    } catch (...) {
+      return false;
+    }
+    kept_ += bytes;
+    return true;
+  }
+
+ private:
+  struct Block {
+    void* p;
+    std::size_t bytes;
+  };
+  std::mutex mutex_;
+  std::vector<Block> blocks_;
+  std::size_t kept_ = 0;
+};
+
+KeptBlocks& kept_blocks() {
+  static KeptBlocks* blocks = new KeptBlocks;  // never destroyed: frees may come during exit
+  return *blocks;
+}
 
 }  // namespace
 
@@ -17,6 +77,12 @@ void* allocate_volume_memory(std::size_t bytes, bool zeroed) {
     void* h = zeroed ? std::calloc(bytes ? bytes : 1, 1) : std::malloc(bytes ? bytes : 1);
     if (!h) throw std::bad_alloc();
     return h;
+  }
+  if (bytes >= KeptBlocks::kMinBytes) {
+    if (void* kept = kept_blocks().take(bytes)) {
+      if (zeroed) std::memset(kept, 0, bytes);  // reused pages hold the last volume
+      return kept;
+    }
   }
   void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
   if (p == MAP_FAILED) throw std::bad_alloc();
@@ -29,7 +95,7 @@ void free_volume_memory(void* p, std::size_t bytes) noexcept {
   if (!p) return;
   if (bytes < kHeapMaxBytes)
     std::free(p);
-  else
+  else if (!kept_blocks().keep(p, bytes))
     ::munmap(p, bytes);
 }
 
