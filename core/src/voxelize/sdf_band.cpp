@@ -405,9 +405,10 @@ template <bool kSeed>
 void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, const BandSetup& s, std::int64_t z0,
                      std::int64_t z1, DenseVolume<float>& values, std::vector<std::uint64_t>& mask) {
   const IndexSpace index_of(g);
-  const double band = s.band * index_of.inv_voxel, band2 = band * band;  // voxels
+  const double band = s.band * index_of.inv_voxel;  // voxels
   const dvec3 centre_i = index_of(c.centre);
-  const double reach = band + c.radius * index_of.inv_voxel, reach2 = reach * reach;
+  // How far along x a voxel in the band can be from the centre.
+  const double reach = band + c.radius * index_of.inv_voxel;
   // The band of the oriented box lies within three slabs, one along each
   // of its axes: |axis . (p - centre)| <= half + band.
   const std::array<dvec3, 3> axes{c.u, c.w, c.n};
@@ -422,24 +423,28 @@ void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, 
   const std::int64_t j0 = IndexSpace::first(c.lo.y - band, g.dims.y), j1 = IndexSpace::last(c.hi.y + band, g.dims.y);
   for (std::int64_t k = k0; k <= k1; ++k) {
     const auto kk = static_cast<double>(k);
-    const double dz = std::max({c.lo.z - kk, kk - c.hi.z, 0.0}), sz = kk - centre_i.z;
+    std::array<double, 3> zpart{};
+    for (int a = 0; a < 3; ++a) zpart[a] = axes[a].z * (kk - centre_i.z);
     const double cz = centre_coordinate(g, 2, k);
     float* slab_values = values.slab(k);
     for (std::int64_t j = j0; j <= j1; ++j) {
       const auto jj = static_cast<double>(j);
-      const double dy = std::max({c.lo.y - jj, jj - c.hi.y, 0.0}), sy = jj - centre_i.y;
-      const double box_rest2 = band2 - dy * dy - dz * dz, sphere_rest2 = reach2 - sy * sy - sz * sz;
-      if (box_rest2 < 0.0 || sphere_rest2 < 0.0) continue;
-      const double bx = std::sqrt(box_rest2), sx = std::sqrt(sphere_rest2);
-      double from = std::max(c.lo.x - bx, centre_i.x - sx), to = std::min(c.hi.x + bx, centre_i.x + sx);
+      // The row within the band of the box's bounds and of its three slabs
+      // (no roots: the voxel test below is exact, these only narrow it).
+      double from = c.lo.x - band, to = c.hi.x + band;
+      bool outside = false;
       for (int a = 0; a < 3; ++a) {
-        if (inv_x[a] == 0.0) continue;  // the axis is nearly across the row: no restriction
         const dvec3& e = axes[a];
-        const double yz = e.y * (jj - centre_i.y) + e.z * (kk - centre_i.z);
+        const double yz = e.y * (jj - centre_i.y) + zpart[a];
+        if (inv_x[a] == 0.0) {  // the axis is nearly across the row: the whole row is in or out
+          outside = outside || std::abs(yz) > slab[a] + std::abs(e.x) * reach;
+          continue;
+        }
         const double p0 = centre_i.x + (-slab[a] - yz) * inv_x[a], p1 = centre_i.x + (slab[a] - yz) * inv_x[a];
         from = std::max(from, std::min(p0, p1));
         to = std::min(to, std::max(p0, p1));
       }
+      if (outside) continue;
       const std::int64_t i0 = IndexSpace::first(from, g.dims.x), i1 = IndexSpace::last(to, g.dims.x);
       if (i0 > i1) continue;
 
@@ -449,10 +454,17 @@ void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, 
                        c.n.y * ey + c.n.z * ez, c.u.x, c.w.x, c.n.x, c.half.x, c.half.y, c.half.z, s.to_model};
       float* row = slab_values + j * g.dims.x;
       const std::int64_t n = i1 - i0 + 1;
-      mask.assign(static_cast<std::size_t>((n + 63) / 64), 0);
-      box_mask(box, row + i0, i0, n, mask.data());
-      for (std::size_t word = 0; word < mask.size(); ++word)
-        for (std::uint64_t bits = mask[word]; bits != 0; bits &= bits - 1) {
+      // Rows are short: their mask on the stack, a longer one in `mask`.
+      const auto words = static_cast<std::size_t>((n + 63) / 64);
+      std::uint64_t short_mask[4] = {0, 0, 0, 0};
+      std::uint64_t* bits_of = short_mask;
+      if (words > 4) {
+        mask.assign(words, 0);
+        bits_of = mask.data();
+      }
+      box_mask(box, row + i0, i0, n, bits_of);
+      for (std::size_t word = 0; word < words; ++word)
+        for (std::uint64_t bits = bits_of[word]; bits != 0; bits &= bits - 1) {
         const std::int64_t i = i0 + static_cast<std::int64_t>(word * 64) + std::countr_zero(bits);
         const double cx = centre_coordinate(g, 0, i);
         double limit = static_cast<double>(row[i]) * s.to_model;
