@@ -50,7 +50,7 @@ struct BandSetup {
 };
 
 // Neighbouring triangles, scattered together (why: sdf_band.cpp).
-constexpr std::uint32_t kClusterSize = 16;
+constexpr std::uint32_t kClusterSize = 64;
 
 struct Cluster {
   std::uint32_t begin = 0, end = 0;  // ClusterSet::order[begin, end)
