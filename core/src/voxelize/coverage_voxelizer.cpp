@@ -3,7 +3,6 @@
 #include "voxd/coverage.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <vector>
 
@@ -12,7 +11,6 @@
 #include "voxelize/fixed_point_mesh.h"
 #include "voxelize/row_rays.h"
 #include "voxelize/splitmix.h"
-#include "voxelize/triangle_bins.h"
 
 namespace voxd {
 namespace {
@@ -35,39 +33,26 @@ class CoverageVoxelizer {
   }
 
   DenseVolume<float> run(JobControl* control) {
-    const std::int64_t nz = grid_.dims.z;
     DenseVolume<float> out(grid_, 0.0f);
     if (grid_.voxel_count() == 0) return out;
     const int threads = options_.threads > 0 ? options_.threads : default_thread_count();
-    const std::int64_t per_chunk = std::max<std::int64_t>(1, nz / (threads * 8));
-    // Rays of row k sit within half a voxel of its centre: margin 1.
-    const detail::TriangleBins bins = detail::bin_triangles(fixed_, 2, nz, per_chunk, 1, threads);
-    std::atomic<std::int64_t> rows_done{0};
-    parallel_for(0, nz, per_chunk, threads, [&](std::int64_t k0, std::int64_t k1) {
-      const std::int64_t chunk = k0 / per_chunk;
-      std::vector<RayCrossing> crossings;
-      std::vector<std::pair<double, float>> events;
-      for (std::int64_t k = k0; k < k1; ++k) {
-        if (control) control->check_cancelled();
-        const auto position = [&](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
-          ray_position(j, k, r / k_, r % k_, pu, pv);
-        };
-        crossings.clear();
-        for (std::uint32_t t = bins.offsets[static_cast<std::size_t>(chunk)];
-             t < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++t)
-          detail::cross_row_rays(fixed_, bins.triangles[t], k, grid_.dims.y, k_ * k_, position, crossings);
-        detail::sort_crossings(crossings);
-        for (std::size_t c = 0; c < crossings.size();) {
-          std::size_t e = c;
-          while (e < crossings.size() && crossings[e].column == crossings[c].column) ++e;
-          float* row = out.slab(k) + static_cast<std::int64_t>(crossings[c].column) * grid_.dims.x;
-          fill_column(crossings.data() + c, crossings.data() + e, row, events);
-          c = e;
-        }
-        const std::int64_t done = ++rows_done;
-        if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(nz));
-      }
-    });
+    using Events = std::vector<std::pair<double, float>>;
+    detail::for_each_ray_row<Events>(
+        fixed_, grid_, k_ * k_, threads, control,
+        [&](std::int64_t k, Events&) {
+          return [this, k](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
+            ray_position(j, k, r / k_, r % k_, pu, pv);
+          };
+        },
+        [&](std::int64_t k, const std::vector<RayCrossing>& crossings, Events& events) {
+          for (std::size_t c = 0; c < crossings.size();) {
+            std::size_t e = c;
+            while (e < crossings.size() && crossings[e].column == crossings[c].column) ++e;
+            float* row = out.slab(k) + static_cast<std::int64_t>(crossings[c].column) * grid_.dims.x;
+            fill_column(crossings.data() + c, crossings.data() + e, row, events);
+            c = e;
+          }
+        });
     return out;
   }
 

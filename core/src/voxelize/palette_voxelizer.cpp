@@ -6,7 +6,6 @@
 // voxel's evaluation is a few popcounts per element: inside mask I against
 // element mask E.
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cmath>
 #include <vector>
@@ -18,7 +17,6 @@
 #include "voxelize/fixed_point_mesh.h"
 #include "voxelize/row_rays.h"
 #include "voxelize/splitmix.h"
-#include "voxelize/triangle_bins.h"
 
 namespace voxd {
 namespace {
@@ -66,45 +64,32 @@ class PaletteVoxelizer {
     const Choice outside = empty_ ? Choice{static_cast<std::uint8_t>(*empty_), 255} : Choice{};
     PaletteVolume out{DenseVolume<std::uint8_t>(grid_, outside.element),
                       DenseVolume<std::uint8_t>(grid_, outside.similarity)};
-    const std::int64_t nz = grid_.dims.z;
     if (grid_.voxel_count() == 0) return out;
     const int threads = options_.threads > 0 ? options_.threads : default_thread_count();
-    const std::int64_t per_chunk = std::max<std::int64_t>(1, nz / (threads * 8));
-    // Rays of row k sit within half a voxel of its centre: margin 1.
-    const detail::TriangleBins bins = detail::bin_triangles(fixed_, 2, nz, per_chunk, 1, threads);
-    std::atomic<std::int64_t> rows_done{0};
-    parallel_for(0, nz, per_chunk, threads, [&](std::int64_t k0, std::int64_t k1) {
-      const std::int64_t chunk = k0 / per_chunk;
-      RowScratch s;
-      for (std::int64_t k = k0; k < k1; ++k) {
-        if (control) control->check_cancelled();
-        place_rays(k, s);
-        s.crossings.clear();
-        const auto position = [&](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
-          const std::size_t at = static_cast<std::size_t>(j * t_ + r);
-          pu = s.pu[at];
-          pv = s.pv[at];
-        };
-        for (std::uint32_t t = bins.offsets[static_cast<std::size_t>(chunk)];
-             t < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++t)
-          detail::cross_row_rays(fixed_, bins.triangles[t], k, grid_.dims.y, t_, position, s.crossings);
-        detail::sort_crossings(s.crossings);
-        std::size_t c = 0;
-        for (std::int64_t j = 0; j < grid_.dims.y; ++j) {
-          std::size_t e = c;
-          while (e < s.crossings.size() && s.crossings[e].column == j) ++e;
-          // A column no ray crosses is all outside: already the empty element.
-          if (e > c || !empty_) {
-            const std::size_t at = static_cast<std::size_t>(j * grid_.dims.x);
-            fill_column(j, s.crossings.data() + c, s.crossings.data() + e, s, out.element.slab(k) + at,
-                        out.similarity.slab(k) + at);
+    detail::for_each_ray_row<RowScratch>(
+        fixed_, grid_, t_, threads, control,
+        [&](std::int64_t k, RowScratch& s) {
+          place_rays(k, s);
+          return [this, &s](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
+            const std::size_t at = static_cast<std::size_t>(j * t_ + r);
+            pu = s.pu[at];
+            pv = s.pv[at];
+          };
+        },
+        [&](std::int64_t k, const std::vector<RayCrossing>& crossings, RowScratch& s) {
+          std::size_t c = 0;
+          for (std::int64_t j = 0; j < grid_.dims.y; ++j) {
+            std::size_t e = c;
+            while (e < crossings.size() && crossings[e].column == j) ++e;
+            // A column no ray crosses is all outside: already the empty element.
+            if (e > c || !empty_) {
+              const std::size_t at = static_cast<std::size_t>(j * grid_.dims.x);
+              fill_column(j, crossings.data() + c, crossings.data() + e, s, out.element.slab(k) + at,
+                          out.similarity.slab(k) + at);
+            }
+            c = e;
           }
-          c = e;
-        }
-        const std::int64_t done = ++rows_done;
-        if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(nz));
-      }
-    });
+        });
     return out;
   }
 
@@ -113,7 +98,6 @@ class PaletteVoxelizer {
     std::vector<std::int64_t> pu, pv;      // ray r of column j at [j * t + r], fixed point
     std::vector<double> y, z;              // the same in voxel coordinates [0, 1)
     std::vector<double> xo;                // point q of ray r of column j at [(j * t + r) * p + q], in [0, 1)
-    std::vector<RayCrossing> crossings;
     std::vector<Word> masks;               // element e's points at [e * words, (e + 1) * words)
     std::vector<Word> inside;              // a voxel's inside points
     std::vector<const RayCrossing*> cur, end;

@@ -9,10 +9,15 @@
 // by simulation of simplicity as in the parity scan converter, so a ray
 // through a shared edge or vertex of a closed mesh crosses it exactly once.
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
+#include "voxd/grid.h"
+#include "voxd/parallel.h"
+#include "voxd/progress.h"
 #include "voxelize/fixed_point_mesh.h"
+#include "voxelize/triangle_bins.h"
 
 namespace voxd::detail {
 
@@ -82,6 +87,38 @@ void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std
       const double x = static_cast<double>(A[0]) + gu * static_cast<double>(pu - au) + gv * static_cast<double>(pv - av);
       out.push_back({static_cast<std::int32_t>(j), r, x / static_cast<double>(kFixedOne) + 0.5});
     }
+}
+
+// Row by row along z, on `threads` threads that each own a chunk of rows:
+// the sorted crossings of row k's rays (`rays` per column) with the mesh.
+// prepare(k, scratch) returns row k's ray positions (as cross_row_rays
+// wants them); consume(k, crossings, scratch) uses the crossings. Scratch is
+// per thread. Reports progress by rows and honours cancellation when
+// `control` is given.
+template <typename Scratch, typename Prepare, typename Consume>
+void for_each_ray_row(const FixedMesh& fixed, const Grid& grid, int rays, int threads, JobControl* control,
+                      const Prepare& prepare, const Consume& consume) {
+  const std::int64_t nz = grid.dims.z;
+  const std::int64_t per_chunk = std::max<std::int64_t>(1, nz / (threads * 8));
+  // Rays of row k sit within half a voxel of its centre: margin 1.
+  const TriangleBins bins = bin_triangles(fixed, 2, nz, per_chunk, 1, threads);
+  std::atomic<std::int64_t> rows_done{0};
+  parallel_for(0, nz, per_chunk, threads, [&](std::int64_t k0, std::int64_t k1) {
+    const auto chunk = static_cast<std::size_t>(k0 / per_chunk);
+    Scratch scratch;
+    std::vector<RayCrossing> crossings;
+    for (std::int64_t k = k0; k < k1; ++k) {
+      if (control) control->check_cancelled();
+      const auto position = prepare(k, scratch);
+      crossings.clear();
+      for (std::uint32_t t = bins.offsets[chunk]; t < bins.offsets[chunk + 1]; ++t)
+        cross_row_rays(fixed, bins.triangles[t], k, grid.dims.y, rays, position, crossings);
+      sort_crossings(crossings);
+      consume(k, crossings, scratch);
+      const std::int64_t done = ++rows_done;
+      if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(nz));
+    }
+  });
 }
 
 }  // namespace voxd::detail
