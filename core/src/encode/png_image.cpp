@@ -84,7 +84,7 @@ void check_size(int width, int height, std::size_t values, const char* what) {
 // The only function with setjmp: it holds nothing with a destructor, so the
 // longjmp from libpng's error path skips no cleanup. False on a libpng error.
 [[gnu::noinline]] bool run_libpng(WriteContext& ctx, int width, int height, int bit_depth, int colour_type,
-                                  const png_bytep* rows, png_text* chunks, int chunk_count) {
+                                  const png_bytep* rows, png_text* chunks, int chunk_count, PngCompression compression) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &ctx, on_error, on_warning);
   if (png == nullptr) {
     std::snprintf(ctx.message, sizeof ctx.message, "out of memory");
@@ -97,6 +97,11 @@ void check_size(int width, int height, std::size_t values, const char* what) {
     return false;
   }
   png_set_write_fn(png, &ctx, on_write, on_flush);
+  if (compression == PngCompression::fast) {
+    // zlib's fastest level and one filter instead of trying all five per row.
+    png_set_compression_level(png, 1);
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
+  }
   png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bit_depth, colour_type,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   if (chunk_count > 0) png_set_text(png, info, chunks, chunk_count);
@@ -110,7 +115,7 @@ void check_size(int width, int height, std::size_t values, const char* what) {
 // The one place that talks to libpng. `rows` are the encoded rows (big-endian
 // samples for 16-bit, as PNG stores them).
 void encode(int width, int height, int bit_depth, int colour_type, const std::vector<png_bytep>& rows,
-            const std::vector<PngText>& text, ByteSink& out) {
+            const std::vector<PngText>& text, ByteSink& out, PngCompression compression = PngCompression::balanced) {
   check_text(text);
   std::vector<std::string> keys, values;  // libpng wants non-const char*
   keys.reserve(text.size());
@@ -128,7 +133,8 @@ void encode(int width, int height, int bit_depth, int colour_type, const std::ve
 
   WriteContext ctx;
   ctx.sink = &out;
-  if (!run_libpng(ctx, width, height, bit_depth, colour_type, rows.data(), chunks.data(), static_cast<int>(chunks.size()))) {
+  if (!run_libpng(ctx, width, height, bit_depth, colour_type, rows.data(), chunks.data(), static_cast<int>(chunks.size()),
+                  compression)) {
     if (ctx.sink_error) std::rethrow_exception(ctx.sink_error);
     throw Error(ErrorCode::io_error, std::string("PNG encoding failed: ") + ctx.message);
   }
@@ -185,13 +191,14 @@ void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, Byt
 }
 
 void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
-                     ByteSink& out) {
+                     ByteSink& out, PngCompression compression) {
   if (pixels.size() % 4 != 0) {
     throw Error(ErrorCode::invalid_argument, "RGBA image has " + std::to_string(pixels.size()) + " bytes, not a multiple of 4");
   }
   check_size(width, height, pixels.size() / 4, "RGBA image");
   std::vector<std::uint8_t> bytes(pixels.begin(), pixels.end());
-  encode(width, height, 8, PNG_COLOR_TYPE_RGBA, row_pointers(bytes, height, static_cast<std::size_t>(width) * 4), text, out);
+  encode(width, height, 8, PNG_COLOR_TYPE_RGBA, row_pointers(bytes, height, static_cast<std::size_t>(width) * 4), text, out,
+         compression);
 }
 
 }  // namespace voxd

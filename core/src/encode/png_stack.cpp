@@ -52,7 +52,9 @@ void encode_layer(const DenseVolume<Rgba8>& volume, std::int64_t k, ByteSink& si
   const Grid& g = volume.grid();
   const std::vector<PngText> text = {
       {"voxd:axis", "z"}, {"voxd:layer", std::to_string(k)}, {"voxd:voxel_size", number_text(g.voxel_size)}};
-  write_png_rgba8(static_cast<int>(g.dims.x), static_cast<int>(g.dims.y), layer_pixels(volume, k), text, sink);
+  // A stack is bulk output (hundreds of layers): fast compression.
+  write_png_rgba8(static_cast<int>(g.dims.x), static_cast<int>(g.dims.y), layer_pixels(volume, k), text, sink,
+                  PngCompression::fast);
 }
 
 std::string manifest(const Grid& g) {
