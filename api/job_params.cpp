@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "api/bounded_json.h"
 #include "api/param_error.h"
 #include "voxd/error.h"
 #include "voxd/transform.h"
@@ -55,7 +56,7 @@ class Validator {
     }
     const double d = v.get<double>();
     if (!std::isfinite(d) || (lo_exclusive ? d <= lo : d < lo) || d > hi) {
-      fail(p, "must be " + std::string(lo_exclusive ? "> " : ">= ") + fmt(lo) + " and <= " + fmt(hi) + ", got " + v.dump());
+      fail(p, "must be " + std::string(lo_exclusive ? "> " : ">= ") + fmt(lo) + " and <= " + fmt(hi) + ", got " + brief_json(v));
       return std::nullopt;
     }
     return d;
@@ -69,16 +70,16 @@ class Validator {
 
   std::optional<std::int64_t> integer_value(const json& v, const std::string& p, std::int64_t lo, std::int64_t hi) {
     if (!v.is_number_integer()) {
-      fail(p, "must be an integer, got " + (v.is_number() ? v.dump() : type_name(v)));
+      fail(p, "must be an integer, got " + (v.is_number() ? brief_json(v) : type_name(v)));
       return std::nullopt;
     }
     const auto i = v.get<std::int64_t>();
     if (v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)) {
-      fail(p, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + v.dump());
+      fail(p, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + brief_json(v));
       return std::nullopt;
     }
     if (i < lo || i > hi) {
-      fail(p, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + v.dump());
+      fail(p, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + brief_json(v));
       return std::nullopt;
     }
     return i;
@@ -98,7 +99,7 @@ class Validator {
     const auto s = v.get<std::string>();
     for (auto a : allowed)
       if (s == a) return s;
-    fail(p, "must be one of " + list + ", got \"" + s + "\"");
+    fail(p, "must be one of " + list + ", got " + brief_json(v));
     return std::nullopt;
   }
 
@@ -114,7 +115,7 @@ class Validator {
     bool ok = true;
     for (int i = 0; i < 3; ++i) {
       if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) {
-        fail(p + "/" + std::to_string(i), "must be a finite number, got " + v[i].dump());
+        fail(p + "/" + std::to_string(i), "must be a finite number, got " + brief_json(v[i]));
         ok = false;
       } else {
         out[i] = v[i].get<double>();
@@ -225,7 +226,7 @@ void parse_coverage(Validator& val, const json& c, CoverageParams& out) {
   if (c.contains("seed")) {
     const json& v = c.at("seed");
     if (!v.is_number_integer() || (v.is_number_integer() && !v.is_number_unsigned() && v.get<std::int64_t>() < 0))
-      val.fail(path + "/seed", "must be a non-negative integer, got " + v.dump());
+      val.fail(path + "/seed", "must be a non-negative integer, got " + brief_json(v));
     else
       out.options.seed = v.get<std::uint64_t>();
     if (out.options.sampling != CoverageSampling::stochastic)
@@ -247,7 +248,7 @@ void parse_sdf(Validator& val, const json& d, SdfOptions& out) {
       if (b.get<std::string>() == "full")
         out.full = true;
       else
-        val.fail(path + "/band", "must be a number of voxels (> 0 and <= 1000) or \"full\", got " + b.dump());
+        val.fail(path + "/band", "must be a number of voxels (> 0 and <= 1000) or \"full\", got " + brief_json(b));
     } else if (auto w = val.number(d, path, "band", 0.0, 1000.0, true)) {
       out.band = *w;
     }
@@ -274,7 +275,7 @@ std::optional<Rgba8> parse_color(Validator& val, const json& v, const std::strin
     const std::string h = v.get<std::string>();
     for (std::size_t i = 0; 1 + 2 * i < h.size(); ++i) c[i] = std::stoi(h.substr(1 + 2 * i, 2), nullptr, 16);
   } else {
-    val.fail(path, hint + ", got " + v.dump());
+    val.fail(path, hint + ", got " + brief_json(v));
     return std::nullopt;
   }
   if (c[3] == 0) {
@@ -309,7 +310,7 @@ std::optional<std::uint64_t> parse_seed(Validator& val, const json& obj, const s
   if (!obj.contains("seed")) return std::nullopt;
   const json& v = obj.at("seed");
   if (!v.is_number_integer() || (!v.is_number_unsigned() && v.get<std::int64_t>() < 0)) {
-    val.fail(path + "/seed", "must be a non-negative integer, got " + v.dump());
+    val.fail(path + "/seed", "must be a non-negative integer, got " + brief_json(v));
     return std::nullopt;
   }
   return v.get<std::uint64_t>();
@@ -540,7 +541,7 @@ void parse_palette(Validator& val, const json& d, PaletteParams& out) {
         out.options.palette = builtin_palette(static_cast<int>(n));
         out.palette_name = std::to_string(n);
       } else {
-        val.fail(path + "/elements", "built-in palettes have 2, 10, 46 or 78 elements, got " + e.dump() +
+        val.fail(path + "/elements", "built-in palettes have 2, 10, 46 or 78 elements, got " + brief_json(e) +
                                          "; or give an array of custom elements");
       }
     } else if (e.is_array() && !e.empty() && e.size() <= kMaxPaletteElements) {
@@ -644,9 +645,10 @@ JobParams parse_job_params(const json& params) {
 JobParams parse_job_params_text(const std::string& text) {
   json j;
   try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw InvalidParams({{"", std::string("malformed JSON: ") + e.what()}});
+    j = parse_bounded_json(text, "the job parameters");
+  } catch (const InvalidJson& e) {
+    const bool malformed = e.reason() == InvalidJson::Reason::malformed;
+    throw InvalidParams(std::vector<FieldError>{{"", (malformed ? "malformed JSON: " : "") + std::string(e.what())}});
   }
   return parse_job_params(j);
 }

@@ -35,6 +35,7 @@ void add_geometry(const Mesh& welded, MeshReport& report) {
 // Sorts a vertex's bucket of edges; buckets are tiny except around a fan
 // centre, where insertion sort would go quadratic.
 void sort_bucket(std::uint64_t* first, std::uint64_t* last) {
+  if (last - first < 2) return;  // also an empty bucket of an empty array (null first)
   if (last - first > 32) {
     std::sort(first, last);
     return;
@@ -71,6 +72,11 @@ void add_edge_topology(const Mesh& welded, MeshReport& report) {
     }
   }
 
+  // No usable edge (every triangle repeats a vertex): uses.data() may be null.
+  if (uses.empty()) {
+    report.watertight = false;
+    return;
+  }
   for (std::size_t v = 0; v < vertex_count; ++v) {
     std::uint64_t* first = uses.data() + bucket_start[v];
     std::uint64_t* const last = uses.data() + bucket_start[v + 1];

@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "api/bounded_json.h"
+
 namespace voxd::cli {
 
 using nlohmann::json;
@@ -12,9 +14,9 @@ json load_params(const Args& args) {
   std::string body = *text;
   if (!body.empty() && body[0] == '@') body = read_text_file(body.substr(1));
   try {
-    return json::parse(body);
-  } catch (const json::parse_error& e) {
-    throw UsageError(std::string("--params is not valid JSON: ") + e.what());
+    return api::parse_bounded_json(body, "--params");
+  } catch (const api::InvalidJson& e) {
+    throw UsageError(e.what());
   }
 }
 

@@ -8,13 +8,16 @@
 #include <httplib.h>
 #include <spdlog/spdlog.h>
 
+#include "api/bounded_json.h"
 #include "api/job_params.h"
 #include "api/param_error.h"
 #include "api/result_json.h"
 #include "server/http/analysis_routes.h"
+#include "server/http/connection_server.h"
 #include "server/http/problem.h"
 #include "server/job_pipeline.h"
 #include "server/http/value_routes.h"
+#include "server/log_safe.h"
 #include "server/http/volume_stream.h"
 #include "server/jobs/job_record.h"
 
@@ -45,16 +48,18 @@ std::string new_request_id() {
 
 void send_json(Response& res, int status, const json& body) {
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
-json parse_params_text(const std::string& text) {
+json parse_params_text(const std::string& text, const api::JsonLimits& limits) {
   if (text.empty()) return json::object();
   try {
-    return json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw ProblemError(make_problem(400, "malformed-json", "Malformed job parameters",
-                                    std::string("params is not valid JSON: ") + e.what()));
+    return api::parse_bounded_json(text, "params", limits);
+  } catch (const api::InvalidJson& e) {
+    if (e.reason() == api::InvalidJson::Reason::too_large)
+      throw ProblemError(make_problem(413, "params-too-large", "Job parameters too large",
+                                      std::string(e.what()) + "; custom palettes and lookups fit well within it"));
+    throw ProblemError(make_problem(400, "malformed-json", "Malformed job parameters", e.what()));
   }
 }
 
@@ -93,7 +98,7 @@ ProblemError upload_too_large(std::uint64_t limit) {
 }
 
 Submission read_submission(const Request& req, const httplib::ContentReader& reader, Metrics& metrics,
-                           std::uint64_t max_bytes) {
+                           std::uint64_t max_bytes, const api::JsonLimits& params_limits) {
   Submission s;
   const std::string type = req.get_header_value("Content-Type");
   if (declared_length(req).value_or(0) > max_bytes)
@@ -108,7 +113,7 @@ Submission read_submission(const Request& req, const httplib::ContentReader& rea
   if (req.is_multipart_form_data()) {
     enum class Part { mesh, params, other } part = Part::other;
     std::string params_text;
-    bool has_mesh = false, has_params = false;
+    bool has_mesh = false, has_params = false, params_too_large = false;
     read_ok = reader(
         [&](const httplib::MultipartFormData& header) {
           if (header.name == "mesh") {
@@ -127,14 +132,28 @@ Submission read_submission(const Request& req, const httplib::ContentReader& rea
         },
         [&](const char* data, std::size_t n) {
           if (!count(n)) return false;
-          if (part == Part::mesh) s.mesh.insert(s.mesh.end(), data, data + n);
-          else if (part == Part::params) params_text.append(data, n);
+          if (part == Part::mesh) {
+            s.mesh.insert(s.mesh.end(), data, data + n);
+          } else if (part == Part::params) {
+            // Stop reading past the limit instead of holding the whole part.
+            if (params_text.size() + n > params_limits.max_bytes) {
+              params_too_large = true;
+              return false;
+            }
+            params_text.append(data, n);
+          }
           return true;
         });
     if (read_ok && !has_mesh)
       throw ProblemError(make_problem(400, "missing-mesh", "No mesh uploaded",
                                       "the multipart body has no part named \"mesh\"; send the mesh file in it"));
-    s.params = has_params ? parse_params_text(params_text) : json::object();
+    if (params_too_large) {
+      body_consumed = false;
+      throw ProblemError(make_problem(413, "params-too-large", "Job parameters too large",
+                                      "the params part is over the limit of " + std::to_string(params_limits.max_bytes) +
+                                          " bytes; custom palettes and lookups fit well within it"));
+    }
+    s.params = has_params ? parse_params_text(params_text, params_limits) : json::object();
   } else {
     if (type.rfind("application/json", 0) == 0 || type.rfind("text/", 0) == 0 || type.rfind("multipart/", 0) == 0)
       throw unsupported_media_type();
@@ -144,7 +163,7 @@ Submission read_submission(const Request& req, const httplib::ContentReader& rea
       return true;
     });
     s.filename = req.get_param_value("filename");
-    if (read_ok) s.params = parse_params_text(req.get_param_value("params"));
+    if (read_ok) s.params = parse_params_text(req.get_param_value("params"), params_limits);
   }
   body_consumed = read_ok;
   if (!read_ok && received > max_bytes) throw upload_too_large(max_bytes);
@@ -287,16 +306,22 @@ void HttpApi::install(httplib::Server& server) {
         handler(req, res, reader);
       } catch (...) {
         // A refused upload may be left partly unread: then the connection
-        // cannot carry another request.
-        if (!body_consumed) res.set_header("Connection", "close");
+        // cannot carry another request, and is closed after the answer (the
+        // rest of the body must never be read as further requests).
+        if (!body_consumed) {
+          res.set_header("Connection", "close");
+          close_connection_after_response();
+        }
         answer_exception(req, res);
       }
     };
   };
 
   server.set_pre_routing_handler([this](const Request& req, Response& res) {
+    begin_request_body();  // the head is parsed: the body's deadline applies from here
     current_request.start = std::chrono::steady_clock::now();
-    current_request.request_id = req.has_header("X-Request-Id") ? req.get_header_value("X-Request-Id").substr(0, 128) : new_request_id();
+    const std::string client_id = req.get_header_value("X-Request-Id");
+    current_request.request_id = is_plain_request_id(client_id) ? client_id : new_request_id();
     res.set_header("X-Request-Id", current_request.request_id);
     // CORS for allowed web front ends.
     const std::string origin = req.get_header_value("Origin");
@@ -338,6 +363,7 @@ void HttpApi::install(httplib::Server& server) {
       metrics_.count_rejected("upload-too-large");
       send_problem(res, upload_too_large(config_.max_upload_bytes).problem(), req.path);
       res.set_header("Connection", "close");
+      close_connection_after_response();
       return 413;
     }
     return 100;
@@ -350,6 +376,7 @@ void HttpApi::install(httplib::Server& server) {
     if (res.status == 404)
       send_problem(res, make_problem(404, "not-found", "Not found", "no route " + req.method + " " + req.path), req.path);
     else if (res.status == 413) {
+      close_connection_after_response();  // httplib left the body unread
       metrics_.count_rejected("upload-too-large");
       send_problem(res, make_problem(413, "upload-too-large", "Upload too large",
                                      "the request body is over the limit of " + std::to_string(config_.max_upload_bytes) + " bytes"),
@@ -365,9 +392,11 @@ void HttpApi::install(httplib::Server& server) {
     if (config_.log_format == "json")
       spdlog::info(json{{"event", "request"}, {"method", req.method}, {"path", req.path}, {"status", res.status},
                         {"bytes", res.body.size()}, {"duration_ms", ms}, {"request_id", current_request.request_id}}
-                       .dump());
+                       // Paths are not always UTF-8: replace, never throw.
+                       .dump(-1, ' ', false, json::error_handler_t::replace));
     else
-      spdlog::info("{} {} {} {}B {:.1f}ms id={}", req.method, req.path, res.status, res.body.size(), ms, current_request.request_id);
+      spdlog::info("{} {} {} {}B {:.1f}ms id={}", log_safe(req.method), log_safe(req.path), res.status, res.body.size(), ms,
+                   current_request.request_id);
   });
 
   // Wrong methods on known routes: 405 with Allow, not a misleading 404.
@@ -399,7 +428,7 @@ void HttpApi::install(httplib::Server& server) {
   for (const char* p : {"/healthz", "/readyz", "/metrics", "/openapi.json"}) allow_only(p, "GET");
 
   server.Post("/v1/jobs", guarded_upload([this](const Request& req, Response& res, const httplib::ContentReader& reader) {
-    Submission s = read_submission(req, reader, metrics_, config_.max_upload_bytes);
+    Submission s = read_submission(req, reader, metrics_, config_.max_upload_bytes, params_limits_);
     const JobSnapshot job = jobs_.submit(std::move(s.mesh), s.filename, s.params);
     res.set_header("Location", "/v1/jobs/" + job.id);
     send_json(res, 202, to_json(job));
@@ -495,11 +524,13 @@ void HttpApi::install(httplib::Server& server) {
 
   server.Post("/v1/voxelize", guarded_upload([this](const Request& req, Response& res, const httplib::ContentReader& reader) {
     const VolumeRequest v = read_volume_request(req);
-    Submission s = read_submission(req, reader, metrics_, config_.max_upload_bytes);
+    Submission s = read_submission(req, reader, metrics_, config_.max_upload_bytes, params_limits_);
     const api::JobParams params = api::parse_job_params(s.params);
     check_format_holds(params, v);
     JobSnapshot job;
-    JobOutput output = jobs_.run_sync(std::move(s.mesh), s.filename, s.params, &job, config_.sync_max_voxels);
+    // A client that gives up on the answer cancels the job.
+    JobOutput output =
+        jobs_.run_sync(std::move(s.mesh), s.filename, s.params, &job, config_.sync_max_voxels, request_client_gone);
     if (!output.solid) {
       Problem p = job.failure ? make_problem(job.failure->type == "internal" ? 500 : 422, job.failure->type, job.failure->title, job.failure->detail)
                               : make_problem(409, "cancelled", "The job was cancelled", "the job was cancelled");

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <string>
 
+#include "api/bounded_json.h"
 #include "server/http/metrics.h"
 #include "server/http/server_config.h"
 #include "server/jobs/job_manager.h"
@@ -25,6 +26,7 @@ class HttpApi {
   const ServeConfig& config_;
   JobManager& jobs_;
   Metrics& metrics_;
+  api::JsonLimits params_limits_;
   std::atomic<bool> draining_{false};
 };
 

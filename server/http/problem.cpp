@@ -5,6 +5,7 @@
 
 #include "api/param_error.h"
 #include "server/jobs/job_manager.h"
+#include "server/log_safe.h"
 #include "voxd/error.h"
 
 namespace voxd::server {
@@ -53,10 +54,10 @@ Problem problem_from_current_exception() {
       case ErrorCode::io_error:
         break;
     }
-    spdlog::error("request failed: {}", e.what());
+    spdlog::error("request failed: {}", log_safe(e.what()));
     return make_problem(500, "internal", "Internal error", "the request failed unexpectedly; it was logged");
   } catch (const std::exception& e) {
-    spdlog::error("request failed: {}", e.what());
+    spdlog::error("request failed: {}", log_safe(e.what()));
     return make_problem(500, "internal", "Internal error", "the request failed unexpectedly; it was logged");
   }
 }
@@ -70,7 +71,7 @@ void send_problem(httplib::Response& res, const Problem& p, const std::string& i
   if (!p.errors.is_null()) body["errors"] = p.errors;
   res.status = p.status;
   for (const auto& [name, value] : p.headers) res.set_header(name, value);
-  res.set_content(body.dump(), "application/problem+json");
+  res.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/problem+json");
 }
 
 }  // namespace voxd::server

@@ -9,10 +9,12 @@
 #include <spdlog/spdlog.h>
 
 #include "server/cli/cli.h"
+#include "server/http/connection_server.h"
 #include "server/http/http_api.h"
 #include "server/http/metrics.h"
 #include "server/http/server_config.h"
 #include "server/jobs/job_manager.h"
+#include "server/log_safe.h"
 #include "voxd/error.h"
 
 namespace voxd::cli {
@@ -31,7 +33,7 @@ int serve_command(int argc, char** argv) {
     spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%eZ %l %v", spdlog::pattern_time_type::utc);
   // JSON log lines carry their message as a JSON value.
   auto log = [&](const std::string& text) {
-    if (config.log_format == "json") spdlog::info(nlohmann::json(text).dump());
+    if (config.log_format == "json") spdlog::info(nlohmann::json(text).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     else spdlog::info(text);
   };
 
@@ -58,25 +60,29 @@ int serve_command(int argc, char** argv) {
       for (const auto& [stage, seconds] : s.timings) metrics.observe_stage(stage, seconds);
     if (config.log_format == "json")
       spdlog::info(nlohmann::json{{"event", "job"}, {"id", s.id}, {"state", to_string(s.state)},
-                                  {"error", s.failure ? s.failure->detail : ""}}.dump());
+                                  {"error", s.failure ? s.failure->detail : ""}}
+                       .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     else
-      spdlog::info("job {} {}{}", s.id, to_string(s.state), s.failure ? ": " + s.failure->detail : "");
+      spdlog::info("job {} {}{}", s.id, to_string(s.state), s.failure ? ": " + log_safe(s.failure->detail) : "");
   };
   JobManager jobs(jc);
 
-  httplib::Server server;
+  ConnectionLimits limits;
+  limits.threads = config.http_threads;
+  limits.max_queued = config.http_queue;
+  limits.max_connections = config.max_connections;
+  limits.header_timeout = std::chrono::seconds(config.header_timeout);
+  limits.body_min_rate = config.body_min_rate;
+  limits.read_timeout = std::chrono::seconds(config.read_timeout);
+  limits.write_timeout = std::chrono::seconds(config.write_timeout);
+  limits.keep_alive_max_count = 1000;  // batch clients reuse one connection
+  ConnectionServer server(limits);
   HttpApi api(config, jobs, metrics);
   api.install(server);
   server.set_payload_max_length(config.max_upload_bytes);
-  server.set_read_timeout(config.read_timeout, 0);
-  server.set_write_timeout(config.write_timeout, 0);
-  server.set_keep_alive_timeout(5);
-  server.set_keep_alive_max_count(1000);  // batch clients reuse one connection
   // Small answers must not wait for the peer's delayed ACK (Nagle): it cost
   // 40 ms on every synchronous job.
   server.set_tcp_nodelay(true);
-  const int http_threads = config.http_threads;
-  server.new_task_queue = [http_threads] { return new httplib::ThreadPool(static_cast<std::size_t>(http_threads)); };
 
   int port = config.port;
   if (port == 0) {
@@ -85,6 +91,7 @@ int serve_command(int argc, char** argv) {
     port = -1;
   }
   if (port < 0) throw Error(ErrorCode::io_error, "cannot listen on " + config.host + ":" + std::to_string(config.port));
+  server.apply_backlog();
 
   std::thread stopper([&] {
     int signal = 0;
@@ -102,6 +109,7 @@ int serve_command(int argc, char** argv) {
     pthread_kill(stopper.native_handle(), SIGTERM);
     stopper.join();
   }
+  server.close_connections();
   log("stopped");
   return 0;
 }

@@ -21,6 +21,10 @@ struct ServeConfig {
   std::uint64_t result_ttl = 86400;       // seconds
   std::uint64_t sync_max_voxels = 1 << 24;  // POST /v1/voxelize
   int http_threads = 16;
+  std::size_t http_queue = 256;      // requests waiting for an HTTP thread (429 above)
+  std::size_t max_connections = 1024;  // open connections (503 above)
+  int header_timeout = 10;  // seconds from a request's first byte to the end of its head
+  std::uint64_t body_min_rate = 16 * 1024;  // bytes/s a body must average after 10 s
   int read_timeout = 30;   // seconds without progress before a request is dropped
   int write_timeout = 30;
   std::vector<std::string> cors_origins;  // "*" allows any

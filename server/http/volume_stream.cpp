@@ -1,5 +1,7 @@
 #include "server/http/volume_stream.h"
 
+#include "server/log_safe.h"
+
 #include <httplib.h>
 #include <spdlog/spdlog.h>
 
@@ -45,7 +47,7 @@ void stream_encoded(httplib::Response& res, const char* media_type, std::functio
     } catch (const ClientGone&) {
       return false;
     } catch (const std::exception& e) {
-      spdlog::error("streaming a volume failed: {}", e.what());
+      spdlog::error("streaming a volume failed: {}", log_safe(e.what()));
       return false;
     }
   });

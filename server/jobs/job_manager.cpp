@@ -16,6 +16,7 @@
 #include "server/jobs/job_analyses.h"
 #include "server/jobs/job_record.h"
 #include "server/jobs/job_store.h"
+#include "server/log_safe.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 
@@ -249,7 +250,7 @@ struct JobManager::Impl {
         status[i]["error"] = e.what();
       } catch (const std::exception& e) {
         // One analysis going wrong costs only its own entry, not the volume.
-        spdlog::error("job {}: analysis {} failed: {}", id, requests[i].artifact_key(), e.what());
+        spdlog::error("job {}: analysis {} failed: {}", id, requests[i].artifact_key(), log_safe(e.what()));
         status[i]["state"] = "failed";
         status[i]["error"] = "the analysis failed unexpectedly; it was logged";
       }
@@ -262,6 +263,7 @@ struct JobManager::Impl {
     for (;;) {
       std::shared_ptr<Job> job;
       PreparedVoxelJob prepared;
+      JobSnapshot running;
       {
         std::unique_lock lock(mutex);
         work_cv.wait(lock, [&] { return stopping || !queue.empty(); });
@@ -274,7 +276,11 @@ struct JobManager::Impl {
         prepared = std::move(*job->prepared);
         job->prepared.reset();
         announce(job->snap);
+        running = job->snap;
       }
+      // Recorded, so a process killed now reports the job as interrupted
+      // while running, not while queued.
+      persist(*job, running);
       deliver();
       const auto t0 = std::chrono::steady_clock::now();
       JobSnapshot done;
@@ -322,7 +328,7 @@ struct JobManager::Impl {
           s.failure = JobFailure{failure_type(e.code()), "The job failed", e.what()};
         }
       } catch (const std::exception& e) {
-        spdlog::error("job {}: internal error: {}", job->snap.id, e.what());
+        spdlog::error("job {}: internal error: {}", job->snap.id, log_safe(e.what()));
         std::lock_guard lock(mutex);
         job->snap.state = JobState::failed;
         job->snap.failure = JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
@@ -666,11 +672,27 @@ std::shared_ptr<const DenseVolume<std::uint8_t>> JobManager::similarity(const st
 }
 
 JobOutput JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
-                                                      const nlohmann::json& params_json, JobSnapshot* snapshot,
-                                                      std::uint64_t max_voxels) {
+                               const nlohmann::json& params_json, JobSnapshot* snapshot, std::uint64_t max_voxels,
+                               const std::function<bool()>& abandoned) {
   std::shared_ptr<Job> job = impl_->enqueue(mesh_bytes, name_hint, params_json, true, nullptr, max_voxels);
   std::unique_lock lock(impl_->mutex);
-  impl_->finished_cv.wait(lock, [&] { return finished(job->snap.state); });
+  bool cancelled = false;
+  while (!impl_->finished_cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return finished(job->snap.state); })) {
+    if (cancelled || !abandoned) continue;
+    lock.unlock();
+    const bool gone = abandoned();
+    lock.lock();
+    if (!gone || finished(job->snap.state)) continue;
+    cancelled = true;
+    spdlog::info("job {}: the client of a synchronous request went away; cancelling", job->snap.id);
+    if (job->snap.state == JobState::queued) {
+      job->snap.state = JobState::cancelled;  // the worker skips it
+      job->snap.finished_at = format_time(Clock::now());
+      job->prepared.reset();
+    } else {
+      job->control.request_cancel();
+    }
+  }
   if (snapshot) *snapshot = job->snap;
   impl_->jobs.erase(job->snap.id);
   return job->snap.state == JobState::succeeded ? job->result : JobOutput{};

@@ -150,9 +150,11 @@ class JobManager {
   // never stored. Returns an empty output (solid null) when the job did not
   // succeed; `snapshot` then holds its failure. Throws like submit().
   // `max_voxels` (0 = none) is an extra, smaller grid limit for this call.
+  // `abandoned`, asked every 100 ms while the job waits or runs, cancels it
+  // when it answers true (the caller's client went away).
   JobOutput run_sync(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
-                                            const nlohmann::json& params_json, JobSnapshot* snapshot,
-                                            std::uint64_t max_voxels = 0);
+                     const nlohmann::json& params_json, JobSnapshot* snapshot, std::uint64_t max_voxels = 0,
+                     const std::function<bool()>& abandoned = {});
 
   // Derived results of a finished job (analysis JSON, images), kept beside
   // its volume so they are computed once and expire with it. `key` is a file

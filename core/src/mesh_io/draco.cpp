@@ -62,6 +62,13 @@ Mesh decode_draco(std::span<const std::uint8_t> data, const DecodeLimits& limits
   const draco::PointAttribute* position = decoded->GetNamedAttribute(draco::GeometryAttribute::POSITION);
   if (position == nullptr || position->size() == 0)
     throw Error(ErrorCode::malformed_input, "the Draco mesh has no vertex positions (no POSITION attribute)");
+  // Positions are numbers; a bool (or invalid) attribute would be converted
+  // by loading bytes as bool, which is undefined for values other than 0 and 1.
+  if (position->data_type() == draco::DT_BOOL || position->data_type() == draco::DT_INVALID ||
+      position->data_type() >= draco::DT_TYPES_COUNT || position->num_components() < 1)
+    throw Error(ErrorCode::malformed_input,
+                "the Draco POSITION attribute is not numeric (data type " +
+                    std::to_string(static_cast<int>(position->data_type())) + "); the file is corrupt");
   check_triangle_limit(decoded->num_faces(), limits, kFormat);
   if (position->size() > std::numeric_limits<std::uint32_t>::max())
     throw Error(ErrorCode::limit_exceeded, "the Draco mesh has more than 4294967295 vertices");

@@ -82,7 +82,9 @@ class ObjParser {
       fail("face vertex " + quote_token(token) + " does not start with a vertex number");
     const auto defined = static_cast<std::int64_t>(mesh_.vertices.size());
     if (index < 0) {
-      if (-index > defined)
+      // Compared as index < -defined: negating the index itself overflows
+      // for INT64_MIN.
+      if (index < -defined)
         fail("face refers to vertex " + std::to_string(index) + " (counting back) but only " +
              std::to_string(defined) + " vertices are defined before it");
       return static_cast<std::uint32_t>(defined + index);

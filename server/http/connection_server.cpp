@@ -1,0 +1,482 @@
+#include "server/http/connection_server.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+namespace voxd::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int remaining_ms(Clock::time_point deadline, std::chrono::seconds cap) {
+  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+  return static_cast<int>(std::clamp<long long>(left, 0, std::chrono::milliseconds(cap).count()));
+}
+
+// One client connection: its socket and what has been read ahead of the
+// request being parsed (httplib reads request lines a byte at a time).
+class Connection final : public httplib::Stream {
+ public:
+  Connection(int fd, const ConnectionLimits& limits) : fd_(fd), limits_(limits) {}
+  ~Connection() override {
+    ::shutdown(fd_, SHUT_RDWR);
+    ::close(fd_);
+  }
+
+  // Reads of the request head must end by `deadline`.
+  void begin_head(Clock::time_point deadline) {
+    deadline_ = deadline;
+    in_body_ = false;
+    close_after_ = false;
+  }
+  void begin_body() {
+    in_body_ = true;
+    body_start_ = Clock::now();
+    body_bytes_ = 0;
+    update_body_deadline();
+  }
+  void close_after() { close_after_ = true; }
+  bool must_close() const { return close_after_; }
+  bool has_buffered() const { return pos_ < len_; }
+  int fd() const { return fd_; }
+
+  bool peer_gone() const {
+    pollfd p{fd_, POLLIN | POLLRDHUP, 0};
+    if (::poll(&p, 1, 0) <= 0) return false;
+    if (p.revents & (POLLRDHUP | POLLHUP | POLLERR)) return true;
+    char c;
+    return ::recv(fd_, &c, 1, MSG_PEEK | MSG_DONTWAIT) == 0;
+  }
+
+  bool is_readable() const override { return has_buffered() || wait(POLLIN, read_wait_ms()); }
+  bool is_writable() const override { return wait(POLLOUT, limits_.write_timeout.count() * 1000); }
+
+  ssize_t read(char* ptr, size_t size) override {
+    if (!has_buffered()) {
+      if (!wait(POLLIN, read_wait_ms())) return -1;
+      const ssize_t n = ::recv(fd_, buffer_.data(), buffer_.size(), 0);
+      if (n <= 0) return n;
+      pos_ = 0;
+      len_ = static_cast<std::size_t>(n);
+    }
+    const std::size_t n = std::min(size, len_ - pos_);
+    std::memcpy(ptr, buffer_.data() + pos_, n);
+    pos_ += n;
+    if (in_body_) {
+      body_bytes_ += n;
+      update_body_deadline();
+    }
+    return static_cast<ssize_t>(n);
+  }
+
+  ssize_t write(const char* ptr, size_t size) override {
+    std::size_t done = 0;
+    while (done < size) {
+      if (!wait(POLLOUT, limits_.write_timeout.count() * 1000)) return done ? static_cast<ssize_t>(done) : -1;
+      const ssize_t n = ::send(fd_, ptr + done, size - done, MSG_NOSIGNAL);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return done ? static_cast<ssize_t>(done) : -1;
+      done += static_cast<std::size_t>(n);
+    }
+    return static_cast<ssize_t>(done);
+  }
+
+  void get_remote_ip_and_port(std::string& ip, int& port) const override { address(true, ip, port); }
+  void get_local_ip_and_port(std::string& ip, int& port) const override { address(false, ip, port); }
+  socket_t socket() const override { return fd_; }
+
+ private:
+  void update_body_deadline() {
+    const auto allowed = limits_.body_grace + std::chrono::seconds(body_bytes_ / std::max<std::size_t>(1, limits_.body_min_rate));
+    deadline_ = body_start_ + allowed;
+  }
+  int read_wait_ms() const { return remaining_ms(deadline_, limits_.read_timeout); }
+  bool wait(short events, long long ms) const {
+    pollfd p{fd_, events, 0};
+    for (;;) {
+      const int r = ::poll(&p, 1, static_cast<int>(ms));
+      if (r < 0 && errno == EINTR) continue;
+      return r > 0 && (p.revents & (events | POLLHUP | POLLERR));
+    }
+  }
+  void address(bool remote, std::string& ip, int& port) const {
+    sockaddr_storage addr{};
+    socklen_t len = sizeof addr;
+    const int r = remote ? ::getpeername(fd_, reinterpret_cast<sockaddr*>(&addr), &len)
+                         : ::getsockname(fd_, reinterpret_cast<sockaddr*>(&addr), &len);
+    if (r != 0) return;
+    char text[INET6_ADDRSTRLEN] = {};
+    if (addr.ss_family == AF_INET) {
+      const auto* a = reinterpret_cast<const sockaddr_in*>(&addr);
+      ::inet_ntop(AF_INET, &a->sin_addr, text, sizeof text);
+      port = ntohs(a->sin_port);
+    } else if (addr.ss_family == AF_INET6) {
+      const auto* a = reinterpret_cast<const sockaddr_in6*>(&addr);
+      ::inet_ntop(AF_INET6, &a->sin6_addr, text, sizeof text);
+      port = ntohs(a->sin6_port);
+    }
+    ip = text;
+  }
+
+  int fd_;
+  const ConnectionLimits& limits_;
+  std::array<char, 4096> buffer_{};
+  std::size_t pos_ = 0, len_ = 0;
+  Clock::time_point deadline_ = Clock::now();
+  bool in_body_ = false;
+  Clock::time_point body_start_;
+  std::size_t body_bytes_ = 0;
+  bool close_after_ = false;
+};
+
+thread_local Connection* current_connection = nullptr;
+
+// A whole problem response written straight to a socket that no HTTP thread
+// serves (never blocks: what does not fit the socket buffer is dropped).
+void send_canned(int fd, int status, const char* reason, const char* slug, const char* title, const char* detail,
+                 bool retry_after) {
+  const std::string body = std::string(R"({"type":"urn:voxd:problem:)") + slug + R"(","title":")" + title +
+                           R"(","status":)" + std::to_string(status) + R"(,"detail":")" + detail + R"("})";
+  std::string head = "HTTP/1.1 " + std::to_string(status) + " " + reason +
+                     "\r\nContent-Type: application/problem+json\r\nConnection: close\r\n";
+  if (retry_after) head += "Retry-After: 1\r\n";
+  head += "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n";
+  const std::string all = head + body;
+  [[maybe_unused]] const ssize_t n = ::send(fd, all.data(), all.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+}
+
+// The end of a request head in what has arrived so far.
+bool has_complete_head(std::string_view data) {
+  return data.find("\r\n\r\n") != std::string_view::npos || data.find("\n\n") != std::string_view::npos;
+}
+
+}  // namespace
+
+struct ConnectionServer::Impl {
+  explicit Impl(ConnectionLimits l) : limits(l) {}
+
+  ConnectionLimits limits;
+  std::atomic<std::size_t> open{0};  // connections, anywhere
+
+  // The gate: connections waiting for a request head, or lingering after a
+  // refusal (reading what the client still sends, so closing with unread
+  // data does not reset the connection before the client reads the answer).
+  enum class Phase { idle, head, lingering };
+  struct Waiting {
+    std::unique_ptr<Connection> connection;
+    Phase phase;
+    Clock::time_point deadline;
+    int served = 0;  // requests already answered on it
+  };
+  int epoll_fd = -1, wake_fd = -1;
+  std::mutex incoming_mutex;
+  std::vector<Waiting> incoming;
+  std::unordered_map<int, Waiting> waiting;  // gate thread only
+  std::thread gate;
+
+  // Requests with a head, for the HTTP threads.
+  std::mutex queue_mutex;
+  std::condition_variable queue_cv;
+  std::deque<Waiting> queue;
+  std::vector<std::thread> workers;
+  bool stopping = false;
+
+  void start(ConnectionServer& server) {
+    epoll_fd = ::epoll_create1(EPOLL_CLOEXEC);
+    wake_fd = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    epoll_event ev{};
+    ev.events = EPOLLIN;
+    ev.data.fd = wake_fd;
+    ::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, wake_fd, &ev);
+    gate = std::thread([this] { gate_loop(); });
+    for (int i = 0; i < std::max(1, limits.threads); ++i) workers.emplace_back([this, &server] { work(server); });
+  }
+
+  void stop() {
+    {
+      std::lock_guard lock(queue_mutex);
+      if (stopping) return;
+      stopping = true;
+    }
+    queue_cv.notify_all();
+    wake();
+    if (gate.joinable()) gate.join();
+    for (auto& t : workers) t.join();
+    workers.clear();
+    queue.clear();
+    waiting.clear();
+    incoming.clear();
+    if (epoll_fd >= 0) ::close(epoll_fd);
+    if (wake_fd >= 0) ::close(wake_fd);
+    epoll_fd = wake_fd = -1;
+  }
+
+  void wake() const {
+    const std::uint64_t one = 1;
+    [[maybe_unused]] const ssize_t n = ::write(wake_fd, &one, sizeof one);
+  }
+
+  // Called on httplib's accept thread.
+  void admit(int fd) {
+    if (open.load() >= limits.max_connections) {
+      send_canned(fd, 503, "Service Unavailable", "too-many-connections", "Too many connections",
+                  "the service holds as many connections as it allows; retry shortly", true);
+      ::shutdown(fd, SHUT_RDWR);
+      ::close(fd);
+      return;
+    }
+    ++open;
+    to_gate({std::make_unique<Connection>(fd, limits), Phase::idle, Clock::now() + limits.header_timeout, 0});
+  }
+
+  void to_gate(Waiting w) {
+    {
+      std::lock_guard lock(incoming_mutex);
+      incoming.push_back(std::move(w));
+    }
+    wake();
+  }
+
+  void close_connection(Waiting& w) {
+    w.connection.reset();
+    --open;
+  }
+
+  void gate_loop() {
+    std::array<epoll_event, 64> events;
+    for (;;) {
+      {
+        std::lock_guard lock(queue_mutex);
+        if (stopping) break;
+      }
+      Clock::time_point next = Clock::now() + std::chrono::seconds(1);
+      for (const auto& [fd, w] : waiting) next = std::min(next, w.deadline);
+      const int n = ::epoll_wait(epoll_fd, events.data(), static_cast<int>(events.size()),
+                                 remaining_ms(next, std::chrono::seconds(1)) + 1);
+      for (int i = 0; i < n; ++i) {
+        const int fd = events[static_cast<std::size_t>(i)].data.fd;
+        if (fd == wake_fd) {
+          std::uint64_t count;
+          [[maybe_unused]] const ssize_t r = ::read(wake_fd, &count, sizeof count);
+          take_incoming();
+          continue;
+        }
+        auto it = waiting.find(fd);
+        if (it != waiting.end()) examine(it);
+      }
+      expire();
+    }
+    for (auto& [fd, w] : waiting) close_connection(w);
+    waiting.clear();
+    std::lock_guard lock(incoming_mutex);
+    for (auto& w : incoming) close_connection(w);
+    incoming.clear();
+  }
+
+  void take_incoming() {
+    std::vector<Waiting> arrived;
+    {
+      std::lock_guard lock(incoming_mutex);
+      arrived.swap(incoming);
+    }
+    for (auto& w : arrived) {
+      const int fd = w.connection->fd();
+      epoll_event ev{};
+      // Edge-triggered: the head is only peeked at, so a level-triggered
+      // descriptor would report the same bytes forever.
+      ev.events = EPOLLIN | EPOLLRDHUP | EPOLLET;
+      ev.data.fd = fd;
+      if (::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, fd, &ev) != 0) {
+        close_connection(w);
+        continue;
+      }
+      auto [it, inserted] = waiting.emplace(fd, std::move(w));
+      // Data that came before the descriptor was added is reported on add,
+      // but a head already buffered by the HTTP thread is not: look now.
+      examine(it);
+    }
+  }
+
+  void forget(std::unordered_map<int, Waiting>::iterator it) {
+    ::epoll_ctl(epoll_fd, EPOLL_CTL_DEL, it->first, nullptr);
+    waiting.erase(it);
+  }
+
+  void examine(std::unordered_map<int, Waiting>::iterator it) {
+    Waiting& w = it->second;
+    const int fd = it->first;
+    if (w.phase == Phase::lingering) {
+      std::array<char, 16384> sink;
+      for (;;) {
+        const ssize_t r = ::recv(fd, sink.data(), sink.size(), MSG_DONTWAIT);
+        if (r > 0) continue;
+        if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) return;
+        close_connection(w);
+        forget(it);
+        return;
+      }
+    }
+    if (w.connection->has_buffered()) return dispatch(it);
+    std::array<char, 16384> head;
+    const ssize_t r = ::recv(fd, head.data(), head.size(), MSG_PEEK | MSG_DONTWAIT);
+    if (r == 0 || (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+      close_connection(w);  // the client closed (or reset) its side
+      forget(it);
+      return;
+    }
+    if (r < 0) return;
+    if (w.phase == Phase::idle) {
+      // The request's first byte starts its header deadline.
+      w.phase = Phase::head;
+      w.deadline = Clock::now() + limits.header_timeout;
+    }
+    // A head longer than the peek is left to httplib's own limits.
+    if (has_complete_head({head.data(), static_cast<std::size_t>(r)}) || static_cast<std::size_t>(r) == head.size())
+      dispatch(it);
+  }
+
+  void linger(std::unordered_map<int, Waiting>::iterator it) {
+    ::shutdown(it->first, SHUT_WR);
+    it->second.phase = Phase::lingering;
+    it->second.deadline = Clock::now() + std::chrono::seconds(2);
+    examine(it);
+  }
+
+  void dispatch(std::unordered_map<int, Waiting>::iterator it) {
+    {
+      std::lock_guard lock(queue_mutex);
+      if (queue.size() < limits.max_queued) {
+        ::epoll_ctl(epoll_fd, EPOLL_CTL_DEL, it->first, nullptr);
+        it->second.connection->begin_head(it->second.deadline);
+        queue.push_back(std::move(it->second));
+        waiting.erase(it);
+        queue_cv.notify_one();
+        return;
+      }
+    }
+    send_canned(it->first, 429, "Too Many Requests", "too-many-requests", "Too many requests",
+                "every HTTP thread is busy and the queue of waiting requests is full; retry shortly", true);
+    linger(it);
+  }
+
+  void expire() {
+    const auto now = Clock::now();
+    for (auto it = waiting.begin(); it != waiting.end();) {
+      auto current = it++;
+      Waiting& w = current->second;
+      if (w.deadline > now) continue;
+      if (w.phase == Phase::head) {
+        send_canned(current->first, 408, "Request Timeout", "request-timeout", "Request timeout",
+                    "the request head did not arrive in time; send it whole", false);
+        linger(current);
+        continue;
+      }
+      close_connection(w);  // idle past keep-alive, or done lingering
+      forget(current);
+    }
+  }
+
+  void work(ConnectionServer& server) {
+    for (;;) {
+      Waiting w;
+      {
+        std::unique_lock lock(queue_mutex);
+        queue_cv.wait(lock, [&] { return stopping || !queue.empty(); });
+        if (stopping) return;
+        w = std::move(queue.front());
+        queue.pop_front();
+      }
+      serve(server, w);
+    }
+  }
+
+  // Runs requests on the connection while their heads are already here, then
+  // hands it back to the gate (or closes it).
+  void serve(ConnectionServer& server, Waiting& w) {
+    for (;;) {
+      Connection& c = *w.connection;
+      current_connection = &c;
+      bool connection_closed = false;
+      const bool last = w.served + 1 >= limits.keep_alive_max_count;
+      bool ok = false;
+      try {
+        ok = server.process_request(c, last, connection_closed, nullptr);
+      } catch (const std::exception& e) {
+        spdlog::error("HTTP request processing failed: {}", e.what());
+      }
+      current_connection = nullptr;
+      ++w.served;
+      if (!ok || connection_closed || last || c.must_close()) {
+        close_connection(w);
+        return;
+      }
+      if (!c.has_buffered()) break;
+      c.begin_head(Clock::now() + limits.header_timeout);  // a pipelined request
+    }
+    w.phase = Phase::idle;
+    w.deadline = Clock::now() + limits.keep_alive_timeout;
+    to_gate(std::move(w));
+  }
+};
+
+ConnectionServer::ConnectionServer(ConnectionLimits limits) : impl_(std::make_unique<Impl>(limits)) {
+  set_read_timeout(limits.read_timeout.count(), 0);
+  set_write_timeout(limits.write_timeout.count(), 0);
+  set_keep_alive_timeout(limits.keep_alive_timeout.count());
+  set_keep_alive_max_count(static_cast<std::size_t>(limits.keep_alive_max_count));
+  // The accept loop only hands sockets to the gate, which never blocks.
+  struct Inline : httplib::TaskQueue {
+    void enqueue(std::function<void()> fn) override { fn(); }
+    void shutdown() override {}
+  };
+  new_task_queue = [] { return new Inline; };
+  impl_->start(*this);
+}
+
+ConnectionServer::~ConnectionServer() { close_connections(); }
+
+void ConnectionServer::apply_backlog() {
+  // Listening again on a listening socket changes its backlog (Linux).
+  const socket_t sock = svr_sock_;
+  if (sock != INVALID_SOCKET && ::listen(sock, impl_->limits.backlog) != 0)
+    spdlog::warn("cannot raise the listen backlog to {}: {}", impl_->limits.backlog, std::strerror(errno));
+}
+
+void ConnectionServer::close_connections() { impl_->stop(); }
+
+bool ConnectionServer::process_and_close_socket(socket_t sock) {
+  impl_->admit(sock);
+  return true;
+}
+
+void begin_request_body() {
+  if (current_connection) current_connection->begin_body();
+}
+
+void close_connection_after_response() {
+  if (current_connection) current_connection->close_after();
+}
+
+bool request_client_gone() { return current_connection && current_connection->peer_gone(); }
+
+}  // namespace voxd::server
