@@ -187,6 +187,7 @@ struct ConnectionServer::Impl {
     Phase phase;
     Clock::time_point deadline;
     int served = 0;  // requests already answered on it
+    std::size_t drained = 0;  // bytes read and dropped while lingering
   };
   int epoll_fd = -1, wake_fd = -1;
   std::mutex incoming_mutex;
@@ -329,7 +330,8 @@ struct ConnectionServer::Impl {
       std::array<char, 16384> sink;
       for (;;) {
         const ssize_t r = ::recv(fd, sink.data(), sink.size(), MSG_DONTWAIT);
-        if (r > 0) continue;
+        w.drained += r > 0 ? static_cast<std::size_t>(r) : 0;
+        if (r > 0 && w.drained < kMaxDrained) continue;
         if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) return;
         close_connection(w);
         forget(it);
@@ -355,10 +357,18 @@ struct ConnectionServer::Impl {
       dispatch(it);
   }
 
+  // After an answer that ends the connection while the client may still be
+  // sending: closing with unread data would reset the connection, and the
+  // client could lose the answer before reading it. The gate reads and drops
+  // what comes for up to 2 s (kMaxDrained bytes at most), then closes.
+  static constexpr std::size_t kMaxDrained = std::size_t{64} << 20;
+  static void start_lingering(Waiting& w) {
+    ::shutdown(w.connection->fd(), SHUT_WR);
+    w.phase = Phase::lingering;
+    w.deadline = Clock::now() + std::chrono::seconds(2);
+  }
   void linger(std::unordered_map<int, Waiting>::iterator it) {
-    ::shutdown(it->first, SHUT_WR);
-    it->second.phase = Phase::lingering;
-    it->second.deadline = Clock::now() + std::chrono::seconds(2);
+    start_lingering(it->second);
     examine(it);
   }
 
@@ -426,7 +436,12 @@ struct ConnectionServer::Impl {
       }
       current_connection = nullptr;
       ++w.served;
-      if (!ok || connection_closed || last || c.must_close()) {
+      if (c.must_close()) {  // a body left unread
+        start_lingering(w);
+        to_gate(std::move(w));
+        return;
+      }
+      if (!ok || connection_closed || last) {
         close_connection(w);
         return;
       }

@@ -72,6 +72,7 @@ int serve_command(int argc, char** argv) {
   limits.max_queued = config.http_queue;
   limits.max_connections = config.max_connections;
   limits.header_timeout = std::chrono::seconds(config.header_timeout);
+  limits.body_grace = std::chrono::seconds(config.body_grace);
   limits.body_min_rate = config.body_min_rate;
   limits.read_timeout = std::chrono::seconds(config.read_timeout);
   limits.write_timeout = std::chrono::seconds(config.write_timeout);

@@ -24,7 +24,8 @@ struct ServeConfig {
   std::size_t http_queue = 256;      // requests waiting for an HTTP thread (429 above)
   std::size_t max_connections = 1024;  // open connections (503 above)
   int header_timeout = 10;  // seconds from a request's first byte to the end of its head
-  std::uint64_t body_min_rate = 16 * 1024;  // bytes/s a body must average after 10 s
+  int body_grace = 10;                      // seconds any request body may take...
+  std::uint64_t body_min_rate = 16 * 1024;  // ...plus its size at this many bytes/s
   int read_timeout = 30;   // seconds without progress before a request is dropped
   int write_timeout = 30;
   std::vector<std::string> cors_origins;  // "*" allows any

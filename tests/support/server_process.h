@@ -3,6 +3,7 @@
 // integration tests that talk HTTP to it.
 #include <sys/types.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,11 @@ class ServerProcess {
   // Sends SIGTERM and waits; returns the exit status (128+signal if killed).
   int stop(int timeout_seconds = 60);
   bool running() const { return pid_ > 0; }
+  pid_t pid() const { return pid_; }
+  // Peak resident memory so far (VmHWM), in bytes.
+  std::uint64_t peak_rss() const;
+  // SIGKILL, as a crash or the OOM killer would end it.
+  void kill_hard();
 
  private:
   pid_t pid_ = -1;

@@ -1,0 +1,303 @@
+// Requests an attacker would send, against a real `voxd serve` on loopback
+// (issue #12's findings, each reproducer generated here). Every test checks
+// the clean answer (a 4xx/503 problem, or a closed connection where HTTP has
+// no answer), where it matters that the server's peak memory stayed bounded,
+// and that the service then still finishes a normal job.
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <zlib.h>
+
+#include "support/http_fixture.h"
+#include "support/raw_socket.h"
+
+namespace voxd::test {
+namespace {
+
+using namespace std::chrono_literals;
+using nlohmann::json;
+
+class Hardening : public HttpServiceTest {
+ protected:
+  // /healthz answers and a small job succeeds, the same as on a fresh server.
+  void expect_healthy() {
+    auto health = http().Get("/healthz");
+    ASSERT_TRUE(health);
+    EXPECT_EQ(health->status, 200);
+    // A queue a test filled may need a moment to drain: 429s are retried.
+    const auto until = std::chrono::steady_clock::now() + 60s;
+    auto post = [&] {
+      return post_multipart(http(), "/v1/jobs", to_binary_stl(make_box({0, 0, 0}, {1, 2, 3})), "part.stl",
+                            R"({"grid": {"resolution": 16}})");
+    };
+    httplib::Result res = post();
+    while (res && res->status == 429 && std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(200ms);
+      res = post();
+    }
+    finished(expect_json(res, 202, "JobStatus"));
+  }
+
+  // The server's peak memory grew by less than `bytes` since `before`.
+  void expect_peak_growth_below(std::uint64_t before, std::uint64_t bytes) {
+    const std::uint64_t after = server_->peak_rss();
+    EXPECT_LT(after - before, bytes) << "peak RSS went from " << (before >> 20) << " MiB to " << (after >> 20) << " MiB";
+  }
+
+  // A small job first, so the peak includes what any job costs.
+  std::uint64_t warm_peak() {
+    expect_healthy();
+    return server_->peak_rss();
+  }
+};
+
+std::string nested_arrays(std::size_t depth, const std::string& inner = "1") {
+  return std::string(depth, '[') + inner + std::string(depth, ']');
+}
+
+std::string gzip_bytes(const std::string& data) {
+  z_stream z{};
+  deflateInit2(&z, 1, Z_DEFLATED, 31, 8, Z_DEFAULT_STRATEGY);
+  std::string out(deflateBound(&z, data.size()), '\0');
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+  z.avail_in = static_cast<uInt>(data.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = static_cast<uInt>(out.size());
+  deflate(&z, Z_FINISH);
+  out.resize(z.total_out);
+  deflateEnd(&z);
+  return out;
+}
+
+// Finding 2: 60,000 levels of nesting in each place whose error message used
+// to serialize the value recursively.
+TEST_F(Hardening, DeeplyNestedParamsAreRefusedNotACrash) {
+  start();
+  const std::string deep = nested_arrays(60000);
+  for (const std::string& params :
+       {R"({"mode": "coverage", "coverage": {"seed": )" + deep + "}}", R"({"grid": {"voxel_size": 1, "origin": )" + deep +
+                                                                          R"(, "dims": [4, 4, 4]}})",
+        R"({"mode": "slice", "slice": {"function": "single_color", "color": )" + deep + "}}"}) {
+    const json p = expect_problem(post_multipart(http(), "/v1/jobs", to_binary_stl(make_box({0, 0, 0}, {1, 1, 1})),
+                                                 "part.stl", params),
+                                  400, "malformed-json");
+    EXPECT_NE(p.at("detail").get<std::string>().find("levels deep"), std::string::npos) << p.dump();
+  }
+  // In the query string of a raw upload too (within httplib's URI limit).
+  expect_problem(post_raw(http(), "/v1/voxelize", to_binary_stl(make_box({0, 0, 0}, {1, 1, 1})),
+                          R"({"grid": {"resolution": )" + nested_arrays(600) + "}}"),
+                 400, "malformed-json");
+  expect_healthy();
+}
+
+TEST_F(Hardening, DeeplyNestedParamsAreAUsageErrorInTheCli) {
+  const std::string dir = make_temp_dir("voxd-deep");
+  write_file(dir + "/box.stl", to_binary_stl(make_box({0, 0, 0}, {1, 1, 1})));
+  std::ofstream(dir + "/params.json") << R"({"coverage": {"seed": )" << nested_arrays(60000) << "}}";
+  const auto r = run_process(std::string(VOXD_BINARY) + " voxelize " + dir + "/box.stl -o " + dir +
+                             "/out.rle --params @" + dir + "/params.json");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("levels deep"), std::string::npos) << r.err;
+  std::filesystem::remove_all(dir);
+}
+
+// Finding 12: a number beyond a double is malformed JSON, not an internal error.
+TEST_F(Hardening, NumberBeyondADoubleIsMalformedJson) {
+  start();
+  const json p = expect_problem(
+      post_multipart(http(), "/v1/jobs", to_binary_stl(make_box({0, 0, 0}, {1, 1, 1})), "part.stl",
+                     R"({"grid": {"voxel_size": 1e400}})"),
+      400, "malformed-json");
+  EXPECT_NE(p.at("detail").get<std::string>().find("1e400"), std::string::npos) << p.dump();
+  expect_healthy();
+}
+
+// Finding 6: the params part has a limit of its own, enforced while it
+// streams in, and the refused rest of the body is never read as requests.
+TEST_F(Hardening, OversizedParamsPartIsRefusedWhileItStreams) {
+  start();
+  const std::uint64_t before = warm_peak();
+  const std::string boundary = "voxdboundary";
+  const std::string mesh = text_of(to_binary_stl(make_box({0, 0, 0}, {1, 1, 1})));
+  std::string params(200u << 20, '1');  // 200 MB of JSON: one number in an array
+  params.front() = '[';
+  params.back() = ']';
+  const std::string body = "--" + boundary + "\r\nContent-Disposition: form-data; name=\"mesh\"; filename=\"a.stl\"\r\n\r\n" +
+                           mesh + "\r\n--" + boundary +
+                           "\r\nContent-Disposition: form-data; name=\"params\"\r\n\r\n" + params + "\r\n--" + boundary +
+                           "--\r\n";
+  RawSocket s(server_->port());
+  s.send("POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: multipart/form-data; boundary=" + boundary +
+         "\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n");
+  std::thread sender([&] { s.send(body); });  // fails once the server closes
+  bool closed = false;
+  const std::string answer = s.read_until_closed(30s, &closed);
+  sender.join();
+  EXPECT_TRUE(closed);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0u) << answer.substr(0, 300);
+  EXPECT_NE(answer.find("params-too-large"), std::string::npos) << answer.substr(0, 600);
+  expect_peak_growth_below(before, std::uint64_t{96} << 20);
+  expect_healthy();
+}
+
+// Finding 3: after a 413 on a gzip body, the connection closes: a request
+// hidden in the rest of the body is never answered.
+TEST_F(Hardening, NoRequestIsSmuggledBehindARefusedGzipBody) {
+  start({"--max-upload-bytes", "1000000"});
+  const std::string smuggled = "GET /healthz HTTP/1.1\r\nHost: t\r\n\r\n";
+  const std::string body = gzip_bytes(std::string(8u << 20, 'A'));  // 8 MB unpacked, over the 1 MB limit
+  RawSocket s(server_->port());
+  s.send("POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: application/octet-stream\r\nContent-Encoding: gzip\r\n"
+         "Content-Length: " + std::to_string(body.size() + smuggled.size()) + "\r\n\r\n");
+  s.send(body + smuggled);
+  bool closed = false;
+  const std::string answer = s.read_until_closed(20s, &closed);
+  EXPECT_TRUE(closed) << "the connection stayed open";
+  EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0u) << answer.substr(0, 300);
+  EXPECT_EQ(answer.find("HTTP/1.1", 1), std::string::npos) << "a second response: " << answer;
+  expect_healthy();
+}
+
+// Finding 7: clients trickling heads hold no HTTP thread; the probes answer
+// at once, and the trickling connections get 408 at the header deadline.
+TEST_F(Hardening, SlowHeadsDoNotStarveTheProbes) {
+  start({"--http-threads", "2", "--header-timeout", "2"});
+  std::vector<std::unique_ptr<RawSocket>> slow;
+  for (int i = 0; i < 40; ++i) {
+    slow.push_back(std::make_unique<RawSocket>(server_->port()));
+    slow.back()->send("GET /healthz HTTP/1.1\r\nHost: t\r\n");
+  }
+  for (int round = 0; round < 3; ++round) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto client = make_client(server_->port(), 2);
+    auto health = client->Get("/healthz");
+    ASSERT_TRUE(health) << "the probe got no answer while 40 heads trickle";
+    EXPECT_EQ(health->status, 200);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+    for (auto& s : slow) s->send("X");  // still sending
+    std::this_thread::sleep_for(400ms);
+  }
+  for (auto& s : slow) {
+    bool closed = false;
+    const std::string answer = s->read_until_closed(5s, &closed);
+    EXPECT_TRUE(closed);
+    EXPECT_EQ(answer.rfind("HTTP/1.1 408", 0), 0u) << answer;
+  }
+  expect_healthy();
+}
+
+// Finding 7: a body shorter than its Content-Length, or trickled, is dropped
+// at its deadline (grace + size at the minimum rate), not held for ever.
+TEST_F(Hardening, StalledBodiesAreDroppedAtTheirDeadline) {
+  start({"--http-threads", "1", "--body-grace", "2", "--body-min-rate", "1000000", "--read-timeout", "60"});
+  RawSocket s(server_->port());
+  s.send("POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: application/octet-stream\r\nContent-Length: 1000000\r\n\r\n");
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 40; ++i) {  // 1 byte every 100 ms: the read timeout alone would never end it
+    if (!s.send("x")) break;
+    std::this_thread::sleep_for(100ms);
+  }
+  bool closed = false;
+  s.read_until_closed(10s, &closed);
+  EXPECT_TRUE(closed);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 8s);
+  expect_healthy();  // the only HTTP thread is free again
+}
+
+// Finding 8: an OBJ index of INT64_MIN is refused, not read out of bounds.
+TEST_F(Hardening, ObjIndexOfInt64MinIsAnInvalidMesh) {
+  start();
+  const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -9223372036854775808 1 2\n";
+  const json p = expect_problem(post_raw(http(), "/v1/voxelize?filename=a.obj", bytes_of(obj), ""), 422, "invalid-mesh");
+  EXPECT_NE(p.at("detail").get<std::string>().find("-9223372036854775808"), std::string::npos) << p.dump();
+  expect_healthy();
+}
+
+// Finding 9: a burst far past the HTTP threads and the job queue gets 202s
+// and 429s with Retry-After, never a reset connection.
+TEST_F(Hardening, BurstsGet429NotResets) {
+  start({"--workers", "1", "--queue-size", "4", "--http-threads", "4", "--http-queue", "16"});
+  const std::vector<std::uint8_t> mesh = to_binary_stl(make_icosphere({0, 0, 0}, 1, 3));
+  constexpr int kClients = 200;
+  std::atomic<int> accepted{0}, busy{0}, other{0};
+  std::vector<std::thread> clients;
+  for (int i = 0; i < kClients; ++i)
+    clients.emplace_back([&, i] {
+      auto client = make_client(server_->port(), 60);
+      auto res = post_multipart(*client, "/v1/jobs", mesh, "part.stl",
+                                R"({"grid": {"resolution": )" + std::to_string(64 + i) + "}}");
+      if (res && res->status == 202) ++accepted;
+      else if (res && res->status == 429 && res->has_header("Retry-After")) ++busy;
+      else ++other;
+    });
+  for (auto& t : clients) t.join();
+  EXPECT_EQ(other.load(), 0) << "answers other than 202 or 429 (or no answer at all)";
+  EXPECT_EQ(accepted + busy, kClients);
+  EXPECT_GT(busy.load(), 0);
+  EXPECT_GE(accepted.load(), 4);
+  expect_healthy();
+}
+
+// Finding 10: a synchronous request whose client leaves stops its job; the
+// only worker is free for the next job long before the abandoned one would
+// have ended (about 20 s of CPU on this machine).
+TEST_F(Hardening, AbandonedSyncRequestsCancelTheirJob) {
+  start({"--workers", "1", "--sync-max-voxels", "100000000"});
+  {
+    auto impatient = make_client(server_->port(), 1);
+    auto res = post_raw(*impatient, "/v1/voxelize?format=raw", to_binary_stl(make_icosphere({0, 0, 0}, 1, 4)),
+                        R"({"mode": "sdf", "sdf": {"band": "full"}, "grid": {"resolution": 400}})");
+    EXPECT_FALSE(res) << "the client was meant to give up first";
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const json job = submit(to_binary_stl(make_box({0, 0, 0}, {1, 2, 3})), R"({"grid": {"resolution": 16}})");
+  finished(job);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 10s);
+  EXPECT_NE(server_->log().find("went away; cancelling"), std::string::npos) << server_->log();
+}
+
+// Finding 13: control characters from a request never reach the log.
+TEST_F(Hardening, RequestFieldsCannotForgeLogLines) {
+  start();
+  const std::string forged = "abc\r\n2026-01-01T00:00:00.000Z info FORGED\x1b[31m";
+  auto res = http().Get("/healthz", {{"X-Request-Id", forged}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  const std::string echoed = res->get_header_value("X-Request-Id");
+  EXPECT_EQ(echoed.find_first_of("\r\n\x1b"), std::string::npos) << echoed;
+  auto plain = http().Get("/healthz", {{"X-Request-Id", "trace-42.a:b"}});
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->get_header_value("X-Request-Id"), "trace-42.a:b");
+  RawSocket s(server_->port());
+  s.send("GET /v1/jobs/%0d%0a%1b[2Jx HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n");
+  s.read_until_closed(5s);
+  expect_healthy();
+  const std::string log = server_->log();
+  EXPECT_EQ(log.find('\x1b'), std::string::npos);
+  EXPECT_EQ(log.find('\r'), std::string::npos);
+  EXPECT_EQ(log.find("\nFORGED"), std::string::npos);
+  EXPECT_EQ(log.find("info FORGED"), std::string::npos);
+}
+
+// Finding 14: a job running when the process is killed is reported as
+// interrupted while running.
+TEST_F(Hardening, AJobRunningAtAKillIsReportedAsRunning) {
+  start({"--workers", "1"});
+  const json job = submit(to_binary_stl(make_icosphere({0, 0, 0}, 1, 4)),
+                          R"({"mode": "sdf", "sdf": {"band": "full"}, "grid": {"resolution": 400}})");
+  const std::string id = job.at("id");
+  wait_for_state(http(), id, "running", 30);
+  server_->kill_hard();
+  start({"--workers", "1"});
+  const json status = expect_json(http().Get(("/v1/jobs/" + id).c_str()), 200, "JobStatus");
+  EXPECT_EQ(status.at("state"), "failed");
+  EXPECT_EQ(status.at("error").at("type"), "urn:voxd:problem:interrupted");
+  EXPECT_NE(status.at("error").at("detail").get<std::string>().find("was running"), std::string::npos) << status.dump();
+}
+
+}  // namespace
+}  // namespace voxd::test
