@@ -259,11 +259,39 @@ struct JobManager::Impl {
     return status;
   }
 
+  // A job taken from the queue becomes running only once its record says
+  // so: a client that saw "running" then learns after a kill and a restart
+  // that it was interrupted while running. False if it was cancelled
+  // meanwhile (the cancellation's own record is written after this one).
+  bool mark_running(Job& job) {
+    std::lock_guard guard(job.store_mutex);
+    JobSnapshot s;
+    {
+      std::lock_guard lock(mutex);
+      if (job.snap.state != JobState::queued) return false;
+      s = job.snap;
+    }
+    s.state = JobState::running;
+    s.started_at = format_time(Clock::now());
+    if (!job.ephemeral && !job.removed) {
+      try {
+        store.save(s);
+      } catch (const std::exception& e) {
+        spdlog::error("job {}: cannot write its record: {}", s.id, e.what());
+      }
+    }
+    std::lock_guard lock(mutex);
+    if (job.snap.state != JobState::queued) return false;
+    job.snap.state = JobState::running;
+    job.snap.started_at = s.started_at;
+    announce(job.snap);
+    return true;
+  }
+
   void work() {
     for (;;) {
       std::shared_ptr<Job> job;
       PreparedVoxelJob prepared;
-      JobSnapshot running;
       {
         std::unique_lock lock(mutex);
         work_cv.wait(lock, [&] { return stopping || !queue.empty(); });
@@ -271,16 +299,10 @@ struct JobManager::Impl {
         job = queue.front();
         queue.pop_front();
         if (job->snap.state != JobState::queued) continue;  // cancelled while waiting
-        job->snap.state = JobState::running;
-        job->snap.started_at = format_time(Clock::now());
         prepared = std::move(*job->prepared);
         job->prepared.reset();
-        announce(job->snap);
-        running = job->snap;
       }
-      // Recorded, so a process killed now reports the job as interrupted
-      // while running, not while queued.
-      persist(*job, running);
+      if (!mark_running(*job)) continue;  // cancelled meanwhile
       deliver();
       const auto t0 = std::chrono::steady_clock::now();
       JobSnapshot done;
