@@ -12,6 +12,7 @@
 
 #include <zlib.h>
 
+#include "support/draco_cli.h"
 #include "support/http_fixture.h"
 #include "support/raw_socket.h"
 
@@ -297,6 +298,65 @@ TEST_F(Hardening, AJobRunningAtAKillIsReportedAsRunning) {
   EXPECT_EQ(status.at("state"), "failed");
   EXPECT_EQ(status.at("error").at("type"), "urn:voxd:problem:interrupted");
   EXPECT_NE(status.at("error").at("detail").get<std::string>().find("was running"), std::string::npos) << status.dump();
+}
+
+}  // namespace
+}  // namespace voxd::test
+
+namespace voxd::test {
+namespace {
+
+std::string varint(std::uint64_t v) {
+  std::string out;
+  do {
+    const std::uint8_t b = v & 0x7f;
+    v >>= 7;
+    out += static_cast<char>(b | (v ? 0x80 : 0));
+  } while (v);
+  return out;
+}
+
+// A Draco 2.2 edgebreaker header claiming `faces` and `vertices`, then
+// zeros: the shape of the fuzzer's 74-122 byte files.
+std::string hostile_draco(std::uint64_t faces, std::uint64_t vertices) {
+  std::string d = "DRACO";
+  d += std::string("\x02\x02\x01\x01\x00\x00", 6);
+  d += '\0' + varint(vertices) + varint(faces) + '\0' + varint(1) + varint(0);
+  return d + std::string(60, '\0');
+}
+
+// Finding 1: Draco headers claiming billions of faces are refused before
+// libdraco sizes a buffer from them; one that passes the checks is decoded
+// in a child process whose memory is limited.
+TEST_F(Hardening, HostileDracoHeadersAreRefusedWithBoundedMemory) {
+  start();
+  const std::uint64_t before = warm_peak();
+  const json over = expect_problem(
+      post_raw(http(), "/v1/jobs?filename=a.drc", bytes_of(hostile_draco(1'130'000'000, 500'000'000)), ""), 422,
+      "limit-exceeded");
+  EXPECT_NE(over.at("detail").get<std::string>().find("1130000000"), std::string::npos) << over.dump();
+  const json dense = expect_problem(
+      post_raw(http(), "/v1/jobs?filename=a.drc", bytes_of(hostile_draco(5'000'000, 2'500'000)), ""), 422,
+      "invalid-mesh");
+  EXPECT_NE(dense.at("detail").get<std::string>().find("bytes can encode"), std::string::npos) << dense.dump();
+  expect_problem(post_raw(http(), "/v1/jobs?filename=a.drc", bytes_of(hostile_draco(60'000, 50'000)), ""), 422,
+                 "invalid-mesh");
+  expect_peak_growth_below(before, std::uint64_t{64} << 20);
+  expect_healthy();
+}
+
+TEST_F(Hardening, DracoPastTheDecoderMemoryLimitIsA422) {
+  ASSERT_TRUE(draco_encoder_available()) << "scripts/install-deps.sh installs Debian's draco";
+  start({"--max-decode-memory", std::to_string(16u << 20)});
+  const std::vector<std::uint8_t> big = encode_with_draco_encoder(make_icosphere({0, 0, 0}, 1, 7), "");
+  const json p = expect_problem(post_raw(http(), "/v1/jobs?filename=a.drc", big, ""), 422, "invalid-mesh");
+  EXPECT_NE(p.at("detail").get<std::string>().find("max-decode-memory"), std::string::npos) << p.dump();
+  // The same file decodes with the default limit, to the same mesh as in process.
+  server_->stop();
+  start();
+  const json job = submit(big, R"({"grid": {"resolution": 32}})", "a.drc");
+  finished(job);
+  EXPECT_EQ(volume(job.at("id"), "?format=rle"), cli_volume(big, "a.drc", R"({"grid": {"resolution": 32}})"));
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include "api/param_error.h"
 #include "server/cli/cli_args.h"
+#include "server/draco_isolation.h"
 #include "voxd/error.h"
 
 namespace voxd::cli {
@@ -40,6 +41,8 @@ int run(int argc, char** argv) {
     if (command == "voxelize") return voxelize_command(argc, argv);
     if (command == "analyze") return analyze_command(argc, argv);
     if (command == "serve") return serve_command(argc, argv);
+    // Internal: the service's isolated Draco decoder (server/draco_isolation.h).
+    if (command == "decode-draco-isolated") return server::decode_draco_child(argc, argv);
     throw UsageError("unknown command '" + command + "' (try voxd --help)");
   } catch (const UsageError& e) {
     std::cerr << "voxd: " << e.what() << '\n';

@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "server/cli/cli.h"
+#include "server/draco_isolation.h"
 #include "server/http/connection_server.h"
 #include "server/http/http_api.h"
 #include "server/http/metrics.h"
@@ -53,6 +54,10 @@ int serve_command(int argc, char** argv) {
   jc.limits.decode.max_bytes = config.max_upload_bytes;
   jc.limits.decode.max_triangles = config.max_triangles;
   jc.limits.max_voxels = config.max_voxels;
+  DracoIsolation draco;
+  draco.max_triangles = config.max_triangles;
+  draco.max_memory = config.max_decode_memory;
+  jc.limits.decode.draco_decoder = [draco](std::span<const std::uint8_t> data) { return decode_draco_isolated(data, draco); };
   jc.max_job_memory = config.max_job_memory;
   jc.result_ttl = std::chrono::seconds(config.result_ttl);
   jc.on_state_change = [&](const JobSnapshot& s) {

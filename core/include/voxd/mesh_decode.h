@@ -3,6 +3,7 @@
 // file name is only a hint used when content is ambiguous.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string_view>
 
@@ -17,6 +18,12 @@ const char* to_string(MeshFormat format) noexcept;
 struct DecodeLimits {
   std::size_t max_bytes = std::size_t{2} << 30;  // 2 GiB
   std::size_t max_triangles = 50'000'000;
+  // Draco is decoded by a third-party library (libdraco). When set, this
+  // decodes it instead of the in-process call, after the header's counts are
+  // checked: the service runs libdraco in a child process under memory and
+  // CPU limits (server/draco_isolation.h), so nothing it does can take the
+  // service down. It returns the mesh as decode_mesh would, or throws Error.
+  std::function<Mesh(std::span<const std::uint8_t>)> draco_decoder;
 };
 
 // Detection only; never throws. Returns MeshFormat::unknown when nothing fits.

@@ -11,6 +11,7 @@
 #include <draco/compression/decode.h>
 
 #include "mesh_io/decode_checks.h"
+#include "mesh_io/draco_header.h"
 #include "mesh_io/format_decoders.h"
 #include "voxd/error.h"
 
@@ -48,7 +49,8 @@ std::unique_ptr<draco::Mesh> decode_draco_mesh(std::span<const std::uint8_t> dat
   } catch (const std::bad_alloc&) {
     // libdraco sizes its buffers from counts in the stream.
     throw Error(ErrorCode::malformed_input,
-                "the Draco data declares more elements than can be decoded; the file is corrupt");
+                "decoding the Draco data needs more memory than the decoder may use: the file is corrupt, or "
+                "larger than this service decodes (its --max-decode-memory)");
   } catch (const std::length_error&) {
     throw Error(ErrorCode::malformed_input,
                 "the Draco data declares more elements than can be decoded; the file is corrupt");
@@ -58,6 +60,8 @@ std::unique_ptr<draco::Mesh> decode_draco_mesh(std::span<const std::uint8_t> dat
 }  // namespace
 
 Mesh decode_draco(std::span<const std::uint8_t> data, const DecodeLimits& limits) {
+  check_draco_claims(read_draco_claims(data), data.size(), limits);
+  if (limits.draco_decoder) return limits.draco_decoder(data);
   const std::unique_ptr<draco::Mesh> decoded = decode_draco_mesh(data);
   const draco::PointAttribute* position = decoded->GetNamedAttribute(draco::GeometryAttribute::POSITION);
   if (position == nullptr || position->size() == 0)
