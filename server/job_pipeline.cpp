@@ -134,6 +134,33 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
   return bits * volumes;
 }
 
+std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
+                                     const DecodeLimits& limits) {
+  const std::uint64_t n = mesh_bytes.size();
+  constexpr std::uint64_t kFixed = std::uint64_t{16} << 20;
+  switch (detect_mesh_format(mesh_bytes, name_hint)) {
+    // A binary STL record (50 bytes) becomes at most 48 bytes of mesh.
+    case MeshFormat::stl_binary: return 2 * n + kFixed;
+    // A binary PLY vertex can be 12 bytes and a face 13: the mesh takes up
+    // to about 4 times the file (229 MB for a 60 MB file of 20M vertices).
+    case MeshFormat::ply: return 5 * n + kFixed;
+    // Text is longer than the numbers it holds.
+    case MeshFormat::stl_ascii:
+    case MeshFormat::obj: return n + kFixed;
+    // libdraco in its own process: its decoder state, and the mesh it hands back.
+    case MeshFormat::draco:
+      return std::min<std::uint64_t>(draco_child_memory(n), limits.max_triangles * 64) + 64 * n + kFixed;
+    case MeshFormat::unknown: break;
+  }
+  return kFixed;
+}
+
+std::uint64_t draco_child_memory(std::uint64_t bytes) { return (std::uint64_t{256} << 20) + 256 * bytes; }
+
+std::uint64_t mesh_memory(const Mesh& mesh) {
+  return mesh.vertices.capacity() * sizeof(mesh.vertices[0]) + mesh.triangles.capacity() * sizeof(mesh.triangles[0]);
+}
+
 PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                    const api::JobParams& params, const JobLimits& limits) {
   PreparedVoxelJob job;

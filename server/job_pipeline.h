@@ -74,6 +74,18 @@ struct VoxelJobResult {
 // Bytes the job's volumes will take at peak, for admission control.
 std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params);
 
+// Bytes decoding an upload takes at its peak beside the upload itself (the
+// mesh, the weld's tables), from its size and format; for Draco, the
+// isolated decoder's process. Checked against measured peaks in
+// tests/memory_estimate_test.cpp.
+std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
+                                     const DecodeLimits& limits);
+// The memory the isolated Draco decoder is given for a file of `bytes`
+// (at most the service's --max-decode-memory).
+std::uint64_t draco_child_memory(std::uint64_t bytes);
+// Bytes a decoded mesh holds.
+std::uint64_t mesh_memory(const Mesh& mesh);
+
 // Decode, rotate/orient, resolve the grid, check limits. Throws voxd::Error.
 PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                    const api::JobParams& params, const JobLimits& limits);

@@ -14,6 +14,7 @@
 
 #include "support/draco_cli.h"
 #include "support/http_fixture.h"
+#include "support/ply_writer.h"
 #include "support/raw_socket.h"
 
 namespace voxd::test {
@@ -357,6 +358,65 @@ TEST_F(Hardening, DracoPastTheDecoderMemoryLimitIsA422) {
   const json job = submit(big, R"({"grid": {"resolution": 32}})", "a.drc");
   finished(job);
   EXPECT_EQ(volume(job.at("id"), "?format=rle"), cli_volume(big, "a.drc", R"({"grid": {"resolution": 32}})"));
+}
+
+}  // namespace
+}  // namespace voxd::test
+
+namespace voxd::test {
+namespace {
+
+// Finding 4: a queued job's decoded mesh is held against the memory budget
+// from its acceptance, so uploads behind a busy worker are refused with 429
+// once the budget is taken, instead of piling up until the process dies.
+TEST_F(Hardening, QueuedMeshesAreAdmittedWithinTheMemoryBudget) {
+  constexpr std::uint64_t kBudget = std::uint64_t{400} << 20;
+  start({"--workers", "1", "--memory-budget", std::to_string(kBudget)});
+  const std::uint64_t before = warm_peak();
+  const json blocker = submit(to_binary_stl(make_icosphere({0, 0, 0}, 1, 4)),
+                              R"({"mode": "sdf", "sdf": {"band": "full"}, "grid": {"resolution": 300}})");
+  const std::string blocker_id = blocker.at("id");
+  wait_for_state(http(), blocker_id, "running", 30);
+  Mesh many = make_box({0, 0, 0}, {1, 1, 1});
+  many.vertices.resize(4'000'000, glm::vec3(0.5f));  // 48 MB of vertices for 12 triangles
+  PlyOptions binary;
+  binary.encoding = PlyOptions::Encoding::binary_little_endian;
+  const std::vector<std::uint8_t> ply = to_ply(many, binary);
+  int accepted = 0, busy = 0;
+  for (int i = 0; i < 20; ++i) {
+    auto res = post_raw(http(), "/v1/jobs?filename=part.ply", ply, R"({"grid": {"resolution": )" + std::to_string(16 + i) + "}}");
+    ASSERT_TRUE(res);
+    if (res->status == 202) {
+      ++accepted;
+      continue;
+    }
+    const json p = expect_problem(res, 429, "memory-busy");
+    EXPECT_TRUE(res->has_header("Retry-After"));
+    EXPECT_NE(p.at("detail").get<std::string>().find("MiB"), std::string::npos) << p.dump();
+    ++busy;
+  }
+  EXPECT_GE(accepted, 1);
+  EXPECT_GE(busy, 10);
+  expect_peak_growth_below(before, kBudget + (std::uint64_t{160} << 20));
+  ASSERT_TRUE(http().Delete(("/v1/jobs/" + blocker_id).c_str()));
+  wait_for_job(http(), blocker_id);
+  expect_healthy();
+}
+
+// Finding 5: an analysis whose estimate could never fit is refused up front
+// (it used to kill the server with several full float copies); one that fits
+// is answered.
+TEST_F(Hardening, AnalysesAreAdmittedWithinTheMemoryBudget) {
+  start({"--memory-budget", std::to_string(256u << 20)});
+  const std::uint64_t before = warm_peak();
+  const std::string id = finished(submit(to_binary_stl(make_icosphere({0, 0, 0}, 1, 4)), R"({"grid": {"resolution": 256}})"));
+  const json p = expect_problem(http().Get(("/v1/jobs/" + id + "/thickness?format=raw").c_str()), 422, "limit-exceeded");
+  EXPECT_NE(p.at("detail").get<std::string>().find("--memory-budget"), std::string::npos) << p.dump();
+  auto radiograph = http().Get(("/v1/jobs/" + id + "/radiography?axis=z&format=json").c_str());
+  ASSERT_TRUE(radiograph);
+  EXPECT_EQ(radiograph->status, 200) << radiograph->body;
+  expect_peak_growth_below(before, std::uint64_t{256} << 20);
+  expect_healthy();
 }
 
 }  // namespace

@@ -65,6 +65,10 @@ std::vector<std::string> install_analysis_routes(httplib::Server& server, JobMan
       const std::string id = req.matches[1];
       const api::AnalysisRequest request = request_of(kind, req);
       const FinishedJob job = finished_job(jobs, id);
+      // Computing (or even serving a kept result, read whole) takes memory
+      // beside the job's volumes: held from the budget meanwhile.
+      const MemoryBudget::Reservation memory =
+          jobs.reserve_memory(estimate_analysis_memory(request, job.snapshot.grid), "this analysis");
       AnalysisResult result;
       try {
         result = job_analysis(request, job.snapshot, job.output, artifacts_of(jobs, id));

@@ -33,6 +33,10 @@ Problem problem_from_current_exception() {
     Problem p = make_problem(429, "queue-full", "Too many jobs", e.what());
     p.headers.emplace_back("Retry-After", std::to_string(e.retry_after_seconds()));
     return p;
+  } catch (const MemoryBusy& e) {
+    Problem p = make_problem(429, "memory-busy", "The service's memory is taken", e.what());
+    p.headers.emplace_back("Retry-After", std::to_string(MemoryBusy::kRetryAfterSeconds));
+    return p;
   } catch (const NotAccepting& e) {
     return make_problem(503, "shutting-down", "The service is shutting down", e.what());
   } catch (const Error& e) {

@@ -191,6 +191,19 @@ std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, 
 
 }  // namespace
 
+std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& grid) {
+  const std::uint64_t voxels = grid.voxel_count();
+  const bool thickness = r.kind == AnalysisKind::thickness || (r.kind == AnalysisKind::analysis && r.thickness) ||
+                         r.colour == "thickness";
+  // The distance transform and the thickness map (floats), the labels of
+  // parts and voids or the peel depths (32 bits a voxel), bit copies.
+  std::uint64_t per_voxel = thickness ? 18 : 6;
+  // The map in the asked unit, the encoded volume and its kept copy.
+  if (r.kind == AnalysisKind::thickness) per_voxel += 12;
+  constexpr std::uint64_t kImagesAndReports = std::uint64_t{16} << 20;
+  return per_voxel * voxels + kImagesAndReports;
+}
+
 ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id) {
   return {id, [&jobs, id](const std::string& key) { return jobs.load_artifact(id, key); },
           [&jobs, id](const std::string& key, const std::string& bytes) { jobs.save_artifact(id, key, bytes); }};

@@ -52,6 +52,12 @@ struct AnalysisResult {
 AnalysisResult job_analysis(const api::AnalysisRequest& request, const JobSnapshot& job, const JobOutput& output,
                             const ArtifactAccess& artifacts, JobControl* control = nullptr);
 
+// Bytes a request may take at its peak, beyond the job's volumes, for the
+// memory budget. Measured (docs/security.md): local thickness and the
+// analysis that uses it about 14 bytes a voxel at 256^3, the thickness
+// volume route about 23; the factors below hold a margin over those.
+std::uint64_t estimate_analysis_memory(const api::AnalysisRequest& request, const Grid& grid);
+
 // Extra response headers of a request (X-Voxd-Scale for images and volumes).
 std::vector<std::pair<std::string, std::string>> analysis_headers(const api::AnalysisRequest& request, const Grid& grid);
 

@@ -79,6 +79,9 @@ struct Job {
   bool ephemeral = false;           // synchronous job: never stored, dropped after use
   JobOutput result;  // a synchronous job's volumes, for its caller
   bool stopped_by_shutdown = false;  // cancelled because the service stops
+  // The job's share of the memory budget (its decoded mesh, volumes and
+  // analyses), from acceptance until it ends.
+  MemoryBudget::Reservation memory;
   // Serializes this job's store writes with its removal: a worker writing the
   // final record just after a client deleted the finished job must not bring
   // it back on disk (and after a restart, in the API).
@@ -87,10 +90,14 @@ struct Job {
 };
 
 struct JobManager::Impl {
-  explicit Impl(JobManagerConfig c) : config(std::move(c)), store(config.data_dir) {}
+  explicit Impl(JobManagerConfig c)
+      : config(std::move(c)),
+        store(config.data_dir),
+        budget(config.memory_budget ? config.memory_budget : available_memory() / 10 * 6) {}
 
   JobManagerConfig config;
   JobStore store;
+  MemoryBudget budget;
   int engine_threads = 0;
 
   mutable std::mutex mutex;
@@ -363,6 +370,7 @@ struct JobManager::Impl {
         done = job->snap;
         announce(done);
       }
+      job->memory.release();
       persist(*job, done);
       deliver();
       finished_cv.notify_all();
@@ -507,6 +515,10 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   if (ephemeral && !params.analyses.empty())
     throw api::InvalidParams(std::vector<api::FieldError>{
         {"/analyses", "synchronous voxelization answers with the volume only; submit to POST /v1/jobs for analyses"}});
+  // The upload while it is decoded, then the job's own share: until the
+  // decoded mesh is known, a bound from the bytes and the format.
+  MemoryBudget::Reservation decoding =
+      budget.reserve(decode_memory_estimate(mesh_bytes, name_hint, config.limits.decode), "decoding this upload");
   PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, config.limits);
   if (max_voxels > 0 && prepared.grid.voxel_count() > max_voxels)
     throw Error(ErrorCode::limit_exceeded, "the grid has " + std::to_string(prepared.grid.voxel_count()) +
@@ -516,10 +528,17 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
     throw Error(ErrorCode::limit_exceeded,
                 "the job needs about " + std::to_string(prepared.memory_estimate >> 20) + " MiB for its volumes, over the limit of " +
                     std::to_string(config.max_job_memory >> 20) + " MiB; use a lower resolution or a larger voxel_size");
+  std::uint64_t analyses_peak = 0;
+  for (const api::AnalysisRequest& r : params.analyses)
+    analyses_peak = std::max(analyses_peak, estimate_analysis_memory(r, prepared.grid));
   mesh_bytes.clear();
   mesh_bytes.shrink_to_fit();
+  decoding.release();
+  MemoryBudget::Reservation memory =
+      budget.reserve(mesh_memory(prepared.mesh) + prepared.memory_estimate + analyses_peak, "the job");
 
   auto job = std::make_shared<Job>();
+  job->memory = std::move(memory);
   job->ephemeral = ephemeral;
   JobSnapshot& s = job->snap;
   s.id = new_job_id();
@@ -605,6 +624,7 @@ JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
       job.snap.state = JobState::cancelled;
       job.snap.finished_at = format_time(Clock::now());
       job.prepared.reset();
+      job.memory.release();
       cancelled = job.snap;
       impl_->announce(job.snap);
     } else if (job.snap.state == JobState::running) {
@@ -711,6 +731,7 @@ JobOutput JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::
       job->snap.state = JobState::cancelled;  // the worker skips it
       job->snap.finished_at = format_time(Clock::now());
       job->prepared.reset();
+      job->memory.release();
     } else {
       job->control.request_cancel();
     }
@@ -736,6 +757,13 @@ JobCounts JobManager::counts() const {
   return c;
 }
 
+MemoryBudget::Reservation JobManager::reserve_memory(std::uint64_t bytes, const std::string& what) {
+  return impl_->budget.reserve(bytes, what);
+}
+
+std::uint64_t JobManager::memory_budget() const { return impl_->budget.total(); }
+std::uint64_t JobManager::memory_in_use() const { return impl_->budget.used(); }
+
 bool JobManager::accepting() const {
   std::lock_guard lock(impl_->mutex);
   return impl_->accepting;
@@ -756,6 +784,7 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
       job->snap.failure = interrupted("queued");
       job->snap.finished_at = format_time(Clock::now());
       job->prepared.reset();
+      job->memory.release();
       abandoned.push_back(job->snap);
       m.announce(job->snap);
     }

@@ -19,6 +19,7 @@
 
 #include "api/job_params.h"
 #include "server/job_pipeline.h"
+#include "server/jobs/memory_budget.h"
 #include "voxd/bit_volume.h"
 #include "voxd/volume_format.h"
 
@@ -79,6 +80,9 @@ struct JobManagerConfig {
   std::filesystem::path data_dir = "voxd-data";
   JobLimits limits;
   std::uint64_t max_job_memory = std::uint64_t{4} << 30;  // bytes of volumes one job may need
+  // Bytes all queued and running jobs, decodes and analyses may take at once
+  // (server/jobs/memory_budget.h); 0 = 60% of the machine's or container's memory.
+  std::uint64_t memory_budget = 0;
   std::chrono::seconds result_ttl{24 * 3600};            // finished jobs expire after this
   // Called (from worker or submitting threads, never under the table's lock)
   // on every state change, for logs and metrics.
@@ -164,6 +168,13 @@ class JobManager {
 
   JobCounts counts() const;
   bool accepting() const;
+
+  // Holds `bytes` of the memory budget for work outside a job (an analysis
+  // asked for over HTTP) until the reservation is dropped. Throws MemoryBusy
+  // when it does not fit now, voxd::Error limit_exceeded when it never can.
+  MemoryBudget::Reservation reserve_memory(std::uint64_t bytes, const std::string& what);
+  std::uint64_t memory_budget() const;
+  std::uint64_t memory_in_use() const;
 
   // Stops accepting; lets running jobs finish for up to `deadline`, then
   // cancels them (recorded as failed/interrupted so a restart reports them);
