@@ -421,3 +421,51 @@ TEST_F(Hardening, AnalysesAreAdmittedWithinTheMemoryBudget) {
 
 }  // namespace
 }  // namespace voxd::test
+
+namespace voxd::test {
+namespace {
+
+// `voxd serve` in a mount namespace of its own whose data directory is a
+// tmpfs of `megabytes`, with `filler_kb` of it taken by a file.
+std::vector<std::string> on_small_disk(const std::string& data_dir, int megabytes, int filler_kb) {
+  std::filesystem::create_directories(data_dir);
+  const std::string script = "mount -t tmpfs -o size=" + std::to_string(megabytes) + "m tmpfs " + data_dir +
+                             " && dd if=/dev/zero of=" + data_dir + "/filler bs=1k count=" + std::to_string(filler_kb) +
+                             " 2>/dev/null && exec \"$@\"";
+  return {"/usr/bin/unshare", "-m", "--", "/bin/sh", "-c", script, "voxd-on-small-disk"};
+}
+
+// Finding 11: a result that does not fit fails its job with storage-full and
+// leaves nothing behind (the next small job still fits); below the free-space
+// floor, submissions get 507 and /readyz is not ready.
+TEST_F(Hardening, AFullDiskFailsJobsCleanlyAndMakesTheServiceNotReady) {
+  start({"--min-free-disk", "65536"}, {}, on_small_disk(dir_ + "/data", 4, 3000));
+  // A full distance field: 4 MB of floats, more than the disk has free.
+  const json big = submit(to_binary_stl(make_icosphere({0, 0, 0}, 1, 3)),
+                          R"({"mode": "sdf", "sdf": {"band": "full"}, "grid": {"resolution": 100}})");
+  const json failed = wait_for_job(http(), big.at("id"));
+  EXPECT_EQ(failed.at("state"), "failed") << failed.dump();
+  EXPECT_EQ(failed.at("error").at("type"), "urn:voxd:problem:storage-full") << failed.dump();
+  EXPECT_EQ(failed.at("error").at("status"), 507);
+  auto ready = http().Get("/readyz");
+  ASSERT_TRUE(ready);
+  EXPECT_EQ(ready->status, 200) << "the failed write must not keep the disk full: " << ready->body;
+  expect_healthy();
+  server_->stop();
+
+  start({"--min-free-disk", std::to_string(2u << 20)}, {}, on_small_disk(dir_ + "/data", 4, 3000));
+  auto not_ready = http().Get("/readyz");
+  ASSERT_TRUE(not_ready);
+  EXPECT_EQ(not_ready->status, 503);
+  EXPECT_NE(not_ready->body.find("disk"), std::string::npos) << not_ready->body;
+  const json p = expect_problem(post_multipart(http(), "/v1/jobs", to_binary_stl(make_box({0, 0, 0}, {1, 1, 1})),
+                                               "part.stl", "{}"),
+                                507, "storage-full");
+  EXPECT_NE(p.at("detail").get<std::string>().find("MiB free"), std::string::npos) << p.dump();
+  auto health = http().Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+}
+
+}  // namespace
+}  // namespace voxd::test

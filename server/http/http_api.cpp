@@ -422,6 +422,8 @@ void HttpApi::install(httplib::Server& server) {
     if (draining_ || !jobs_.accepting()) return send_json(res, 503, {{"status", "not ready"}, {"reason", "shutting down"}});
     if (jobs_.counts().queue_depth >= config_.queue_size)
       return send_json(res, 503, {{"status", "not ready"}, {"reason", "the job queue is full"}});
+    if (!jobs_.storage_ok())
+      return send_json(res, 503, {{"status", "not ready"}, {"reason", "the data directory's disk is full"}});
     send_json(res, 200, {{"status", "ready"}});
   });
   server.Get("/metrics", [this](const Request&, Response& res) {

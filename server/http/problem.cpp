@@ -5,6 +5,7 @@
 
 #include "api/param_error.h"
 #include "server/jobs/job_manager.h"
+#include "server/jobs/job_store.h"
 #include "server/log_safe.h"
 #include "voxd/error.h"
 
@@ -32,6 +33,10 @@ Problem problem_from_current_exception() {
   } catch (const QueueFull& e) {
     Problem p = make_problem(429, "queue-full", "Too many jobs", e.what());
     p.headers.emplace_back("Retry-After", std::to_string(e.retry_after_seconds()));
+    return p;
+  } catch (const StorageFull& e) {
+    Problem p = make_problem(507, "storage-full", "The service's storage is full", e.what());
+    p.headers.emplace_back("Retry-After", "60");
     return p;
   } catch (const MemoryBusy& e) {
     Problem p = make_problem(429, "memory-busy", "The service's memory is taken", e.what());

@@ -72,6 +72,7 @@ int serve_command(int argc, char** argv) {
     return decode_draco_isolated(data, sized);
   };
   jc.memory_budget = config.memory_budget;
+  jc.min_free_disk = config.min_free_disk;
   jc.max_job_memory = config.max_job_memory;
   jc.result_ttl = std::chrono::seconds(config.result_ttl);
   jc.on_state_change = [&](const JobSnapshot& s) {

@@ -356,6 +356,15 @@ struct JobManager::Impl {
           s.state = JobState::failed;
           s.failure = JobFailure{failure_type(e.code()), "The job failed", e.what()};
         }
+      } catch (const StorageFull& e) {
+        // Nothing half-written stays: the disk is not kept full by this job.
+        spdlog::error("job {}: cannot store its result: {}", job->snap.id, e.what());
+        std::lock_guard guard(job->store_mutex);
+        if (!job->removed) store.remove(job->snap.id);
+        std::lock_guard lock(mutex);
+        job->snap.state = JobState::failed;
+        job->snap.failure = JobFailure{"storage-full", "The service's storage is full",
+                                       "the result could not be stored: " + std::string(e.what()) + "; retry later"};
       } catch (const std::exception& e) {
         spdlog::error("job {}: internal error: {}", job->snap.id, log_safe(e.what()));
         std::lock_guard lock(mutex);
@@ -473,6 +482,9 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
                       retry_after());
   }
   const api::JobParams params = api::parse_job_params(params_json);
+  if (!ephemeral && store.free_bytes() < config.min_free_disk)
+    throw StorageFull("the service's disk has less than " + std::to_string(config.min_free_disk >> 20) +
+                      " MiB free and takes no new jobs until results expire or are deleted; retry later");
   // Synchronous jobs are never stored, so never answered from the store: they
   // skip the hash (a tenth of a small job's time).
   const std::string hash = ephemeral ? std::string() : content_hash(mesh_bytes, params_json.dump());
@@ -552,8 +564,9 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   s.content_hash = hash;
   s.analyses = analyses_status(params.analyses, s.id, "pending");
   job->prepared = std::move(prepared);
-  // Recorded before a worker can see it, so the final record always wins.
-  persist(*job, s);
+  // Recorded before a worker can see it, so the final record always wins. A
+  // job that cannot be recorded is not accepted (a full disk is a 507).
+  if (!ephemeral) store.save(s);
   {
     std::lock_guard lock(mutex);
     if (!accepting || queue.size() >= config.queue_size) {
@@ -763,6 +776,7 @@ MemoryBudget::Reservation JobManager::reserve_memory(std::uint64_t bytes, const 
 
 std::uint64_t JobManager::memory_budget() const { return impl_->budget.total(); }
 std::uint64_t JobManager::memory_in_use() const { return impl_->budget.used(); }
+bool JobManager::storage_ok() const { return impl_->store.free_bytes() >= impl_->config.min_free_disk; }
 
 bool JobManager::accepting() const {
   std::lock_guard lock(impl_->mutex);

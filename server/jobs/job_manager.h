@@ -83,6 +83,9 @@ struct JobManagerConfig {
   // Bytes all queued and running jobs, decodes and analyses may take at once
   // (server/jobs/memory_budget.h); 0 = 60% of the machine's or container's memory.
   std::uint64_t memory_budget = 0;
+  // Submissions are refused (507) and /readyz is not ready while the data
+  // directory's disk has less than this free.
+  std::uint64_t min_free_disk = std::uint64_t{64} << 20;
   std::chrono::seconds result_ttl{24 * 3600};            // finished jobs expire after this
   // Called (from worker or submitting threads, never under the table's lock)
   // on every state change, for logs and metrics.
@@ -174,6 +177,8 @@ class JobManager {
   // when it does not fit now, voxd::Error limit_exceeded when it never can.
   MemoryBudget::Reservation reserve_memory(std::uint64_t bytes, const std::string& what);
   std::uint64_t memory_budget() const;
+  // Whether the data directory has at least min_free_disk free.
+  bool storage_ok() const;
   std::uint64_t memory_in_use() const;
 
   // Stops accepting; lets running jobs finish for up to `deadline`, then

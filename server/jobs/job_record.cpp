@@ -45,6 +45,7 @@ Grid grid_from_json(const json& j) {
 int failure_status(const std::string& type) {
   if (type == "interrupted") return 503;
   if (type == "internal") return 500;
+  if (type == "storage-full") return 507;
   return 422;
 }
 

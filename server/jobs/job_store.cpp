@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include <fcntl.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -31,20 +32,44 @@ void fsync_path(const fs::path& p, int flags) {
 }
 
 // Writes through `write` into a temporary file, then fsyncs and renames it.
+void make_dirs(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec == std::errc::no_space_on_device) throw StorageFull("the service's disk is full (" + ec.message() + ")");
+  if (ec) throw fs::filesystem_error("cannot create the job directory", dir, ec);
+}
+
+// A failed write removes its temporary file (a full disk stays full
+// otherwise) and reports a full disk as StorageFull.
 template <typename WriteFn>
 void write_atomically(const fs::path& target, WriteFn&& write) {
   const fs::path tmp = target.string() + ".tmp";
-  {
-    FileSink sink(tmp.string());
-    write(sink);
-    sink.close();
+  try {
+    {
+      FileSink sink(tmp.string());
+      write(sink);
+      sink.close();
+    }
+    fsync_path(tmp, O_RDONLY);
+    fs::rename(tmp, target);
+  } catch (const std::exception& e) {
+    const int err = errno;
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    if (err == ENOSPC || err == EDQUOT || err == EFBIG)
+      throw StorageFull("the service's disk is full (" + std::string(std::strerror(err)) + ")");
+    throw;
   }
-  fsync_path(tmp, O_RDONLY);
-  fs::rename(tmp, target);
   fsync_path(target.parent_path(), O_RDONLY | O_DIRECTORY);
 }
 
 }  // namespace
+
+std::uint64_t JobStore::free_bytes() const {
+  struct statvfs s {};
+  if (::statvfs(jobs_.c_str(), &s) != 0) return UINT64_MAX;  // unknown: do not refuse on it
+  return static_cast<std::uint64_t>(s.f_bavail) * s.f_frsize;
+}
 
 JobStore::JobStore(fs::path data_dir) : jobs_(std::move(data_dir) / "jobs") {
   std::error_code ec;
@@ -71,7 +96,7 @@ std::vector<JobSnapshot> JobStore::load_all() const {
 }
 
 void JobStore::save(const JobSnapshot& job) const {
-  fs::create_directories(job_dir(job.id));
+  make_dirs(job_dir(job.id));
   nlohmann::json record = to_json(job);
   if (job.mesh_mass) record["mesh_mass"] = api::to_json(*job.mesh_mass);
   const std::string text = record.dump();
@@ -87,28 +112,28 @@ std::optional<std::string> JobStore::load_artifact(const std::string& id, const 
 }
 
 void JobStore::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const {
-  fs::create_directories(job_dir(id) / "artifacts");
+  make_dirs(job_dir(id) / "artifacts");
   write_atomically(job_dir(id) / "artifacts" / key, [&](ByteSink& sink) { sink.write(bytes.data(), bytes.size()); });
 }
 
 void JobStore::save_volume(const std::string& id, const BitVolume& volume) const {
-  fs::create_directories(job_dir(id));
+  make_dirs(job_dir(id));
   write_atomically(job_dir(id) / "volume.rle", [&](ByteSink& sink) { write_rle(volume, sink); });
 }
 
 void JobStore::save_values(const std::string& id, const ValueVolume& values) const {
-  fs::create_directories(job_dir(id));
+  make_dirs(job_dir(id));
   const std::string name = std::string("values.") + value_type_name(values) + ".rle";
   write_atomically(job_dir(id) / name, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
 }
 
 void JobStore::save_similarity(const std::string& id, const DenseVolume<std::uint8_t>& similarity) const {
-  fs::create_directories(job_dir(id));
+  make_dirs(job_dir(id));
   write_atomically(job_dir(id) / "similarity.u8.rle", [&](ByteSink& sink) { write_rle(similarity, sink); });
 }
 
 void JobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
-  fs::create_directories(job_dir(to_id));
+  make_dirs(job_dir(to_id));
   for (const char* name : {"volume.rle", "values.u8.rle", "values.f32.rle", "values.rgba8.rle", "similarity.u8.rle"}) {
     const fs::path from = job_dir(from_id) / name, to = job_dir(to_id) / name;
     // The volume must be there (else the original is gone: throw); values only for value jobs.

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <optional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,13 @@
 #include "voxd/volume_format.h"
 
 namespace voxd::server {
+
+// The data directory's disk has no room (ENOSPC, EDQUOT, EFBIG): HTTP 507.
+// The write that failed has left nothing behind.
+class StorageFull : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 class JobStore {
  public:
@@ -39,6 +47,8 @@ class JobStore {
   void share_volume(const std::string& from_id, const std::string& to_id) const;
   std::shared_ptr<const BitVolume> load_volume(const std::string& id) const;
   void remove(const std::string& id) const;
+  // Bytes the data directory's file system has free for this process.
+  std::uint64_t free_bytes() const;
 
  private:
   std::filesystem::path job_dir(const std::string& id) const { return jobs_ / id; }

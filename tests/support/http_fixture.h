@@ -75,12 +75,13 @@ class HttpServiceTest : public ::testing::Test {
     std::filesystem::remove_all(dir_);
   }
 
-  void start(std::vector<std::string> args = {}, std::vector<std::string> env = {}) {
+  void start(std::vector<std::string> args = {}, std::vector<std::string> env = {},
+             const std::vector<std::string>& launcher = {}) {
     if (std::find(args.begin(), args.end(), "--workers") == args.end()) {
       args.push_back("--workers");
       args.push_back("2");
     }
-    server_ = std::make_unique<ServerProcess>(dir_ + "/data", args, env);
+    server_ = std::make_unique<ServerProcess>(dir_ + "/data", args, env, launcher);
     client_ = make_client(server_->port());
   }
   httplib::Client& http() { return *client_; }

@@ -16,9 +16,11 @@
 namespace voxd::test {
 
 ServerProcess::ServerProcess(const std::string& data_dir, const std::vector<std::string>& args,
-                             std::vector<std::string> env)
+                             std::vector<std::string> env, const std::vector<std::string>& launcher)
     : log_path_(data_dir + ".log") {
-  std::vector<std::string> argv_s = {VOXD_BINARY, "serve", "--host", "127.0.0.1", "--port", "0", "--data-dir", data_dir};
+  std::vector<std::string> argv_s = launcher;
+  for (const char* a : {VOXD_BINARY, "serve", "--host", "127.0.0.1", "--port", "0", "--data-dir"}) argv_s.push_back(a);
+  argv_s.push_back(data_dir);
   argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (auto& a : argv_s) argv.push_back(a.data());

@@ -14,8 +14,10 @@ class ServerProcess {
   // Starts `voxd serve --host 127.0.0.1 --port 0 --data-dir DATA_DIR ARGS...`
   // and waits until it logs the port it listens on. Its log (stdout and
   // stderr) goes to LOG_PATH. Throws when it does not come up.
+  // `launcher`, when given, runs first and gets the voxd command line as its
+  // own arguments (e.g. a shell that mounts a small file system first).
   ServerProcess(const std::string& data_dir, const std::vector<std::string>& args = {},
-                std::vector<std::string> env = {});
+                std::vector<std::string> env = {}, const std::vector<std::string>& launcher = {});
   ~ServerProcess();
   ServerProcess(const ServerProcess&) = delete;
   ServerProcess& operator=(const ServerProcess&) = delete;
