@@ -21,6 +21,7 @@ packages=(
   libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-jsonschema python3-yaml
+  clang libclang-rt-14-dev util-linux
 )
 if [[ "${1:-}" == --runtime ]]; then
   packages=("${runtime_packages[@]}")
