@@ -14,6 +14,8 @@
 #include <cstring>
 #include <new>
 #include <string>
+#include <cstdio>
+#include <thread>
 #include <vector>
 
 #include "voxd/error.h"
@@ -109,10 +111,22 @@ std::string describe_end(int status, const DracoIsolation& iso) {
   if (WIFSIGNALED(status)) {
     const int sig = WTERMSIG(status);
     if (sig == SIGXCPU) return "ran past its CPU limit of " + std::to_string(iso.max_cpu_seconds) + " s";
-    if (sig == SIGKILL) return "was stopped (memory limit of " + std::to_string(iso.max_memory >> 20) + " MiB or time)";
+    if (sig == SIGKILL)
+      return "was stopped: over its memory limit of " + std::to_string(iso.max_memory >> 20) +
+             " MiB (--max-decode-memory) or its time";
     return std::string("crashed (") + strsignal(sig) + ")";
   }
   return "ended with status " + std::to_string(WEXITSTATUS(status)) + " and no answer";
+}
+
+[[maybe_unused]] std::uint64_t resident_bytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  unsigned long long pages = 0, resident = 0;
+  if (f) {
+    if (std::fscanf(f, "%llu %llu", &pages, &resident) != 2) resident = 0;
+    std::fclose(f);
+  }
+  return resident * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
 }
 
 void write_all_or_exit(int fd, const void* data, std::size_t size) {
@@ -193,7 +207,16 @@ int decode_draco_child(int argc, char** argv) {
   const rlimit memory_limit{max_memory, max_memory};
   ::setrlimit(RLIMIT_DATA, &memory_limit);
 #else
-  (void)max_memory;
+  // ASan's per-allocation cap (set by the parent) stops one huge
+  // reservation; this stops many smaller ones: resident memory above what
+  // the process started with plus the limit ends it, as the rlimit would.
+  std::thread([max_memory] {
+    const std::uint64_t start = resident_bytes();
+    for (;;) {
+      if (resident_bytes() > start + max_memory) ::kill(::getpid(), SIGKILL);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }).detach();
 #endif
   const rlimit cpu_limit{cpu, cpu + 1};  // SIGXCPU at the soft limit, SIGKILL a second later
   ::setrlimit(RLIMIT_CPU, &cpu_limit);

@@ -2,6 +2,9 @@
 // detection follows content, and every kind of bad input gives its error code
 // and a message that says what is wrong and where.
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <cstring>
 #include <functional>
 #include <string>
@@ -516,6 +519,29 @@ TEST(MeshDecodeErrors, WrongFormatForcedOnData) {
                ErrorCode::malformed_input, {"line 1", "expected 'solid'", "'#'"});
   Bytes not_draco = bytes_of("DRACO garbage that is not a draco stream at all");
   expect_error([&] { decode_mesh(not_draco); }, ErrorCode::malformed_input, {"Draco"});
+}
+
+// Inputs the fuzzers found (tests/fuzz/regressions), decoded in process as
+// the CLI does: each is refused with an Error before the decoder allocates
+// what its header claims (the first made libdraco reserve 5.7 GB).
+TEST(MeshDecode, FuzzFindingsAreRefused) {
+  const std::filesystem::path dir = std::filesystem::path(VOXD_SOURCE_DIR) / "tests/fuzz/regressions";
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    DecodeLimits limits;
+    limits.max_triangles = 1'000'000;
+    // Called only once the Draco header's counts have passed their checks:
+    // these files must be refused before libdraco sees them.
+    limits.draco_decoder = [&](std::span<const std::uint8_t>) -> Mesh {
+      ADD_FAILURE() << entry.path() << " reached libdraco";
+      throw Error(ErrorCode::malformed_input, "stopped by the test");
+    };
+    EXPECT_THROW(decode_mesh(bytes, entry.path().filename().string(), limits), Error) << entry.path();
+    ++files;
+  }
+  EXPECT_GE(files, 1);
 }
 
 }  // namespace

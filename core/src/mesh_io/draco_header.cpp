@@ -100,6 +100,15 @@ DracoClaims read_draco_claims(std::span<const std::uint8_t> data) {
     const std::uint64_t split_symbols = in.varint("split symbol count");
     if (symbols > *claims.faces || split_symbols > symbols) cut_off("more symbols than faces");
     *claims.vertices += split_symbols;  // the decoder sizes its vertex arrays for both
+  } else {
+    // Before 2.2 the counts start with the new vertices of split events,
+    // written as u32 before 2.0 and as varints since.
+    const bool varints = version >= 2 * 256;
+    auto count = [&](const char* what) { return varints ? in.varint(what) : in.u32(what); };
+    in.u8("traversal type");
+    const std::uint64_t new_vertices = count("new vertex count");
+    claims.vertices = count("vertex count") + new_vertices;
+    claims.faces = count("face count");
   }
   return claims;
 }

@@ -5,7 +5,8 @@
 // service's triangle limit and against the bytes actually present.
 // Layout from the Draco bitstream specification: "DRACO", version major and
 // minor, encoder type, method, flags (u16); metadata when flagged; then the
-// connectivity header of the sequential or the edgebreaker method.
+// connectivity header of the sequential or the edgebreaker method, in the
+// layouts of bitstreams 1.x, 2.0/2.1 and 2.2.
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -17,8 +18,7 @@ namespace voxd::mesh_io {
 struct DracoClaims {
   int version_major = 0, version_minor = 0;
   bool edgebreaker = false;
-  // Unset where this bitstream version's connectivity header is not read
-  // (edgebreaker before 2.2): the decoder's isolation is the bound then.
+  // Unset for a point cloud (which the decoder refuses).
   std::optional<std::uint64_t> faces, vertices;
 };
 
