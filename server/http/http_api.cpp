@@ -51,14 +51,18 @@ void send_json(Response& res, int status, const json& body) {
   res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
+ProblemError params_too_large(std::size_t limit) {
+  return ProblemError(make_problem(413, "params-too-large", "Job parameters too large",
+                                   "the job parameters are over the limit of " + std::to_string(limit) +
+                                       " bytes; custom palettes and lookups fit well within it"));
+}
+
 json parse_params_text(const std::string& text, const api::JsonLimits& limits) {
   if (text.empty()) return json::object();
   try {
     return api::parse_bounded_json(text, "params", limits);
   } catch (const api::InvalidJson& e) {
-    if (e.reason() == api::InvalidJson::Reason::too_large)
-      throw ProblemError(make_problem(413, "params-too-large", "Job parameters too large",
-                                      std::string(e.what()) + "; custom palettes and lookups fit well within it"));
+    if (e.reason() == api::InvalidJson::Reason::too_large) throw params_too_large(limits.max_bytes);
     throw ProblemError(make_problem(400, "malformed-json", "Malformed job parameters", e.what()));
   }
 }
@@ -113,7 +117,7 @@ Submission read_submission(const Request& req, const httplib::ContentReader& rea
   if (req.is_multipart_form_data()) {
     enum class Part { mesh, params, other } part = Part::other;
     std::string params_text;
-    bool has_mesh = false, has_params = false, params_too_large = false;
+    bool has_mesh = false, has_params = false, params_over_limit = false;
     read_ok = reader(
         [&](const httplib::MultipartFormData& header) {
           if (header.name == "mesh") {
@@ -137,7 +141,7 @@ Submission read_submission(const Request& req, const httplib::ContentReader& rea
           } else if (part == Part::params) {
             // Stop reading past the limit instead of holding the whole part.
             if (params_text.size() + n > params_limits.max_bytes) {
-              params_too_large = true;
+              params_over_limit = true;
               return false;
             }
             params_text.append(data, n);
@@ -147,11 +151,9 @@ Submission read_submission(const Request& req, const httplib::ContentReader& rea
     if (read_ok && !has_mesh)
       throw ProblemError(make_problem(400, "missing-mesh", "No mesh uploaded",
                                       "the multipart body has no part named \"mesh\"; send the mesh file in it"));
-    if (params_too_large) {
+    if (params_over_limit) {
       body_consumed = false;
-      throw ProblemError(make_problem(413, "params-too-large", "Job parameters too large",
-                                      "the params part is over the limit of " + std::to_string(params_limits.max_bytes) +
-                                          " bytes; custom palettes and lookups fit well within it"));
+      throw params_too_large(params_limits.max_bytes);
     }
     s.params = has_params ? parse_params_text(params_text, params_limits) : json::object();
   } else {
