@@ -38,33 +38,43 @@ static_assert(sizeof(glm::vec3) == 12 && sizeof(std::array<std::uint32_t, 3>) ==
   throw Error(ErrorCode::malformed_input, "the Draco decoder " + why + "; the file is corrupt or hostile");
 }
 
-bool send_all(int fd, const void* data, std::size_t size, Clock::time_point deadline) {
+// How a transfer with the child ended: the deadline is told apart from the
+// child's own end, whatever the clock says after a poll that returned early.
+enum class Transfer { done, timed_out, failed };
+
+// Waits for `events` until the deadline.
+Transfer wait_for(int fd, short events, Clock::time_point deadline) {
+  pollfd p{fd, events, 0};
+  const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()).count();
+  if (left <= 0) return Transfer::timed_out;
+  const int r = ::poll(&p, 1, static_cast<int>(left));
+  if (r == 0) return Transfer::timed_out;
+  return r > 0 || errno == EINTR ? Transfer::done : Transfer::failed;
+}
+
+Transfer send_all(int fd, const void* data, std::size_t size, Clock::time_point deadline) {
   const auto* p = static_cast<const char*>(data);
   while (size > 0) {
-    pollfd w{fd, POLLOUT, 0};
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
-    if (left <= 0 || ::poll(&w, 1, static_cast<int>(left)) <= 0) return false;
+    if (const Transfer t = wait_for(fd, POLLOUT, deadline); t != Transfer::done) return t;
     const ssize_t n = ::send(fd, p, size, MSG_NOSIGNAL);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
+    if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+    if (n <= 0) return Transfer::failed;
     p += n;
     size -= static_cast<std::size_t>(n);
   }
-  return true;
+  return Transfer::done;
 }
 
-// Everything until EOF, at most `cap` bytes; false at the deadline or past cap.
-bool receive_all(int fd, std::vector<char>& out, std::size_t cap, Clock::time_point deadline) {
+// Everything until EOF, at most `cap` bytes.
+Transfer receive_all(int fd, std::vector<char>& out, std::size_t cap, Clock::time_point deadline) {
   char buf[1 << 16];
   for (;;) {
-    pollfd r{fd, POLLIN, 0};
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
-    if (left <= 0 || ::poll(&r, 1, static_cast<int>(left)) <= 0) return false;
+    if (const Transfer t = wait_for(fd, POLLIN, deadline); t != Transfer::done) return t;
     const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return false;
-    if (n == 0) return true;
-    if (out.size() + static_cast<std::size_t>(n) > cap) return false;
+    if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+    if (n < 0) return Transfer::failed;
+    if (n == 0) return Transfer::done;
+    if (out.size() + static_cast<std::size_t>(n) > cap) return Transfer::failed;
     out.insert(out.end(), buf, buf + n);
   }
 }
@@ -184,16 +194,16 @@ Mesh decode_draco_isolated(std::span<const std::uint8_t> data, const DracoIsolat
   const auto deadline = Clock::now() + iso.deadline;
   std::vector<char> answer;
   const std::size_t cap = 20 + 12 * (3 * iso.max_triangles + 3) + 12 * iso.max_triangles;
-  bool complete = send_all(fds[0], data.data(), data.size(), deadline);
+  Transfer transfer = send_all(fds[0], data.data(), data.size(), deadline);
   ::shutdown(fds[0], SHUT_WR);
-  complete = complete && receive_all(fds[0], answer, cap, deadline);
+  if (transfer == Transfer::done) transfer = receive_all(fds[0], answer, cap, deadline);
   ::close(fds[0]);
+  const bool complete = transfer == Transfer::done;
   if (!complete) ::kill(pid, SIGKILL);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
-  if (!complete && Clock::now() >= deadline)
-    refuse("took longer than " + std::to_string(iso.deadline.count()) + " s");
+  if (transfer == Transfer::timed_out) refuse("took longer than " + std::to_string(iso.deadline.count()) + " s");
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !complete) refuse(describe_end(status, iso));
   return parse_answer(answer, iso.max_triangles);
 }
