@@ -27,19 +27,23 @@ cp tests/fuzz/seeds/obj/* "$seeds/obj/"
 cp tests/fuzz/seeds/ply/* "$seeds/ply/"
 cp tests/fuzz/seeds/job_params/* "$seeds/job_params/"
 cp tests/fuzz/seeds/analysis_query/* "$seeds/analysis_query/"
-# Real meshes, small enough for a fuzzer's input length.
+# Real meshes, small enough for a fuzzer's input length (../shared/meshes
+# where the checkout has it beside it; else the committed PLY box).
+shopt -s nullglob
 for m in ../shared/meshes/*.stl; do
-  [[ $(stat -c %s "$m") -le 65536 ]] && cp "$m" "$seeds/stl_binary/"
+  if [[ $(stat -c %s "$m") -le 65536 ]]; then cp "$m" "$seeds/stl_binary/"; fi
 done
-for m in "$seeds"/stl_binary/*.stl; do
-  base=$(basename "$m" .stl)
+sources=("$seeds"/stl_binary/*.stl)
+((${#sources[@]})) || sources=(tests/fuzz/seeds/ply/box_le.ply)
+for m in "${sources[@]}"; do
+  base=$(basename "${m%.*}")
   draco_encoder -i "$m" -o "$seeds/draco/$base.drc" >/dev/null
   draco_encoder -i "$m" -o "$seeds/draco/$base-seq.drc" -cl 0 >/dev/null
   draco_encoder -i "$m" -o "$seeds/draco/$base-hi.drc" -qp 20 -cl 10 >/dev/null
 done
 voxd="$main_build/server/voxd"
 if [[ -x "$voxd" ]]; then
-  m="$seeds/stl_binary/bunny.stl"
+  m="${sources[0]}"
   "$voxd" voxelize "$m" -o "$seeds/rle/bits.rle" --resolution 12 2>/dev/null
   "$voxd" voxelize "$m" -o "$seeds/rle/u8.rle" --mode coverage --resolution 8 2>/dev/null
   "$voxd" voxelize "$m" -o "$seeds/rle/f32.rle" --mode sdf --resolution 8 2>/dev/null
@@ -49,7 +53,7 @@ if [[ -x "$voxd" ]]; then
 else
   echo "fuzz: $voxd not built (scripts/build.sh): the RLE reader starts from no seed"
 fi
-cp "$seeds"/{stl_binary,stl_ascii,obj,ply,draco}/* "$seeds/auto/"
+for f in "$seeds"/{stl_binary,stl_ascii,obj,ply,draco}/*; do cp "$f" "$seeds/auto/"; done
 
 declare -A dict=(
   [fuzz_decode_stl_ascii]=stl_ascii [fuzz_decode_obj]=obj [fuzz_decode_ply]=ply [fuzz_decode_draco]=draco
