@@ -6,9 +6,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "voxd/analysis.h"
+#include "voxd/analysis/analysis.h"
 #include "voxd/grid.h"
-#include "voxd/mass_properties.h"
+#include "voxd/analysis/mass_properties.h"
 #include "voxd/mesh_report.h"
 
 namespace voxd::api {

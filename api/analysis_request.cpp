@@ -4,7 +4,7 @@
 #include <initializer_list>
 
 #include "api/param_error.h"
-#include "voxd/number_text.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::api {
 namespace {

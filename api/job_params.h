@@ -9,14 +9,14 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "api/analysis_request.h"
-#include "voxd/coverage.h"
+#include "voxd/voxelize/coverage.h"
 #include "voxd/grid.h"
-#include "voxd/palette.h"
-#include "voxd/palette_render.h"
-#include "voxd/sdf.h"
-#include "voxd/slice_functions.h"
-#include "voxd/volume_format.h"
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/palette.h"
+#include "voxd/voxelize/palette_render.h"
+#include "voxd/voxelize/sdf.h"
+#include "voxd/voxelize/slice_functions.h"
+#include "voxd/encode/volume_format.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd::api {
 

@@ -5,7 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench_mesh.h"
-#include "voxd/coverage.h"
+#include "voxd/voxelize/coverage.h"
 #include "voxd/grid.h"
 
 namespace voxd::bench {

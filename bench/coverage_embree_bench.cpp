@@ -72,7 +72,7 @@
 #include <vector>
 
 #include "bench_mesh.h"
-#include "voxd/coverage.h"
+#include "voxd/voxelize/coverage.h"
 #include "voxelize/fixed_point_mesh.h"
 #include "voxelize/row_rays.h"
 #include "voxelize/splitmix.h"
@@ -88,7 +88,7 @@ constexpr std::uint64_t kSeed = 1;  // CoverageOptions' default
 // ---------------------------------------------------------------------------
 // The engine's fixed-point mesh, binning and exact crossings (core/src
 // internals, on this benchmark's include path), and a replica of
-// coverage_voxelizer.cpp's ray placement and run integration around them.
+// voxelize/coverage.cpp's ray placement and run integration around them.
 namespace replica {
 
 using detail::FixedMesh;

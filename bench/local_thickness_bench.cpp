@@ -9,11 +9,11 @@
 #include <filesystem>
 
 #include "bench_mesh.h"
-#include "voxd/mesh_decode.h"
-#include "voxd/distance_transform.h"
+#include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/analysis/distance_transform.h"
 #include "voxd/grid.h"
-#include "voxd/local_thickness.h"
-#include "voxd/voxelize.h"
+#include "voxd/analysis/local_thickness.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd::bench {
 namespace {

@@ -4,7 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "support/test_meshes.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/mesh_report.h"
 
 namespace {

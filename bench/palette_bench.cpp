@@ -8,7 +8,7 @@
 
 #include "bench_mesh.h"
 #include "voxd/grid.h"
-#include "voxd/palette.h"
+#include "voxd/voxelize/palette.h"
 
 namespace voxd::bench {
 namespace {

@@ -9,11 +9,11 @@
 #include <string>
 
 #include "bench_mesh.h"
-#include "voxd/analysis_images.h"
+#include "voxd/analysis/analysis_images.h"
 #include "voxd/grid.h"
-#include "voxd/preview.h"
-#include "voxd/radiography.h"
-#include "voxd/voxelize.h"
+#include "voxd/analysis/preview.h"
+#include "voxd/analysis/radiography.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd::bench {
 namespace {

@@ -8,7 +8,8 @@
 
 #include "bench_mesh.h"
 #include "voxd/grid.h"
-#include "voxd/sdf.h"
+#include "voxd/detail/sdf_tuning.h"
+#include "voxd/voxelize/sdf.h"
 
 namespace voxd::bench {
 namespace {
@@ -17,13 +18,13 @@ const Mesh& mesh() { return benchmark_mesh(); }
 // Room for the band outside the mesh.
 Grid grid_at(std::int64_t resolution) { return benchmark_grid(resolution, 3); }
 
-void run(benchmark::State& state, bool full, SdfTuning::Nearest nearest = SdfTuning::Nearest::tree) {
+void run(benchmark::State& state, bool full, detail::SdfTuning::Nearest nearest = detail::SdfTuning::Nearest::tree) {
   const Grid g = grid_at(state.range(0));
   SdfOptions o;
   o.band = 3.0;
   o.full = full;
   for (auto _ : state) {
-    auto sdf = signed_distance_field(mesh(), g, o, nullptr, SdfTuning{nearest});
+    auto sdf = signed_distance_field(mesh(), g, o, nullptr, detail::SdfTuning{nearest});
     benchmark::DoNotOptimize(sdf.values().data());
   }
   state.counters["voxels"] = static_cast<double>(g.voxel_count());
@@ -35,7 +36,7 @@ BENCHMARK(BM_SdfBand)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRea
 void BM_SdfFull(benchmark::State& state) { run(state, true); }
 BENCHMARK(BM_SdfFull)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-void BM_SdfFullEmbree(benchmark::State& state) { run(state, true, SdfTuning::Nearest::embree); }
+void BM_SdfFullEmbree(benchmark::State& state) { run(state, true, detail::SdfTuning::Nearest::embree); }
 BENCHMARK(BM_SdfFullEmbree)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Direct rendering of a signed distance field (voxd/sdf_render.h): a torus
+// Direct rendering of a signed distance field (voxd/analysis/sdf_render.h): a torus
 // filling a 256^3 and a 512^3 grid, its field clamped to a 3-voxel band as
 // signed_distance_field() leaves it, rendered from +z (rays across the
 // slabs: strided reads) and +x (rays along the x rows), one pixel per voxel.
@@ -11,7 +11,7 @@
 #include <map>
 
 #include "voxd/parallel.h"
-#include "voxd/sdf_render.h"
+#include "voxd/analysis/sdf_render.h"
 
 namespace voxd::bench {
 namespace {

@@ -7,8 +7,8 @@
 
 #include "bench_mesh.h"
 #include "voxd/grid.h"
-#include "voxd/slice_functions.h"
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/slice_functions.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd::bench {
 namespace {

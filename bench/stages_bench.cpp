@@ -4,9 +4,9 @@
 
 #include "bench_mesh.h"
 #include "voxd/grid.h"
-#include "voxd/mesh_decode.h"
-#include "voxd/volume_format.h"
-#include "voxd/voxelize.h"
+#include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/encode/volume_format.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd::bench {
 namespace {

@@ -10,7 +10,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace {
 

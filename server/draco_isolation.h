@@ -14,7 +14,7 @@
 #include <string>
 
 #include "voxd/mesh.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 
 namespace voxd::server {
 

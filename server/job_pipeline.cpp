@@ -1,20 +1,20 @@
 #include "server/job_pipeline.h"
 
-#include "voxd/mass_properties.h"
+#include "voxd/analysis/mass_properties.h"
 
 #include <algorithm>
 #include <chrono>
 #include <string>
 
-#include "voxd/coverage.h"
+#include "voxd/voxelize/coverage.h"
 #include "voxd/error.h"
-#include "voxd/palette.h"
-#include "voxd/palette_export.h"
-#include "voxd/palette_render.h"
-#include "voxd/sdf.h"
-#include "voxd/slice_functions.h"
+#include "voxd/voxelize/palette.h"
+#include "voxd/encode/palette_export.h"
+#include "voxd/voxelize/palette_render.h"
+#include "voxd/voxelize/sdf.h"
+#include "voxd/voxelize/slice_functions.h"
 #include "voxd/transform.h"
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd {
 namespace {

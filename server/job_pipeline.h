@@ -15,11 +15,11 @@
 
 #include "api/job_params.h"
 #include "voxd/bit_volume.h"
-#include "voxd/mass_properties.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/analysis/mass_properties.h"
+#include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/mesh_report.h"
 #include "voxd/progress.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd {
 
@@ -63,7 +63,7 @@ struct VoxelJobResult {
   std::uint64_t filled = 0;
   // A coverage, sdf, palette or slice job's result (api::JobParams::has_values()).
   std::optional<ValueVolume> values;
-  // A palette job's similarity per voxel, round(255 B) (voxd/palette.h).
+  // A palette job's similarity per voxel, round(255 B) (voxd/voxelize/palette.h).
   std::optional<DenseVolume<std::uint8_t>> similarity;
   // What the values are, for the job status and the CLI summary
   // (proto-schemas/job-status.schema.json "values").
@@ -77,7 +77,7 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
 // Bytes decoding an upload takes at its peak beside the upload itself (the
 // mesh, the weld's tables), from its size and format; for Draco, the
 // isolated decoder's process. Checked against measured peaks in
-// tests/memory_estimate_test.cpp.
+// tests/service/memory_estimate_test.cpp.
 std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                      const DecodeLimits& limits);
 // The memory the isolated Draco decoder is given for a file of `bytes`
@@ -95,7 +95,7 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
 VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads = 0);
 
 // A palette job's reconstruction as a mesh (format stl or glb,
-// voxd/palette_export.h), in model units: voxels scaled back by the job's
+// voxd/encode/palette_export.h), in model units: voxels scaled back by the job's
 // voxel_aspect. Throws Error(invalid_argument) for another format.
 void write_palette_mesh(const api::PaletteParams& params, const DenseVolume<std::uint8_t>& element, VolumeFormat format,
                         ByteSink& sink);

@@ -33,7 +33,7 @@
 #include "../bench_mesh.h"
 #include "voxd/dense_volume.h"
 #include "voxd/grid.h"
-#include "voxd/sdf.h"
+#include "voxd/voxelize/sdf.h"
 
 using namespace voxd;
 

@@ -15,7 +15,7 @@
 
 #include "../bench_mesh.h"
 #include "voxd/grid.h"
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/voxelize.h"
 
 using namespace voxd;
 

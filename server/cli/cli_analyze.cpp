@@ -16,15 +16,15 @@
 #include "server/cli/mapped_file.h"
 #include "server/job_pipeline.h"
 #include "server/jobs/job_analyses.h"
-#include "voxd/analysis.h"
-#include "voxd/analysis_images.h"
+#include "voxd/analysis/analysis.h"
+#include "voxd/analysis/analysis_images.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
-#include "voxd/local_thickness.h"
-#include "voxd/preview.h"
-#include "voxd/sdf_render.h"
-#include "voxd/value_images.h"
-#include "voxd/volume_format.h"
+#include "voxd/analysis/local_thickness.h"
+#include "voxd/analysis/preview.h"
+#include "voxd/analysis/sdf_render.h"
+#include "voxd/analysis/value_images.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::cli {
 namespace {

@@ -7,7 +7,7 @@
 #include "server/cli/cli.h"
 #include "server/cli/cli_args.h"
 #include "server/cli/mapped_file.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/mesh_report.h"
 
 namespace voxd::cli {

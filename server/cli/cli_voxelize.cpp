@@ -14,7 +14,7 @@
 #include "server/job_pipeline.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::cli {
 namespace {

@@ -8,10 +8,10 @@
 #include "api/job_params.h"
 #include "server/http/problem.h"
 #include "voxd/byte_sink.h"
-#include "voxd/palette_export.h"
-#include "voxd/palette_geometry.h"
-#include "voxd/palette_render.h"
-#include "voxd/png_stack.h"
+#include "voxd/encode/palette_export.h"
+#include "voxd/voxelize/palette_geometry.h"
+#include "voxd/voxelize/palette_render.h"
+#include "voxd/encode/png_stack.h"
 
 namespace voxd::server {
 namespace {

@@ -15,7 +15,7 @@
 #include "server/http/analysis_routes.h"
 #include "server/http/metrics.h"
 #include "server/jobs/job_manager.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
 

@@ -9,7 +9,7 @@
 #include "server/http/metrics.h"
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace httplib {
 struct Response;

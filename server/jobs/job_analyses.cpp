@@ -14,17 +14,17 @@
 
 #include "api/analysis_json.h"
 #include "api/job_params.h"
-#include "voxd/analysis.h"
-#include "voxd/analysis_images.h"
+#include "voxd/analysis/analysis.h"
+#include "voxd/analysis/analysis_images.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
-#include "voxd/preview.h"
-#include "voxd/radiography.h"
-#include "voxd/sdf_render.h"
-#include "voxd/section.h"
-#include "voxd/skin_removal.h"
-#include "voxd/value_images.h"
-#include "voxd/volume_format.h"
+#include "voxd/analysis/preview.h"
+#include "voxd/analysis/radiography.h"
+#include "voxd/analysis/sdf_render.h"
+#include "voxd/analysis/section.h"
+#include "voxd/analysis/skin_removal.h"
+#include "voxd/analysis/value_images.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
 namespace {

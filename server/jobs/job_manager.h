@@ -15,13 +15,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "voxd/mass_properties.h"
+#include "voxd/analysis/mass_properties.h"
 
 #include "api/job_params.h"
 #include "server/job_pipeline.h"
 #include "server/jobs/memory_budget.h"
 #include "voxd/bit_volume.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
 

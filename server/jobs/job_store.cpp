@@ -17,7 +17,7 @@
 #include "server/jobs/job_record.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
 namespace {

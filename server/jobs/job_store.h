@@ -14,7 +14,7 @@
 
 #include "server/jobs/job_manager.h"
 #include "voxd/bit_volume.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
 

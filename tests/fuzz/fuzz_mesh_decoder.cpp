@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "voxd/error.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <span>
 
 #include "voxd/error.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::span<const std::uint8_t> bytes(data, size);

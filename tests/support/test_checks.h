@@ -15,7 +15,7 @@
 #include "support/run_process.h"
 #include "support/test_meshes.h"
 #include "voxd/error.h"
-#include "voxd/preview.h"
+#include "voxd/analysis/preview.h"
 
 namespace voxd::test {
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Independent binvox reader, written from the format description at
 https://www.patrickmin.com/binvox/binvox.html the way common readers (binvox_rw)
-do it, used by tests/volume_format_test.cpp to check the C++ writer.
+do it, used by tests/core/volume_format_test.cpp to check the C++ writer.
 
 usage: read_binvox.py FILE OUT
 

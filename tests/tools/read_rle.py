@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Independent reader of voxd's RLE stream, written from proto-schemas/rle-format.md
-alone (it shares no code with the C++ reader), used by tests/volume_format_test.cpp
+alone (it shares no code with the C++ reader), used by tests/core/volume_format_test.cpp
 to check that the C++ writer follows the specification.
 
 usage: read_rle.py STREAM OUT

@@ -1,4 +1,4 @@
-#include "voxd/analysis.h"
+#include "voxd/analysis/analysis.h"
 
 namespace voxd {
 

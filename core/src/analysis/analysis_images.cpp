@@ -1,13 +1,13 @@
-#include "voxd/analysis_images.h"
+#include "voxd/analysis/analysis_images.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "voxd/byte_sink.h"
-#include "voxd/colour_map.h"
-#include "voxd/number_text.h"
+#include "voxd/encode/colour_map.h"
+#include "voxd/encode/number_text.h"
 #include "voxd/error.h"
-#include "voxd/section.h"
+#include "voxd/analysis/section.h"
 
 namespace voxd {
 const char* to_string(RadiographyMeasure m) {

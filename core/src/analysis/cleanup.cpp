@@ -1,4 +1,4 @@
-#include "voxd/cleanup.h"
+#include "voxd/analysis/cleanup.h"
 
 #include <atomic>
 #include <bit>

@@ -1,4 +1,4 @@
-#include "voxd/components.h"
+#include "voxd/analysis/components.h"
 
 #include <algorithm>
 #include <bit>

@@ -20,7 +20,7 @@
 // 64-byte cache line per step along the strided axis), solve them in a
 // contiguous buffer and scatter them back, instead of walking one voxel per
 // cache line.
-#include "voxd/distance_transform.h"
+#include "voxd/analysis/distance_transform.h"
 
 #include <algorithm>
 #include <atomic>

@@ -1,8 +1,9 @@
 // Local thickness: every filled voxel is a ball centre; balls are painted
 // largest first and each voxel keeps the value of the first ball that covers
-// it, which is the largest. See voxd/local_thickness.h for why this is exact
+// it, which is the largest. See voxd/analysis/local_thickness.h for why this is exact
 // and fast.
-#include "voxd/local_thickness.h"
+#include "voxd/analysis/local_thickness.h"
+#include "voxd/detail/local_thickness_tuning.h"
 
 #include <algorithm>
 #include <atomic>
@@ -390,11 +391,11 @@ class LeftoverReach {
 }  // namespace
 
 DenseVolume<float> local_thickness(const BitVolume& solid, int threads, JobControl* control) {
-  return local_thickness(solid, threads, control, LocalThicknessTuning{});
+  return local_thickness(solid, threads, control, detail::LocalThicknessTuning{});
 }
 
 DenseVolume<float> local_thickness(const BitVolume& solid, int threads, JobControl* control,
-                                   const LocalThicknessTuning& tuning) {
+                                   const detail::LocalThicknessTuning& tuning) {
   const Grid& grid = solid.grid();
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
   const int nthreads = threads > 0 ? threads : default_thread_count();

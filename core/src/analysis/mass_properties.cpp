@@ -1,4 +1,4 @@
-#include "voxd/mass_properties.h"
+#include "voxd/analysis/mass_properties.h"
 
 #include <algorithm>
 #include <bit>

@@ -1,4 +1,4 @@
-#include "voxd/preview.h"
+#include "voxd/analysis/preview.h"
 
 #include <algorithm>
 #include <array>
@@ -10,7 +10,7 @@
 
 #include "voxd/error.h"
 #include "voxd/parallel.h"
-#include "voxd/radiography.h"
+#include "voxd/analysis/radiography.h"
 
 namespace voxd {
 namespace {

@@ -7,7 +7,7 @@
 // which each word holds 64 consecutive voxels of one ray and the same per-word
 // run scan applies. Blocks that are all empty or all full (most of a part's
 // bounding box) skip the transpose.
-#include "voxd/radiography.h"
+#include "voxd/analysis/radiography.h"
 
 #include <algorithm>
 #include <array>

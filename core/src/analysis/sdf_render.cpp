@@ -1,4 +1,4 @@
-#include "voxd/sdf_render.h"
+#include "voxd/analysis/sdf_render.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,10 +6,10 @@
 
 #include <glm/geometric.hpp>
 
-#include "voxd/analysis_images.h"
+#include "voxd/analysis/analysis_images.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
-#include "voxd/number_text.h"
+#include "voxd/encode/number_text.h"
 #include "voxd/parallel.h"
 
 namespace voxd {

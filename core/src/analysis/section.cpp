@@ -1,11 +1,11 @@
-#include "voxd/section.h"
+#include "voxd/analysis/section.h"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "voxd/error.h"
-#include "voxd/radiography.h"
+#include "voxd/analysis/radiography.h"
 
 namespace voxd {
 namespace {

@@ -1,10 +1,10 @@
-#include "voxd/skin_removal.h"
+#include "voxd/analysis/skin_removal.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "voxd/distance_transform.h"
+#include "voxd/analysis/distance_transform.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 

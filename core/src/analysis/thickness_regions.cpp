@@ -2,7 +2,7 @@
 // explicit stack (no recursion depth limit), a bit per voxel to mark visits.
 // Sequential: the scan order is what makes the output deterministic, and the
 // cost is a few passes over the voxels, small next to the thickness itself.
-#include "voxd/thickness_regions.h"
+#include "voxd/analysis/thickness_regions.h"
 
 #include <algorithm>
 

@@ -1,14 +1,14 @@
-#include "voxd/value_images.h"
+#include "voxd/analysis/value_images.h"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "voxd/byte_sink.h"
-#include "voxd/colour_map.h"
+#include "voxd/encode/colour_map.h"
 #include "voxd/error.h"
-#include "voxd/number_text.h"
-#include "voxd/radiography.h"
+#include "voxd/encode/number_text.h"
+#include "voxd/analysis/radiography.h"
 
 namespace voxd {
 namespace {

@@ -24,9 +24,9 @@
 #include "encode/byte_buffer.h"
 #include "encode/ordered_pipeline.h"
 #include "encode/volume_checks.h"
-#include "voxd/number_text.h"
+#include "voxd/encode/number_text.h"
 #include "voxd/parallel.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd {
 namespace {

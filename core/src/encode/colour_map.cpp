@@ -4,7 +4,7 @@
 // monotone in brightness; the hue turns from violet (305 deg) through blue,
 // teal and green to yellow (105 deg); chroma is reduced only as far as needed
 // to stay inside sRGB, which keeps L exact.
-#include "voxd/colour_map.h"
+#include "voxd/encode/colour_map.h"
 
 #include <algorithm>
 #include <cmath>

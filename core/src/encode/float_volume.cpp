@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "encode/volume_checks.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd {
 namespace {

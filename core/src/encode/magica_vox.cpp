@@ -5,7 +5,7 @@
 // as children. MAIN's header needs the size of everything after it, so the
 // volume is scanned once first (palette, filled voxels per block), then the
 // models are streamed block by block.
-#include "voxd/magica_vox.h"
+#include "voxd/encode/magica_vox.h"
 
 #include <algorithm>
 #include <array>

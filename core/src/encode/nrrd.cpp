@@ -4,8 +4,8 @@
 #include <string>
 
 #include "encode/volume_checks.h"
-#include "voxd/number_text.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/number_text.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd {
 namespace {

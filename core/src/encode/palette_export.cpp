@@ -1,5 +1,5 @@
-// Palette reconstructions as STL and instanced glTF; see voxd/palette_export.h.
-#include "voxd/palette_export.h"
+// Palette reconstructions as STL and instanced glTF; see voxd/encode/palette_export.h.
+#include "voxd/encode/palette_export.h"
 
 #include <algorithm>
 #include <array>
@@ -17,7 +17,7 @@
 #include "encode/byte_buffer.h"
 #include "encode/volume_checks.h"
 #include "voxd/error.h"
-#include "voxd/palette_geometry.h"
+#include "voxd/voxelize/palette_geometry.h"
 
 namespace voxd {
 namespace {

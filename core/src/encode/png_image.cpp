@@ -2,7 +2,7 @@
 // must not be skipped by it, so everything with a destructor (rows, strings,
 // the text table) is built before setjmp, and the sink's exceptions are
 // caught in the write callback, stored, and rethrown after libpng unwinds.
-#include "voxd/png_image.h"
+#include "voxd/encode/png_image.h"
 
 #include <png.h>
 
@@ -13,7 +13,7 @@
 #include <exception>
 #include <memory>
 
-#include "voxd/number_text.h"
+#include "voxd/encode/number_text.h"
 #include "voxd/error.h"
 
 namespace voxd {

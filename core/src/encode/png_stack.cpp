@@ -1,7 +1,7 @@
 // PNG stack writing: each layer is flipped into image rows (y descending),
 // encoded into memory on a worker thread, and added to the ZIP in order, so
 // only a few layers' PNGs are held at a time.
-#include "voxd/png_stack.h"
+#include "voxd/encode/png_stack.h"
 
 #include <cmath>
 #include <cstdio>
@@ -11,10 +11,10 @@
 #include "encode/ordered_pipeline.h"
 #include "encode/volume_checks.h"
 #include "voxd/error.h"
-#include "voxd/number_text.h"
+#include "voxd/encode/number_text.h"
 #include "voxd/parallel.h"
-#include "voxd/png_image.h"
-#include "voxd/zip_archive.h"
+#include "voxd/encode/png_image.h"
+#include "voxd/encode/zip_archive.h"
 
 namespace voxd {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "encode/byte_buffer.h"
 #include "encode/volume_checks.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd {
 namespace {

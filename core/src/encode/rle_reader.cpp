@@ -10,7 +10,7 @@
 #include "encode/byte_cursor.h"
 #include "encode/rle_stream.h"
 #include "encode/volume_checks.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd {
 namespace {

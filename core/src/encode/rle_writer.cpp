@@ -16,7 +16,7 @@
 #include "encode/rle_stream.h"
 #include "encode/volume_checks.h"
 #include "voxd/parallel.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd {
 namespace {

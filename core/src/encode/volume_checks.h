@@ -7,7 +7,7 @@
 #include "voxd/dense_volume.h"
 #include "voxd/error.h"
 #include "voxd/grid.h"
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::encode {
 

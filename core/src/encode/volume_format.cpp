@@ -1,5 +1,5 @@
 // Format names, file extensions and media types, and the encoder dispatch.
-#include "voxd/volume_format.h"
+#include "voxd/encode/volume_format.h"
 
 #include <algorithm>
 #include <cctype>
@@ -7,8 +7,8 @@
 #include <type_traits>
 
 #include "voxd/error.h"
-#include "voxd/magica_vox.h"
-#include "voxd/png_stack.h"
+#include "voxd/encode/magica_vox.h"
+#include "voxd/encode/png_stack.h"
 
 namespace voxd {
 namespace {

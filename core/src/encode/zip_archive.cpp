@@ -3,7 +3,7 @@
 // fields are little-endian. The values 0xFFFF and 0xFFFFFFFF announce ZIP64
 // records to a reader, so counts stay at most 0xFFFF and sizes and offsets
 // below 0xFFFFFFFF.
-#include "voxd/zip_archive.h"
+#include "voxd/encode/zip_archive.h"
 
 #include <zlib.h>
 

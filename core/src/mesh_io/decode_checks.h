@@ -9,7 +9,7 @@
 #include <glm/vec3.hpp>
 
 #include "voxd/mesh.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 
 namespace voxd::mesh_io {
 

@@ -10,7 +10,7 @@
 
 #include "mesh_io/detect_format.h"
 #include "mesh_io/text_lines.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 
 namespace voxd {
 namespace {

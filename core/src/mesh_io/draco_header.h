@@ -11,7 +11,7 @@
 #include <optional>
 #include <span>
 
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 
 namespace voxd::mesh_io {
 

@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "voxd/mesh.h"
-#include "voxd/mesh_decode.h"
+#include "voxd/mesh_io/mesh_decode.h"
 
 namespace voxd::mesh_io {
 

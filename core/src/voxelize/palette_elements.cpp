@@ -1,12 +1,12 @@
 // Palette elements: the built-in palettes, complements, validation. See
-// voxd/palette.h.
+// voxd/voxelize/palette.h.
 #include <array>
 #include <cmath>
 #include <set>
 #include <string>
 
 #include "voxd/error.h"
-#include "voxd/palette.h"
+#include "voxd/voxelize/palette.h"
 
 namespace voxd {
 namespace {

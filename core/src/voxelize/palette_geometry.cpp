@@ -1,6 +1,6 @@
 // Convex pieces as polyhedra (a list of face polygons), clipped half-space
-// by half-space; see voxd/palette_geometry.h.
-#include "voxd/palette_geometry.h"
+// by half-space; see voxd/voxelize/palette_geometry.h.
+#include "voxd/voxelize/palette_geometry.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Rendering palettes: per voxel, the first display object whose threshold
-// the similarity reaches. See voxd/palette_render.h.
-#include "voxd/palette_render.h"
+// the similarity reaches. See voxd/voxelize/palette_render.h.
+#include "voxd/voxelize/palette_render.h"
 
 #include <array>
 #include <cmath>

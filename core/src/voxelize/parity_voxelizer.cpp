@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "voxd/parallel.h"
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd::detail {
 namespace {

@@ -1,6 +1,6 @@
 #pragma once
 // Ken Perlin's improved noise (2002) in 3D with a seeded permutation table,
-// and its turbulence and fractal (fBm) sums. Formulas in voxd/slice_functions.h.
+// and its turbulence and fractal (fBm) sums. Formulas in voxd/voxelize/slice_functions.h.
 #include <array>
 #include <cstdint>
 

@@ -1,7 +1,8 @@
 // Signed distance field: the narrow band by scattering triangles to voxels
 // (Jones 1996), exact nearest-triangle queries for the rest of the grid when
-// asked, the sign from the solid voxelization. See voxd/sdf.h.
-#include "voxd/sdf.h"
+// asked, the sign from the solid voxelization. See voxd/voxelize/sdf.h.
+#include "voxd/detail/sdf_tuning.h"
+#include "voxd/voxelize/sdf.h"
 
 #include <algorithm>
 #include <atomic>
@@ -124,29 +125,29 @@ double point_triangle_distance2(const dvec3& p, const dvec3& a, const dvec3& b, 
 namespace {
 
 DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
-                               const SdfTuning& tuning, BitVolume* solid_out);
+                               const detail::SdfTuning& tuning, BitVolume* solid_out);
 
 }  // namespace
 
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control) {
-  return compute_sdf(mesh, grid, options, control, SdfTuning{}, nullptr);
+  return compute_sdf(mesh, grid, options, control, detail::SdfTuning{}, nullptr);
 }
 
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control, BitVolume* solid) {
-  return compute_sdf(mesh, grid, options, control, SdfTuning{}, solid);
+  return compute_sdf(mesh, grid, options, control, detail::SdfTuning{}, solid);
 }
 
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
-                                         JobControl* control, const SdfTuning& tuning) {
+                                         JobControl* control, const detail::SdfTuning& tuning) {
   return compute_sdf(mesh, grid, options, control, tuning, nullptr);
 }
 
 namespace {
 
 DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
-                               const SdfTuning& tuning, BitVolume* solid_out) {
+                               const detail::SdfTuning& tuning, BitVolume* solid_out) {
   if (!(options.band > 0.0) || !std::isfinite(options.band))
     throw Error(ErrorCode::invalid_argument, "the distance band must be a positive number of voxels");
   if (!(grid.voxel_size > 0.0) || !std::isfinite(grid.voxel_size))
@@ -190,7 +191,7 @@ DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOpti
   sdf::scatter_band(mesh, grid, s, plan, threads, values, progress.part(0.15, band_end));
   if (options.full) {
     const detail::ProgressSpan rest = progress.part(band_end, 1.0);
-    if (tuning.nearest == SdfTuning::Nearest::embree) {
+    if (tuning.nearest == detail::SdfTuning::Nearest::embree) {
       const sdf::EmbreeNearest nearest(mesh);
       rest.check_cancelled();
       fill_beyond_band(nearest, grid, s, clamped, threads, values, rest.part(0.1, 1.0));

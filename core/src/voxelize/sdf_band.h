@@ -1,7 +1,7 @@
 #pragma once
 // The narrow band of the signed distance field: exact distances wherever
 // they are at most the band, by scattering triangles to voxels (see
-// voxd/sdf.h), and the index arithmetic the rest of the engine shares.
+// voxd/voxelize/sdf.h), and the index arithmetic the rest of the engine shares.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

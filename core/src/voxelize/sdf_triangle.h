@@ -1,7 +1,7 @@
 #pragma once
 // The exact point-triangle distance of the signed distance field, shared by
 // the band scatter and the nearest-triangle queries so both give the same
-// bits (see voxd/sdf.h on precision).
+// bits (see voxd/voxelize/sdf.h on precision).
 #include <algorithm>
 #include <cfloat>
 #include <cmath>

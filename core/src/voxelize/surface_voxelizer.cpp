@@ -10,7 +10,7 @@
 #include <glm/geometric.hpp>
 
 #include "voxd/parallel.h"
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/voxelize.h"
 
 namespace voxd {
 namespace {

@@ -4,7 +4,7 @@
 #include <algorithm>
 
 #include "voxd/parallel.h"
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/voxelize.h"
 #include "voxelize/parity_voxelizer.h"
 
 namespace voxd {

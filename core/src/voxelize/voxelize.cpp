@@ -1,4 +1,4 @@
-#include "voxd/voxelize.h"
+#include "voxd/voxelize/voxelize.h"
 
 #include "voxd/error.h"
 

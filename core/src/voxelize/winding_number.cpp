@@ -1,4 +1,4 @@
-#include "voxd/winding_number.h"
+#include "voxd/voxelize/winding_number.h"
 
 #include <algorithm>
 #include <array>

@@ -27,8 +27,8 @@
 #include "voxd/bit_volume.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
-#include "voxd/voxelize.h"
-#include "voxd/winding_number.h"
+#include "voxd/voxelize/voxelize.h"
+#include "voxd/voxelize/winding_number.h"
 
 namespace voxd {
 namespace {

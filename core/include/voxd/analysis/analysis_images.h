@@ -1,0 +1,57 @@
+#pragma once
+// The analysis images as PNG bytes, shared by the HTTP routes and
+// `voxd analyze` so both produce the same files.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "voxd/bit_volume.h"
+#include "voxd/encode/colour_map.h"
+#include "voxd/dense_volume.h"
+#include "voxd/encode/png_image.h"
+#include "voxd/analysis/preview.h"
+#include "voxd/analysis/radiography.h"
+
+namespace voxd {
+
+enum class RadiographyMeasure { min, max, total };
+const char* to_string(RadiographyMeasure m);
+const std::vector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m);
+
+// 16-bit grey (pixel = thickness in voxels, exact) or, with `colour`, false
+// colour with a legend. `scale` states what one pixel value is worth.
+std::vector<std::uint8_t> radiography_png(const ThicknessImage& image, int axis, RadiographyMeasure measure, bool colour,
+                                          const PngScale& scale, std::vector<PngText> text = {});
+
+// 8-bit section through voxel layer `index` along `axis`, with its plane and
+// pixel size in tEXt.
+std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index, std::vector<PngText> text = {});
+// The same section coloured by local thickness (map in voxels on the same
+// grid): filled pixels in the ramp colour of round(t * 8) over the whole
+// map's range, empty ones white, legend strip below with labels in model
+// units (as preview_png). A null map gives the grey section.
+std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index,
+                                      const DenseVolume<float>* thickness, std::vector<PngText> text = {});
+
+// Shaded preview (voxd/analysis/preview.h) as 8-bit RGB. Without `thickness`: the part
+// in kPreviewPartColour times the shade, background white. With `thickness`
+// (local thickness map in voxels on the same grid, 0 = empty; see
+// voxd/analysis/local_thickness.h) each visible voxel takes the thickness ramp colour
+// of round(t * 8) (voxd/encode/colour_map.h; range = smallest and largest non-zero
+// value of the whole map, so hidden voxels count; legend strip under the
+// image, labels in model units: PngScale{voxel_size / 8, "model units"})
+// times the shade; legend rows stay unshaded, and a visible voxel the map
+// gives no thickness keeps kPreviewPartColour. tEXt: voxd:view, voxd:right,
+// voxd:up, voxd:voxel_size, voxd:lighting, the colour map's chunks when
+// coloured, then `text`. Throws Error(invalid_argument) when the map's dims
+// differ from the volume's or the volume has a zero dimension.
+inline constexpr Rgb kPreviewPartColour{176, 190, 210};  // steel blue-grey
+std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
+                                      std::vector<PngText> text = {}, int threads = 0);
+// The same view with each visible voxel in its own colour (a slice job's
+// colours; alpha ignored), shaded alike. Throws as preview_png, and when the
+// colours' dims differ from the volume's.
+std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
+                                             std::vector<PngText> text = {}, int threads = 0);
+
+}  // namespace voxd

@@ -1,0 +1,41 @@
+#pragma once
+// Thin and thick regions of a local thickness map (voxd/analysis/local_thickness.h):
+// the connected sets of filled voxels whose thickness is below (thin) or above
+// (thick) a threshold, the places a design review has to look at.
+//
+// Connectivity is 26 (faces, edges and corners): a thin wall that steps
+// diagonally through the grid, as a tilted wall does once voxelized, stays
+// one region instead of breaking into many small ones.
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "voxd/dense_volume.h"
+
+namespace voxd {
+
+enum class ThicknessRegionKind {
+  thin,   // filled voxels with 0 < thickness < threshold
+  thick,  // filled voxels with thickness > threshold
+};
+
+struct ThicknessRegion {
+  std::uint64_t voxel_count = 0;
+  glm::i64vec3 bbox_min{0};  // voxel indices, inclusive
+  glm::i64vec3 bbox_max{0};  // voxel indices, inclusive
+  // Mean voxel index of the region's voxels. In model units its centre is
+  // grid.origin + (centroid + 0.5) * grid.voxel_size.
+  glm::dvec3 centroid{0.0};
+  // The region's extreme thickness, in voxels: the minimum for a thin region,
+  // the maximum for a thick one.
+  float extreme_thickness = 0.0f;
+};
+
+// Regions of at least `min_voxels` voxels, largest first, equal sizes in
+// order of their first voxel (z, then y, then x): the same input always gives
+// the same list.
+std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
+                                                    float threshold_voxels, std::uint64_t min_voxels);
+
+}  // namespace voxd

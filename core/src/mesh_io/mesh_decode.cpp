@@ -1,0 +1,71 @@
+// Entry points of mesh decoding: the checks every format shares (empty input,
+// size limit), detection, and dispatch to the per-format decoders.
+#include <string>
+
+#include "mesh_io/decode_checks.h"
+#include "mesh_io/detect_format.h"
+#include "mesh_io/format_decoders.h"
+#include "voxd/error.h"
+#include "voxd/mesh_io/mesh_decode.h"
+
+namespace voxd {
+namespace {
+
+constexpr const char* kSupportedFormats =
+    "supported formats are binary STL, ASCII STL, OBJ, PLY (ascii or binary) and Draco (.drc)";
+
+void check_size(std::span<const std::uint8_t> data, const DecodeLimits& limits) {
+  if (data.empty()) throw Error(ErrorCode::empty_input, "the mesh file is empty (0 bytes); upload it again");
+  if (data.size() > limits.max_bytes)
+    throw Error(ErrorCode::limit_exceeded, "the mesh file is " + std::to_string(data.size()) +
+                                               " bytes, over the limit of " + std::to_string(limits.max_bytes) +
+                                               " bytes; compress it (e.g. to Draco) or simplify the mesh");
+}
+
+std::string_view as_text(std::span<const std::uint8_t> data) {
+  return {reinterpret_cast<const char*>(data.data()), data.size()};
+}
+
+}  // namespace
+
+const char* to_string(MeshFormat format) noexcept {
+  switch (format) {
+    case MeshFormat::unknown: return "unknown";
+    case MeshFormat::stl_binary: return "stl_binary";
+    case MeshFormat::stl_ascii: return "stl_ascii";
+    case MeshFormat::obj: return "obj";
+    case MeshFormat::ply: return "ply";
+    case MeshFormat::draco: return "draco";
+  }
+  return "unknown";
+}
+
+Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint, const DecodeLimits& limits) {
+  check_size(data, limits);
+  const MeshFormat format = detect_mesh_format(data, name_hint);
+  if (format == MeshFormat::unknown) {
+    const std::string name = name_hint.empty() ? std::string("the file") : mesh_io::quote_token(name_hint);
+    const std::string_view foreign = mesh_io::foreign_format_name(data);
+    const std::string what = foreign.empty() ? "starts with " + mesh_io::quote_token(as_text(data).substr(0, 16))
+                                             : "looks like " + std::string(foreign);
+    throw Error(ErrorCode::unknown_format,
+                "cannot recognize the mesh format of " + name + ", which " + what + "; " + kSupportedFormats);
+  }
+  return decode_mesh_as(format, data, limits);
+}
+
+Mesh decode_mesh_as(MeshFormat format, std::span<const std::uint8_t> data, const DecodeLimits& limits) {
+  check_size(data, limits);
+  switch (format) {
+    case MeshFormat::stl_binary: return mesh_io::decode_stl_binary(data, limits);
+    case MeshFormat::stl_ascii: return mesh_io::decode_stl_ascii(as_text(data), limits);
+    case MeshFormat::obj: return mesh_io::decode_obj(as_text(data), limits);
+    case MeshFormat::ply: return mesh_io::decode_ply(data, limits);
+    case MeshFormat::draco: return mesh_io::decode_draco(data, limits);
+    case MeshFormat::unknown: break;
+  }
+  throw Error(ErrorCode::unknown_format, std::string("no decoder for format '") + to_string(format) + "'; " +
+                                             kSupportedFormats);
+}
+
+}  // namespace voxd

@@ -1,0 +1,143 @@
+// Parts and voids against shapes with known answers and against a
+// brute-force flood fill on random volumes, for both connectivities.
+#include <queue>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "support/test_meshes.h"
+#include "voxd/analysis/components.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd {
+namespace {
+
+using test::unit_grid;
+
+// Reference: BFS over voxels. Solid 26-connected; empty 6-connected, with
+// regions touching the border dropped.
+std::vector<std::uint64_t> brute_force_sizes(const BitVolume& v, bool empty_phase) {
+  const auto d = v.grid().dims;
+  std::vector<char> seen(static_cast<std::size_t>(d.x * d.y * d.z), 0);
+  auto idx = [&](std::int64_t i, std::int64_t j, std::int64_t k) { return static_cast<std::size_t>(i + d.x * (j + d.y * k)); };
+  std::vector<std::uint64_t> sizes;
+  for (std::int64_t k = 0; k < d.z; ++k)
+    for (std::int64_t j = 0; j < d.y; ++j)
+      for (std::int64_t i = 0; i < d.x; ++i) {
+        if (seen[idx(i, j, k)] || v.get(i, j, k) == empty_phase) continue;
+        std::uint64_t n = 0;
+        bool border = false;
+        std::queue<glm::i64vec3> q;
+        q.push({i, j, k});
+        seen[idx(i, j, k)] = 1;
+        while (!q.empty()) {
+          const auto p = q.front();
+          q.pop();
+          ++n;
+          if (p.x == 0 || p.y == 0 || p.z == 0 || p.x == d.x - 1 || p.y == d.y - 1 || p.z == d.z - 1) border = true;
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                const int manhattan = std::abs(dx) + std::abs(dy) + std::abs(dz);
+                if (manhattan == 0 || (empty_phase && manhattan != 1)) continue;
+                const glm::i64vec3 q2 = p + glm::i64vec3(dx, dy, dz);
+                if (q2.x < 0 || q2.y < 0 || q2.z < 0 || q2.x >= d.x || q2.y >= d.y || q2.z >= d.z) continue;
+                if (seen[idx(q2.x, q2.y, q2.z)] || v.get(q2.x, q2.y, q2.z) == empty_phase) continue;
+                seen[idx(q2.x, q2.y, q2.z)] = 1;
+                q.push(q2);
+              }
+        }
+        if (!(empty_phase && border)) sizes.push_back(n);
+      }
+  std::sort(sizes.rbegin(), sizes.rend());
+  return sizes;
+}
+
+std::vector<std::uint64_t> sizes_of(const std::vector<VoxelRegion>& regions) {
+  std::vector<std::uint64_t> s;
+  for (const auto& r : regions) s.push_back(r.voxels);
+  return s;
+}
+
+TEST(Components, TwoDisjointBoxesAreTwoPartsWithExactCountsAndBoxes) {
+  const Grid g = unit_grid({30, 20, 20});
+  const Mesh m = test::concat({test::make_box({1, 1, 1}, {5, 6, 7}), test::make_box({10, 2, 3}, {20, 12, 8})});
+  const ComponentReport r = find_components(voxelize(m, g, {}));
+  ASSERT_EQ(r.parts.size(), 2u);
+  EXPECT_EQ(r.parts[0].voxels, 10u * 10u * 5u);
+  EXPECT_EQ(r.parts[0].bbox_min, glm::i64vec3(10, 2, 3));
+  EXPECT_EQ(r.parts[0].bbox_max, glm::i64vec3(19, 11, 7));
+  EXPECT_EQ(r.parts[0].centroid, glm::dvec3(14.5, 6.5, 5.0));
+  EXPECT_EQ(r.parts[1].voxels, 4u * 5u * 6u);
+  EXPECT_EQ(region_centroid_model(r.parts[1], g), glm::dvec3(3.0, 3.5, 4.0));
+  EXPECT_TRUE(r.voids.empty());
+}
+
+TEST(Components, HollowBoxHasOneVoidTheSizeOfItsCavity) {
+  const Grid g = unit_grid({12, 12, 12});
+  const Mesh m = test::concat({test::make_box({1, 1, 1}, {11, 11, 11}), test::flipped(test::make_box({3, 4, 5}, {8, 9, 9}))});
+  const ComponentReport r = find_components(voxelize(m, g, {}));
+  ASSERT_EQ(r.parts.size(), 1u);
+  ASSERT_EQ(r.voids.size(), 1u);
+  EXPECT_EQ(r.voids[0].voxels, 5u * 5u * 4u);
+  EXPECT_EQ(r.voids[0].bbox_min, glm::i64vec3(3, 4, 5));
+  EXPECT_EQ(r.voids[0].bbox_max, glm::i64vec3(7, 8, 8));
+  EXPECT_EQ(r.parts[0].voxels, 1000u - 100u);
+}
+
+TEST(Components, ACavityOpenToTheOutsideIsNoVoid) {
+  const Grid g = unit_grid({12, 12, 12});
+  // A cup: the cavity reaches the top face of the block.
+  BitVolume v(g);
+  for (int k = 1; k < 11; ++k)
+    for (int j = 1; j < 11; ++j)
+      for (int i = 1; i < 11; ++i) v.set(i, j, k, !(i >= 3 && i < 8 && j >= 3 && j < 8 && k >= 4));
+  EXPECT_TRUE(find_components(v).voids.empty());
+  // Closing its mouth traps it.
+  for (int j = 3; j < 8; ++j)
+    for (int i = 3; i < 8; ++i) v.set(i, j, 10, true);
+  const ComponentReport r = find_components(v);
+  ASSERT_EQ(r.voids.size(), 1u);
+  EXPECT_EQ(r.voids[0].voxels, 5u * 5u * 6u);
+}
+
+TEST(Components, DiagonalContactJoinsPartsButDoesNotOpenAVoid) {
+  const Grid g = unit_grid({6, 6, 6});
+  BitVolume v(g);
+  v.set(1, 1, 1, true);
+  v.set(2, 2, 2, true);  // touches the first only by a corner: one part
+  EXPECT_EQ(find_components(v).parts.size(), 1u);
+  // A 3x3x3 shell with its centre empty and one edge voxel missing: the
+  // centre reaches the missing voxel only diagonally, so it stays enclosed.
+  BitVolume s(g);
+  for (int k = 1; k < 4; ++k)
+    for (int j = 1; j < 4; ++j)
+      for (int i = 1; i < 4; ++i) s.set(i, j, k, !(i == 2 && j == 2 && k == 2));
+  s.set(1, 1, 2, false);  // edge voxel (face-adjacent to outside, edge-adjacent to centre)
+  const ComponentReport r = find_components(s);
+  ASSERT_EQ(r.voids.size(), 1u);
+  EXPECT_EQ(r.voids[0].voxels, 1u);
+}
+
+TEST(Components, RandomVolumesMatchABruteForceFloodFill) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 40; ++trial) {
+    const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 70 + 1), static_cast<std::int64_t>(rng() % 13 + 1),
+                            static_cast<std::int64_t>(rng() % 11 + 1));
+    BitVolume v(unit_grid(dims));
+    const double density = 0.15 + 0.7 * (rng() % 100) / 100.0;
+    std::bernoulli_distribution fill(density);
+    for (std::int64_t k = 0; k < dims.z; ++k)
+      for (std::int64_t j = 0; j < dims.y; ++j)
+        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+    const ComponentReport r = find_components(v);
+    EXPECT_EQ(sizes_of(r.parts), brute_force_sizes(v, false)) << "trial " << trial;
+    EXPECT_EQ(sizes_of(r.voids), brute_force_sizes(v, true)) << "trial " << trial;
+    std::uint64_t solid = 0;
+    for (const auto& p : r.parts) solid += p.voxels;
+    EXPECT_EQ(solid, v.count());
+  }
+}
+
+}  // namespace
+}  // namespace voxd

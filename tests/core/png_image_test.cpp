@@ -1,0 +1,255 @@
+// PNG output, decoded by an independent reader (tests/tools/read_png.py: zlib
+// and struct, no libpng) so the tests check the bytes a viewer sees, not
+// libpng reading back its own output.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <set>
+#include <tuple>
+#include <string>
+#include <unistd.h>
+
+#include "support/run_process.h"
+#include "support/test_checks.h"
+#include "support/test_meshes.h"
+#include "voxd/encode/colour_map.h"
+#include "voxd/error.h"
+#include "voxd/encode/png_image.h"
+#include "voxd/analysis/radiography.h"
+#include "voxd/analysis/section.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd {
+namespace {
+
+using nlohmann::json;
+using test::code_of;
+using test::decode_png;
+
+template <class T>
+std::vector<std::uint32_t> widen(const std::vector<T>& v) {
+  return std::vector<std::uint32_t>(v.begin(), v.end());
+}
+
+// Three steps along x, heights 2, 5 and 9 voxels, depth j 3..8 (as in radiography_test).
+BitVolume stepped_block() {
+  Grid g;
+  g.dims = {16, 12, 13};
+  const Mesh steps = test::concat({test::make_box({2, 3, 2}, {6, 9, 4}), test::make_box({6, 3, 2}, {10, 9, 7}),
+                                   test::make_box({10, 3, 2}, {14, 9, 11})});
+  return voxelize(steps, g, VoxelizeOptions{});
+}
+
+TEST(PngGrey16, ExactSamplesAndScaleText) {
+  const std::vector<std::uint32_t> values = {0, 1, 2, 255, 256, 257, 4095, 4096, 30000, 65534, 65535, 12, 0, 7, 65535};
+  VectorSink sink;
+  write_png_grey16(5, 3, values, PngScale{0.125, "mm"}, {{"voxd:axis", "z"}, {"voxd:map", "max"}}, sink);
+  const json png = decode_png(sink.data);
+  EXPECT_EQ(png["width"], 5);
+  EXPECT_EQ(png["height"], 3);
+  EXPECT_EQ(png["bit_depth"], 16);
+  EXPECT_EQ(png["color_type"], 0);
+  EXPECT_EQ(png["pixels"].get<std::vector<std::uint32_t>>(), values);
+  EXPECT_EQ(png["text"]["voxd:scale"], "1 pixel value = 0.125 mm");
+  EXPECT_EQ(png["text"]["voxd:unit"], "mm");
+  EXPECT_EQ(png["text"]["voxd:axis"], "z");
+  EXPECT_EQ(png["text"]["voxd:map"], "max");
+}
+
+TEST(PngGrey16, RadiographyOfSteppedBlockRoundTrips) {
+  const ThicknessImage img = radiography(stepped_block(), 2);
+  VectorSink sink;
+  write_png_grey16(img.width, img.height, img.total, PngScale{}, {}, sink);
+  const json png = decode_png(sink.data);
+  EXPECT_EQ(png["width"], 16);
+  EXPECT_EQ(png["height"], 12);
+  EXPECT_EQ(png["pixels"].get<std::vector<std::uint32_t>>(), img.total);
+  EXPECT_EQ(png["text"]["voxd:scale"], "1 pixel value = 1 voxel");
+}
+
+TEST(PngGrey16, LargeRandomImageChecksum) {
+  // Big enough for libpng to pick varied row filters, which the reader undoes.
+  const int w = 640, h = 300;
+  std::vector<std::uint32_t> values(static_cast<std::size_t>(w * h));
+  std::mt19937 rng(5);
+  std::uint64_t sum = 0;
+  for (std::size_t p = 0; p < values.size(); ++p) {
+    // Smooth ramps (filters pay off) with noise in one third of the rows.
+    const std::uint32_t x = static_cast<std::uint32_t>(p % w), y = static_cast<std::uint32_t>(p / w);
+    values[p] = (x * 97 + y * 31) % 65536 + (y % 3 == 0 ? rng() % 64 : 0) % 65536;
+    values[p] = std::min<std::uint32_t>(values[p], 65535);
+    sum += values[p];
+  }
+  VectorSink sink;
+  write_png_grey16(w, h, values, PngScale{0.05, "in"}, {}, sink);
+  const json png = decode_png(sink.data, true);
+  EXPECT_EQ(png["sample_count"], values.size());
+  EXPECT_EQ(png["sample_sum"].get<std::uint64_t>(), sum);
+  EXPECT_EQ(png["text"]["voxd:scale"], "1 pixel value = 0.05 in");
+}
+
+TEST(PngGrey16, ValueOver65535IsALimitError) {
+  std::vector<std::uint32_t> values(6, 1);
+  values[4] = 65536;
+  VectorSink sink;
+  std::string message;
+  EXPECT_EQ(code_of([&] { write_png_grey16(3, 2, values, PngScale{}, {}, sink); }, &message), ErrorCode::limit_exceeded);
+  EXPECT_NE(message.find("pixel (1, 1) has value 65536"), std::string::npos) << message;
+  EXPECT_NE(message.find("65535"), std::string::npos) << message;
+  EXPECT_TRUE(sink.data.empty());
+}
+
+TEST(PngGrey8, CrossSectionRoundTrips) {
+  const GreyImage8 s = cross_section(stepped_block(), 1, 4);
+  VectorSink sink;
+  write_png_grey8(s.width, s.height, s.pixels, {{"voxd:section", "y = 4.5"}}, sink);
+  const json png = decode_png(sink.data);
+  EXPECT_EQ(png["width"], 16);
+  EXPECT_EQ(png["height"], 13);
+  EXPECT_EQ(png["bit_depth"], 8);
+  EXPECT_EQ(png["color_type"], 0);
+  EXPECT_EQ(png["pixels"].get<std::vector<std::uint32_t>>(), widen(s.pixels));
+  EXPECT_EQ(png["text"]["voxd:section"], "y = 4.5");
+  // The staircase: column 12 (third step) is filled from row 2 to row 10.
+  for (int k = 0; k < 13; ++k) EXPECT_EQ(png["pixels"][static_cast<std::size_t>(k * 16 + 12)], k >= 2 && k <= 10 ? 255 : 0);
+}
+
+TEST(PngErrors, BadSizesAndTextAreRejectedBeforeWriting) {
+  VectorSink sink;
+  const std::vector<std::uint8_t> six(6, 0);
+  EXPECT_EQ(code_of([&] { write_png_grey8(4, 2, six, {}, sink); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { write_png_grey8(0, 0, {}, {}, sink); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { write_png_grey8(3, 2, six, {{"", "x"}}, sink); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { write_png_grey8(3, 2, six, {{std::string(80, 'k'), "x"}}, sink); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { write_png_grey8(3, 2, six, {{" lead", "x"}}, sink); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { write_png_grey8(3, 2, six, {{"k", std::string("a\0b", 3)}}, sink); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { write_png_rgb8(RgbImage{2, 2, std::vector<std::uint8_t>(11)}, {}, sink); }), ErrorCode::invalid_argument);
+  EXPECT_TRUE(sink.data.empty());
+}
+
+TEST(PngErrors, FailingSinkErrorComesBackThroughLibpng) {
+  // The sink's exception crosses libpng's longjmp error path and is rethrown as is.
+  struct FailingSink final : ByteSink {
+    using ByteSink::write;
+    int calls = 0;
+    void write(std::span<const std::uint8_t>) override {
+      if (++calls == 2) throw Error(ErrorCode::io_error, "disk full (test)");
+    }
+  };
+  FailingSink sink;
+  std::string message;
+  EXPECT_EQ(code_of([&] { write_png_grey8(3, 2, std::vector<std::uint8_t>(6, 9), {}, sink); }, &message), ErrorCode::io_error);
+  EXPECT_EQ(message, "disk full (test)");
+  // And the encoder still works afterwards.
+  VectorSink ok;
+  write_png_grey8(3, 2, std::vector<std::uint8_t>(6, 9), {}, ok);
+  EXPECT_EQ(decode_png(ok.data)["pixels"].get<std::vector<std::uint32_t>>(), std::vector<std::uint32_t>(6, 9));
+}
+
+Rgb pixel(const json& png, int x, int y) {
+  const std::size_t p = (static_cast<std::size_t>(y) * png["width"].get<std::size_t>() + static_cast<std::size_t>(x)) * 3;
+  return {png["pixels"][p].get<std::uint8_t>(), png["pixels"][p + 1].get<std::uint8_t>(), png["pixels"][p + 2].get<std::uint8_t>()};
+}
+
+TEST(ThicknessColourMap, PixelsLegendAndTextOfSteppedBlock) {
+  const ThicknessImage img = radiography(stepped_block(), 2);  // totals 2, 5, 9 by step
+  const ColourMap map = render_thickness_map(img.width, img.height, img.total, ColourMapOptions{});
+  EXPECT_EQ(map.range_min, 2u);
+  EXPECT_EQ(map.range_max, 9u);
+  VectorSink sink;
+  write_png_rgb8(map.image, map.text, sink);
+  const json png = decode_png(sink.data);
+  ASSERT_EQ(png["width"], 16);
+  ASSERT_EQ(png["height"], 12 + kLegendHeight);
+  EXPECT_EQ(png["bit_depth"], 8);
+  EXPECT_EQ(png["color_type"], 2);
+  const auto& ramp = thickness_ramp();
+  EXPECT_EQ(ramp_index(5, 2, 9), 109);  // round(3 * 255 / 7)
+  for (int j = 0; j < 12; ++j) {
+    for (int i = 0; i < 16; ++i) {
+      Rgb want = kNoMaterialColour;
+      if (j >= 3 && j <= 8 && i >= 2 && i <= 13) want = ramp[i <= 5 ? 0 : i <= 9 ? 109 : 255];
+      EXPECT_EQ(pixel(png, i, j), want) << i << "," << j;
+    }
+  }
+  // Legend: background row, bar from ramp[0] (x = 2) to ramp[255] (x = 13), ticks, labels "2" and "9".
+  const int top = 12;
+  EXPECT_EQ(pixel(png, 7, top), kLegendBackground);
+  EXPECT_EQ(pixel(png, 2, top + kLegendMargin), ramp[0]);
+  EXPECT_EQ(pixel(png, 13, top + kLegendMargin + kLegendBarRows - 1), ramp[255]);
+  EXPECT_EQ(pixel(png, 1, top + kLegendMargin), kLegendBackground);
+  EXPECT_EQ(pixel(png, 14, top + kLegendMargin), kLegendBackground);
+  const int tick_row = top + kLegendMargin + kLegendBarRows;
+  for (int x = 0; x < 16; ++x) {  // bar_w = 11: ticks at 2 + round(q * 11 / 4) = 2, 5, 8, 10, 13
+    const bool tick = x == 2 || x == 5 || x == 8 || x == 10 || x == 13;
+    EXPECT_EQ(pixel(png, x, tick_row), tick ? kLegendInk : kLegendBackground) << x;
+  }
+  // '2' is rows 111/001/111/100/111 at x 2..4; '9' is 111/101/111/001/111 at x 11..13.
+  const int ly = top + kLegendLabelRow;
+  const char* two[5] = {"###", "..#", "###", "#..", "###"};
+  const char* nine[5] = {"###", "#.#", "###", "..#", "###"};
+  for (int r = 0; r < 5; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_EQ(pixel(png, 2 + c, ly + r), two[r][c] == '#' ? kLegendInk : kLegendBackground) << "2 at " << c << "," << r;
+      EXPECT_EQ(pixel(png, 11 + c, ly + r), nine[r][c] == '#' ? kLegendInk : kLegendBackground) << "9 at " << c << "," << r;
+    }
+  }
+  EXPECT_EQ(png["text"]["voxd:min"], "2 voxel");
+  EXPECT_EQ(png["text"]["voxd:max"], "9 voxel");
+  EXPECT_EQ(png["text"]["voxd:scale"], "1 pixel value = 1 voxel");
+  EXPECT_EQ(png["text"]["voxd:no_material"], "rgb(255,255,255)");
+}
+
+TEST(ThicknessColourMap, ExplicitRangeClampsAndScaleGoesToText) {
+  const std::vector<std::uint32_t> values = {0, 1, 4, 10, 20, 30, 0, 100};
+  ColourMapOptions o;
+  o.scale = {0.5, "mm"};
+  o.range_min = 10;
+  o.range_max = 30;
+  const ColourMap map = render_thickness_map(4, 2, values, o);
+  ASSERT_EQ(map.image.height, 2);  // narrower than kLegendMinWidth: no legend
+  VectorSink sink;
+  write_png_rgb8(map.image, map.text, sink);
+  const json png = decode_png(sink.data);
+  const auto& ramp = thickness_ramp();
+  const Rgb want[8] = {kNoMaterialColour, ramp[0], ramp[0], ramp[0], ramp[128], ramp[255], kNoMaterialColour, ramp[255]};
+  for (int p = 0; p < 8; ++p) EXPECT_EQ(pixel(png, p % 4, p / 4), want[p]) << p;
+  EXPECT_EQ(png["text"]["voxd:min"], "5 mm");
+  EXPECT_EQ(png["text"]["voxd:max"], "15 mm");
+  EXPECT_EQ(png["text"]["voxd:scale"], "1 pixel value = 0.5 mm");
+  EXPECT_EQ(png["text"]["voxd:legend"], "none");
+  o.range_min = 31;
+  EXPECT_EQ(code_of([&] { render_thickness_map(4, 2, values, o); }), ErrorCode::invalid_argument);
+}
+
+double luminance(Rgb c) {
+  auto lin = [](std::uint8_t v) {
+    const double s = v / 255.0;
+    return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+  };
+  return 0.2126 * lin(c.r) + 0.7152 * lin(c.g) + 0.0722 * lin(c.b);
+}
+
+TEST(ThicknessColourMap, RampIsPerceptuallyOrdered) {
+  const auto& ramp = thickness_ramp();
+  // Brighter with thickness (up to 8-bit rounding between neighbours).
+  for (int i = 0; i + 4 < 256; ++i) EXPECT_LT(luminance(ramp[i]), luminance(ramp[i + 4])) << i;
+  // Dark violet to yellow, every entry darker than the no-material colour.
+  EXPECT_GT(ramp[0].b, ramp[0].g);
+  EXPECT_GT(ramp[0].r, ramp[0].g);
+  EXPECT_LT(luminance(ramp[0]), 0.05);
+  EXPECT_GT(ramp[255].r, 2 * ramp[255].b);
+  EXPECT_GT(ramp[255].g, 2 * ramp[255].b);
+  EXPECT_LT(luminance(ramp[255]), luminance(kNoMaterialColour) - 0.1);
+  std::set<std::tuple<int, int, int>> distinct;
+  for (const Rgb& c : ramp) distinct.insert({c.r, c.g, c.b});
+  EXPECT_GE(distinct.size(), 250u);
+}
+
+}  // namespace
+}  // namespace voxd

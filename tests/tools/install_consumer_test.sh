@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The installed-package check (ctest install.consumer):
+#   install_consumer_test.sh BUILD_DIR WORK_DIR CONSUMER_SOURCE
+# installs BUILD_DIR into WORK_DIR/prefix, configures and builds the consumer
+# project against it alone (CMAKE_PREFIX_PATH), and runs it on a 3 x 2 x 1.5
+# box at 0.25: every one of the 12 x 8 x 6 voxels inside, volume exactly 9.
+set -euo pipefail
+build="$1" work="$2" source="$3"
+rm -rf "$work"
+mkdir -p "$work"
+cmake --install "$build" --prefix "$work/prefix" > "$work/install.log"
+# Nothing internal is installed: the detail headers stay in the tree.
+if [[ -e "$work/prefix/include/voxd/detail" ]]; then
+  echo "FAIL: voxd/detail/ was installed" >&2
+  exit 1
+fi
+cmake -S "$source" -B "$work/build" -DCMAKE_PREFIX_PATH="$work/prefix" \
+  -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" > "$work/configure.log"
+cmake --build "$work/build" > "$work/build.log"
+python3 - "$work/box.stl" <<'PY'
+import sys
+x, y, z = 3.0, 2.0, 1.5
+v = [(0, 0, 0), (x, 0, 0), (x, y, 0), (0, y, 0), (0, 0, z), (x, 0, z), (x, y, z), (0, y, z)]
+faces = [(0, 2, 1), (0, 3, 2), (4, 5, 6), (4, 6, 7), (0, 1, 5), (0, 5, 4),
+         (1, 2, 6), (1, 6, 5), (2, 3, 7), (2, 7, 6), (3, 0, 4), (3, 4, 7)]
+with open(sys.argv[1], "w") as f:
+    f.write("solid box\n")
+    for t in faces:
+        f.write(" facet normal 0 0 0\n  outer loop\n")
+        for i in t:
+            f.write("   vertex %g %g %g\n" % v[i])
+        f.write("  endloop\n endfacet\n")
+    f.write("endsolid box\n")
+PY
+out="$("$work/build/voxd_consumer" "$work/box.stl" 0.25)"
+echo "$out"
+expected=$'triangles 12\nfilled 576\nmesh_volume 9.000000'
+if [[ "$out" != "$expected" ]]; then
+  echo "FAIL: expected:" >&2
+  echo "$expected" >&2
+  exit 1
+fi
+echo "PASS: find_package(voxd) -> voxd::core, built outside the tree, voxelized the box exactly"
