@@ -4,6 +4,7 @@
 #include <iostream>
 #include <string>
 
+#include "api/error_table.h"
 #include "api/param_error.h"
 #include "server/cli/cli_args.h"
 #include "server/draco_isolation.h"
@@ -46,13 +47,13 @@ int run(int argc, char** argv) {
     throw UsageError("unknown command '" + command + "' (try voxd --help)");
   } catch (const UsageError& e) {
     std::cerr << "voxd: " << e.what() << '\n';
-    return 2;
+    return api::kExitUsage;
   } catch (const api::InvalidParams& e) {
     std::cerr << "voxd: " << e.what() << '\n';
-    return 2;
+    return api::kExitUsage;
   } catch (const Error& e) {
     std::cerr << "voxd: " << to_string(e.code()) << ": " << e.what() << '\n';
-    return 1;
+    return api::error_kind(e.code()).cli_exit;
   } catch (const std::exception& e) {
     std::cerr << "voxd: internal error: " << e.what() << '\n';
     return 1;

@@ -3,6 +3,7 @@
 #include <httplib.h>
 #include <spdlog/spdlog.h>
 
+#include "api/error_table.h"
 #include "api/param_error.h"
 #include "server/jobs/job_manager.h"
 #include "server/jobs/job_store.h"
@@ -45,26 +46,10 @@ Problem problem_from_current_exception() {
   } catch (const NotAccepting& e) {
     return make_problem(503, "shutting-down", "The service is shutting down", e.what());
   } catch (const Error& e) {
-    switch (e.code()) {
-      case ErrorCode::empty_input:
-      case ErrorCode::truncated_input:
-      case ErrorCode::malformed_input:
-      case ErrorCode::non_finite_coordinates:
-      case ErrorCode::no_usable_triangles:
-        return make_problem(422, "invalid-mesh", "The mesh cannot be used", e.what());
-      case ErrorCode::unknown_format:
-        return make_problem(415, "unsupported-format", "Unsupported mesh format", e.what());
-      case ErrorCode::limit_exceeded:
-        return make_problem(422, "limit-exceeded", "Over the service's limits", e.what());
-      case ErrorCode::invalid_argument:
-        return make_problem(422, "invalid-params", "Invalid job parameters", e.what());
-      case ErrorCode::cancelled:
-        return make_problem(409, "cancelled", "The job was cancelled", e.what());
-      case ErrorCode::io_error:
-        break;
-    }
+    const api::ErrorKind& kind = api::error_kind(e.code());
+    if (kind.client_message) return make_problem(kind.http_status, kind.slug, kind.title, e.what());
     spdlog::error("request failed: {}", log_safe(e.what()));
-    return make_problem(500, "internal", "Internal error", "the request failed unexpectedly; it was logged");
+    return make_problem(kind.http_status, kind.slug, kind.title, "the request failed unexpectedly; it was logged");
   } catch (const std::exception& e) {
     spdlog::error("request failed: {}", log_safe(e.what()));
     return make_problem(500, "internal", "Internal error", "the request failed unexpectedly; it was logged");

@@ -11,6 +11,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "api/error_table.h"
 #include "api/param_error.h"
 #include "server/jobs/content_hash.h"
 #include "server/jobs/job_analyses.h"
@@ -48,21 +49,6 @@ std::string new_job_id() {
     for (int i = 0; i < 16; ++i, r >>= 4) id[static_cast<std::size_t>(half * 16 + i)] = kHex[r & 15];
   }
   return id;
-}
-
-// Problem slug of an engine error that ends a job.
-std::string failure_type(ErrorCode code) {
-  switch (code) {
-    case ErrorCode::empty_input:
-    case ErrorCode::truncated_input:
-    case ErrorCode::malformed_input:
-    case ErrorCode::non_finite_coordinates:
-    case ErrorCode::no_usable_triangles: return "invalid-mesh";
-    case ErrorCode::unknown_format: return "unsupported-format";
-    case ErrorCode::limit_exceeded: return "limit-exceeded";
-    case ErrorCode::invalid_argument: return "invalid-params";
-    default: return "internal";
-  }
 }
 
 JobFailure interrupted(const char* was) {
@@ -354,7 +340,10 @@ struct JobManager::Impl {
           if (job->stopped_by_shutdown) s.failure = interrupted("running");
         } else {
           s.state = JobState::failed;
-          s.failure = JobFailure{failure_type(e.code()), "The job failed", e.what()};
+          const api::ErrorKind& kind = api::error_kind(e.code());
+          if (!kind.client_message) spdlog::error("job {}: {}", s.id, log_safe(e.what()));
+          s.failure = JobFailure{kind.slug, "The job failed",
+                                 kind.client_message ? e.what() : "the job failed unexpectedly; it was logged"};
         }
       } catch (const StorageFull& e) {
         // Nothing half-written stays: the disk is not kept full by this job.

@@ -17,7 +17,7 @@ enum class ErrorCode {
   unknown_format,          // content matches no supported mesh format
   limit_exceeded,          // bytes, triangles or voxels over a configured limit
   cancelled,               // the job was cancelled while running
-  io_error,                // reading or writing a file failed
+  io_error,                // reading or writing a file failed (keep it last: api/error_table.cpp checks every code has a row)
 };
 
 const char* to_string(ErrorCode code) noexcept;

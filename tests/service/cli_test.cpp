@@ -1,0 +1,310 @@
+// The `voxd` command line, run as a real process.
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "support/run_process.h"
+#include "support/test_meshes.h"
+#include "voxd/encode/volume_format.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd {
+namespace {
+
+using nlohmann::json;
+using test::run_process;
+
+const std::string kVoxd = VOXD_BINARY;
+const std::string kMeshes = VOXD_SHARED_MESHES;
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = test::make_temp_dir("voxd-cli"); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string path(const std::string& name) const { return dir_ + "/" + name; }
+  std::string write_mesh(const std::string& name, const Mesh& mesh) {
+    test::write_file(path(name), test::to_binary_stl(mesh));
+    return path(name);
+  }
+  std::string dir_;
+};
+
+std::string shared_mesh(const std::string& name) {
+  const std::string p = kMeshes + "/" + name;
+  if (!std::filesystem::exists(p)) throw std::runtime_error("shared test mesh missing (expected at ../shared/meshes next to the repo): " + p);
+  return p;
+}
+
+TEST_F(CliTest, InspectPrintsTheMeshReportAsJson) {
+  const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {2, 3, 4}));
+  const auto r = run_process(kVoxd + " inspect " + mesh);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json report = json::parse(r.out);
+  EXPECT_EQ(report.at("triangles"), 12);
+  EXPECT_EQ(report.at("vertices"), 8);
+  EXPECT_EQ(report.at("watertight"), true);
+  EXPECT_EQ(report.at("boundary_edges"), 0);
+  EXPECT_EQ(report.at("nonmanifold_edges"), 0);
+  EXPECT_EQ(report.at("degenerate_triangles"), 0);
+  EXPECT_DOUBLE_EQ(report.at("volume").get<double>(), 24.0);
+  EXPECT_DOUBLE_EQ(report.at("surface_area").get<double>(), 52.0);
+  EXPECT_EQ(report.at("bbox_max"), json::array({2.0, 3.0, 4.0}));
+  EXPECT_EQ(report.at("format"), "stl_binary");
+}
+
+TEST_F(CliTest, InspectReportsTheOpenSharedPelvis) {
+  const auto r = run_process(kVoxd + " inspect " + shared_mesh("pelvis.stl"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json report = json::parse(r.out);
+  EXPECT_EQ(report.at("boundary_edges"), 291);
+  EXPECT_EQ(report.at("watertight"), false);
+  EXPECT_TRUE(report.at("volume").is_null());
+}
+
+TEST_F(CliTest, VoxelizeJsonSummaryMatchesTheEngineAndTheFile) {
+  const Mesh sphere = test::make_icosphere({1, 2, 3}, 5.0, 4);
+  const std::string mesh = write_mesh("sphere.stl", sphere);
+  const auto r = run_process(kVoxd + " voxelize " + mesh + " --resolution 40 --padding 1 -o " + path("s.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({42, 42, 42}));
+  EXPECT_EQ(s.at("mode"), "solid");
+  EXPECT_EQ(s.at("inside"), "parity");
+  for (const char* stage : {"parse", "voxelize", "encode", "total"}) EXPECT_TRUE(s.at("timings").contains(stage)) << stage;
+
+  const BitVolume from_file = read_rle_bits(test::read_file(path("s.rle")));
+  EXPECT_EQ(from_file.count(), s.at("filled_voxels").get<std::uint64_t>());
+  const double h = s.at("grid").at("voxel_size").get<double>();
+  EXPECT_NEAR(s.at("filled_volume").get<double>(), static_cast<double>(from_file.count()) * h * h * h, 1e-9);
+  EXPECT_NEAR(from_file.grid().voxel_size, h, 1e-15);
+
+  // The CLI result equals the library's on the same mesh and grid.
+  const BitVolume direct = voxelize(sphere, from_file.grid(), {});
+  EXPECT_EQ(direct.count(), from_file.count());
+}
+
+TEST_F(CliTest, AllFormatsHoldTheSameVoxels) {
+  const std::string mesh = write_mesh("torus.stl", test::make_torus({0, 0, 0}, 3, 1, 48, 24));
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 -o " + path("t.rle")).exit_code, 0);
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 -o " + path("t.binvox")).exit_code, 0);
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 -o " + path("t.raw")).exit_code, 0);
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 --format raw --raw-packing bits -o " + path("t.bits")).exit_code, 0);
+  const BitVolume rle = read_rle_bits(test::read_file(path("t.rle")));
+  const BitVolume binvox = read_binvox(test::read_file(path("t.binvox")));
+  const BitVolume raw = read_raw(test::read_file(path("t.raw")), rle.grid(), RawPacking::bytes);
+  const BitVolume bits = read_raw(test::read_file(path("t.bits")), rle.grid(), RawPacking::bits);
+  ASSERT_GT(rle.count(), 100u);
+  const auto& d = rle.grid().dims;
+  for (std::int64_t k = 0; k < d.z; ++k)
+    for (std::int64_t j = 0; j < d.y; ++j)
+      for (std::int64_t i = 0; i < d.x; ++i) {
+        ASSERT_EQ(rle.get(i, j, k), binvox.get(i, j, k));
+        ASSERT_EQ(rle.get(i, j, k), raw.get(i, j, k));
+        ASSERT_EQ(rle.get(i, j, k), bits.get(i, j, k));
+      }
+  EXPECT_EQ(binvox.count(), rle.count());  // the binvox cube padding is empty
+}
+
+TEST_F(CliTest, ParamsFileAndFlagsCombineFlagsWinning) {
+  const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {10, 10, 10}));
+  {
+    std::ofstream f(path("job.json"));
+    f << R"({"grid": {"voxel_size": 2.0, "origin": [0, 0, 0], "dims": [5, 5, 5]}, "mode": "surface"})";
+  }
+  auto r = run_process(kVoxd + " voxelize " + mesh + " --params @" + path("job.json") + " -o " + path("a.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({5, 5, 5}));
+  EXPECT_EQ(s.at("mode"), "surface");
+  r = run_process(kVoxd + " voxelize " + mesh + " --params @" + path("job.json") + " --mode solid --dims 6,5,5 -o " + path("b.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({6, 5, 5}));
+  EXPECT_EQ(s.at("mode"), "solid");
+  EXPECT_EQ(s.at("filled_voxels"), 125);  // centres 1,3,5,7,9 per axis inside [0,10]
+}
+
+TEST_F(CliTest, RotationTurnsTheMeshBeforeTheGridIsLaidOut) {
+  // A 10 x 2 x 2 bar turned 90 degrees about z lies along y; the report
+  // still describes the bar as uploaded.
+  const std::string mesh = write_mesh("bar.stl", test::make_box({0, 0, 0}, {10, 2, 2}));
+  const auto r = run_process(kVoxd + " voxelize " + mesh +
+                             " --params '{\"rotation\": {\"axis\": [0, 0, 1], \"angle_deg\": 90}, \"grid\": {\"voxel_size\": 0.5}}' -o " +
+                             path("bar.rle") + " --json --report");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({4, 20, 4}));
+  EXPECT_EQ(s.at("filled_voxels"), 4 * 20 * 4);
+  EXPECT_EQ(s.at("report").at("bbox_max"), json::array({10.0, 2.0, 2.0}));
+  EXPECT_NEAR(s.at("rotation")[1][0].get<double>(), 1.0, 1e-12);  // x maps to y
+}
+
+TEST_F(CliTest, OrientAutoPutsTheSmallestExtentOnX) {
+  const std::string mesh = write_mesh("plate.stl", test::make_box({0, 0, 0}, {10, 8, 1}));
+  const auto r = run_process(kVoxd + " voxelize " + mesh + " --params '{\"orient\": \"auto\", \"grid\": {\"voxel_size\": 0.5}}' -o " + path("p.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({2, 20, 16}));
+  EXPECT_EQ(s.at("filled_voxels"), 2 * 20 * 16);
+}
+
+TEST_F(CliTest, ErrorsExitNonZeroWithOneLineMessages) {
+  const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {1, 1, 1}));
+  struct Case {
+    std::string args;
+    int code;
+    std::string fragment;
+  };
+  const Case cases[] = {
+      {"voxelize " + path("missing.stl") + " -o " + path("x.rle"), 1, "cannot open"},
+      {"voxelize " + mesh + " -o " + path("x.vox3"), 2, "--format"},
+      {"voxelize " + mesh, 2, "needs -o"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --resolution 0", 2, "/grid/resolution"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --mode fluffy", 2, "/mode"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --params '{\"grid\": '", 2, "not valid JSON"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --params '{\"colour\": 1}'", 2, "/colour: unknown field"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --frobnicate 3", 2, "unknown option --frobnicate"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --origin 1,2", 2, "--origin expects 3"},
+      {"frobnicate", 2, "unknown command"},
+      {"voxelize " + mesh + " -o " + path("x.rle") + " --resolution 100 --max-voxels 1000", 2, "over the limit of 1000"},
+      {"inspect " + path("empty.stl"), 1, "empty"},
+  };
+  test::write_file(path("empty.stl"), {});
+  for (const auto& c : cases) {
+    const auto r = run_process(kVoxd + " " + c.args);
+    EXPECT_EQ(r.exit_code, c.code) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.fragment), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("x.rle")));
+  EXPECT_FALSE(std::filesystem::exists(path("x.rle.partial")));
+}
+
+TEST_F(CliTest, SharedClosedMeshesVoxelizeToTheirMeshVolume) {
+  for (const char* name : {"bunny.stl", "torus.stl", "M3_hex_nut.stl", "helper_disk.stl", "M3x10_screw.stl"}) {
+    const auto inspect = run_process(kVoxd + " inspect " + shared_mesh(name));
+    ASSERT_EQ(inspect.exit_code, 0) << inspect.err;
+    const json report = json::parse(inspect.out);
+    ASSERT_TRUE(report.at("watertight").get<bool>()) << name;
+    const double volume = report.at("volume").get<double>();
+    const double area = report.at("surface_area").get<double>();
+    const auto r = run_process(kVoxd + " voxelize " + shared_mesh(name) + " --resolution 160 -o " + path("m.rle") + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json s = json::parse(r.out);
+    const double filled = s.at("filled_volume").get<double>();
+    const double h = s.at("grid").at("voxel_size").get<double>();
+    // Centre sampling can only err in voxels the surface cuts: half a voxel
+    // of the surface's area at most (helper_disk is 0.2 mm thick: ~2 voxels).
+    EXPECT_LE(std::abs(filled - volume), 0.5 * area * h) << name;
+    if (std::string(name) != "helper_disk.stl") {
+      EXPECT_NEAR(filled / volume, 1.0, 0.02) << name;
+    }
+  }
+}
+
+TEST_F(CliTest, ValueModesWriteTheirValuesAndSummarizeThem) {
+  const Mesh sphere = test::make_icosphere({0, 0, 0}, 1.0, 4);
+  const std::string mesh = write_mesh("sphere.stl", sphere);
+  // Coverage as binvox version 2: the grey levels add up to the mesh volume.
+  auto r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("c.binvox") +
+                       " --resolution 48 --padding 1 --mode coverage --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json summary = json::parse(r.out);
+  EXPECT_EQ(summary.at("mode"), "coverage");
+  EXPECT_EQ(summary.at("values").at("type"), "u8");
+  const double mesh_volume = test::mesh_volume(sphere);
+  EXPECT_NEAR(summary.at("values").at("covered_volume").get<double>(), mesh_volume, 1e-3 * mesh_volume);
+  const auto binvox = test::read_file(path("c.binvox"));
+  const DenseVolume<std::uint8_t> grey = read_binvox_u8(binvox);
+  const double h = summary.at("grid").at("voxel_size").get<double>();
+  double total = 0;
+  for (std::uint8_t b : grey.values()) total += b / 255.0;
+  EXPECT_NEAR(total * h * h * h, mesh_volume, 5e-3 * mesh_volume);  // bytes round each voxel by up to 1/510
+
+  // SDF as gzip NRRD: the header says so, and its negatives are the solid.
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.nrrd") +
+                  " --resolution 32 --padding 3 --mode sdf --nrrd-encoding gzip --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  summary = json::parse(r.out);
+  EXPECT_EQ(summary.at("values").at("quantity"), "signed distance");
+  const auto nrrd = test::read_file(path("d.nrrd"));
+  const std::string text(nrrd.begin(), nrrd.end());
+  EXPECT_NE(text.find("\nencoding: gzip\n"), std::string::npos);
+  EXPECT_NE(text.find("\ntype: float\n"), std::string::npos);
+  EXPECT_NE(text.find("\ncontent: signed distance (model units)\n"), std::string::npos);
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.raw") + " --resolution 32 --padding 3 --mode sdf --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto raw = test::read_file(path("d.raw"));
+  ASSERT_EQ(raw.size(), 38u * 38 * 38 * 4);
+  std::uint64_t negative = 0;
+  for (std::size_t i = 0; i < raw.size(); i += 4) {
+    float v;
+    std::memcpy(&v, raw.data() + i, 4);
+    negative += v < 0;
+  }
+  EXPECT_EQ(negative, json::parse(r.out).at("filled_voxels").get<std::uint64_t>());
+
+  // Quantized RLE: u16 levels with their offset and scale in the header.
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("q.rle") + " --resolution 32 --padding 3 --mode sdf --quantize u16");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto q = test::read_file(path("q.rle"));
+  EXPECT_EQ(read_rle_u16(q).values().size(), 38u * 38 * 38);
+  EXPECT_EQ(json::parse(read_rle_metadata(q)).at("quantization").at("levels"), 65535);
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("q.rle") + " --resolution 32 --quantize u8");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("not to bits"), std::string::npos) << r.err;
+
+  // What cannot hold the values is refused before any work, in one line.
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.binvox") + " --resolution 32 --mode sdf");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("float32"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("d.binvox")));
+  r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("x.nrrd") + " --mode sdf --nrrd-encoding bz2");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST_F(CliTest, PaletteAndSliceWriteTheirMeshesAndColours) {
+  // A box on voxel boundaries: every voxel is full or empty, so the palette
+  // reconstruction encloses exactly the box.
+  const std::string mesh = write_mesh("box.stl", test::make_box({1, 1, 1}, {5, 4, 3}));
+  const std::string grid = R"("grid":{"voxel_size":1,"origin":[0,0,0],"dims":[6,5,4]})";
+  auto r = run_process(kVoxd + " voxelize " + mesh + " --params '{" + grid + R"(,"mode":"palette"}' -o )" + path("b.stl") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out).at("values").at("palette"), "46");
+  const auto stl = test::read_file(path("b.stl"));
+  std::uint32_t triangles = 0;
+  std::memcpy(&triangles, stl.data() + 80, 4);
+  EXPECT_EQ(triangles, 2u * (4 * 3 + 4 * 2 + 3 * 2) * 2);  // the box's exposed unit squares, two triangles each
+  double volume = 0;
+  for (std::uint32_t t = 0; t < triangles; ++t) {
+    float f[12];
+    std::memcpy(f, stl.data() + 84 + 50 * t, 48);
+    volume += (f[3] * (f[7] * f[11] - f[8] * f[10]) - f[4] * (f[6] * f[11] - f[8] * f[9]) + f[5] * (f[6] * f[10] - f[7] * f[9])) / 6;
+  }
+  EXPECT_NEAR(volume, 24.0, 1e-4);
+
+  // A slice job: the .vox holds one voxel per filled voxel; a palette mesh
+  // format is refused for it, in one line.
+  const std::string slice = "'{" + grid + R"(,"mode":"slice","slice":{"function":"checker","checker_size":1}}')";
+  r = run_process(kVoxd + " voxelize " + mesh + " --params " + slice + " -o " + path("c.vox") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out).at("filled_voxels"), 24);
+  const auto vox = test::read_file(path("c.vox"));
+  const std::string text(vox.begin(), vox.end());
+  const std::size_t xyzi = text.find("XYZI");
+  ASSERT_NE(xyzi, std::string::npos);
+  std::uint32_t voxels = 0;
+  std::memcpy(&voxels, vox.data() + xyzi + 12, 4);
+  EXPECT_EQ(voxels, 24u);
+  r = run_process(kVoxd + " voxelize " + mesh + " --params " + slice + " -o " + path("c.glb"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("palette job's reconstruction"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace voxd
