@@ -39,7 +39,7 @@ struct AnalysisRequest {
   std::string peel_metric = "faces";  // faces | euclidean
   std::int64_t peel = 0;
   // section, preview: none | thickness (colour by local thickness); section
-  // also distance (an sdf job's diverging distance map).
+  // also distance (a distance field's diverging map).
   std::string colour = "none";
   // preview: +x | -x | +y | -y | +z | -z.
   std::string view = "+z";

@@ -1,6 +1,7 @@
 #pragma once
 // The job parameters JSON (proto-schemas/job-params.schema.json), shared by the
 // CLI and the HTTP API, parsed into engine types.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -9,56 +10,42 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "api/analysis_request.h"
-#include "voxd/voxelize/coverage.h"
-#include "voxd/grid.h"
-#include "voxd/voxelize/palette.h"
-#include "voxd/voxelize/palette_render.h"
-#include "voxd/voxelize/sdf.h"
-#include "voxd/voxelize/slice_functions.h"
+#include "api/job_mode.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/grid.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd::api {
-
-// "mode": "coverage" (Thon et al.'s grey levels) and its "coverage" object.
-struct CoverageParams {
-  CoverageOptions options;          // sampling, rays, points, seed (threads set by the runner)
-  std::optional<float> threshold;   // set: the job's volume is the bits coverage >= threshold
-  bool float_values = false;        // "values": "f32" (fractions 0..1) instead of "u8" (Thon's byte)
-};
-
-// "mode": "palette" (Cavagnino & Gribaudo) and its "palette" object.
-struct PaletteParams {
-  PaletteOptions options;              // palette, metric, rays, points, seed (threads set by the runner)
-  std::string palette_name = "46";     // "2", "10", "46", "78" or "custom"
-  glm::dvec3 voxel_aspect{1.0};        // the voxel's edges over the grid's voxel_size (anisotropic voxels)
-  RenderPalette render;                // display objects by element and similarity (may be empty)
-};
 
 struct JobParams {
   GridRequest grid;
   std::optional<glm::dmat3> rotation;  // applied before orient
   bool orient_auto = false;
-  // The binary volume: the result of a solid/surface job, and the solid
-  // (centre inside) that the analyses measure for a coverage or sdf job.
-  VoxelMode mode = VoxelMode::solid;
-  InsideTest inside = InsideTest::parity;  // also the sign of an sdf job
-  std::optional<CoverageParams> coverage;  // set iff "mode": "coverage"
-  std::optional<SdfOptions> sdf;           // set iff "mode": "sdf" (inside = the job's inside)
-  std::optional<PaletteParams> palette;    // set iff "mode": "palette"
-  std::optional<SliceOptions> slice;       // set iff "mode": "slice" (inside = the job's inside)
-
-  // The job's "mode" as written: solid, surface, solid+surface, coverage, sdf, palette, slice.
-  std::string mode_name() const;
-  // Whether the job's result is a volume of values (u8, f32 or rgba8) rather than bits.
-  bool has_values() const { return sdf || palette || slice || (coverage && !coverage->threshold); }
+  // The job's mode (api/job_mode.h), recorded once here: whatever needs to
+  // know what the job makes asks it. Never null.
+  const JobMode* mode = nullptr;
+  // The inside test of the job's solid (the result of a solid job, the solid
+  // the analyses measure for a value job), also the sign of a distance field.
+  InsideTest inside = InsideTest::parity;
+  // The mode's options (the object under its name), parsed by the mode; may be null.
+  std::shared_ptr<ModeOptions> options;
   // Analyses the worker prepares once the volume exists (api/analysis_request.h).
   std::vector<AnalysisRequest> analyses;
-};
 
-// An empty volume of the value type a value job produces (u8, f32 or
-// rgba8), to ask format_refusal() before any work; nullopt for a job of bits.
-std::optional<ValueVolume> value_type_probe(const JobParams& params);
+  JobParams();
+  // The job's "mode" as written (api/modes/mode_registry.cpp lists them).
+  std::string mode_name() const { return std::string(mode->name()); }
+  // Whether the job's result is a volume of values (u8, f32 or rgba8) rather than bits.
+  bool has_values() const { return value_type().has_value(); }
+  // An empty volume of the value type the job produces, to ask
+  // format_refusal() before any work; nullopt for a job of bits.
+  std::optional<ValueVolume> value_type() const { return mode->value_type(*this); }
+  // The mode's options as its own type; null for another mode's.
+  template <class T>
+  const T* options_as() const {
+    return dynamic_cast<const T*>(options.get());
+  }
+};
 
 // Validates and converts. Unknown keys, wrong types and out-of-range values
 // are all reported together in InvalidParams.

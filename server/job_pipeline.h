@@ -56,15 +56,14 @@ struct VoxelJobResult {
   std::optional<MassProperties> mesh_mass;  // with the report; in the voxels' (rotated) frame
   glm::dmat3 rotation{1.0};
   Grid grid;
-  // The binary volume: the result of a solid/surface job or of a coverage
-  // threshold; the solid (centre inside, the job's inside test) of a
-  // coverage or sdf job, which the analyses measure.
+  // The binary volume: the result of a job of bits; the solid (centre
+  // inside) of a value job, which the analyses measure.
   BitVolume volume;
   std::uint64_t filled = 0;
-  // A coverage, sdf, palette or slice job's result (api::JobParams::has_values()).
+  // A value job's result (api::JobParams::has_values()).
   std::optional<ValueVolume> values;
-  // A palette job's similarity per voxel, round(255 B) (voxd/voxelize/palette.h).
-  std::optional<DenseVolume<std::uint8_t>> similarity;
+  // Volumes kept beside the values, by name (api::JobMode::stored_layers()).
+  std::vector<std::pair<std::string, ValueVolume>> layers;
   // What the values are, for the job status and the CLI summary
   // (proto-schemas/job-status.schema.json "values").
   nlohmann::json values_info;
@@ -93,12 +92,6 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
 // The expensive part: (mesh report of the mesh as uploaded,) rotation,
 // voxelization, count.
 VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads = 0);
-
-// A palette job's reconstruction as a mesh (format stl or glb,
-// voxd/encode/palette_export.h), in model units: voxels scaled back by the job's
-// voxel_aspect. Throws Error(invalid_argument) for another format.
-void write_palette_mesh(const api::PaletteParams& params, const DenseVolume<std::uint8_t>& element, VolumeFormat format,
-                        ByteSink& sink);
 
 // Both steps, as the CLI runs them.
 VoxelJobResult run_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,

@@ -45,10 +45,13 @@ writes into DIR what the HTTP API serves for a job:
   preview-from{+x,-x,+y,-y,+z,-z}.png  shaded views; preview-*-thickness.png
                          coloured by local thickness
   thickness.nrrd         the local-thickness volume (float32, model units)
-  with --mode coverage:  section-{x,y,z}-coverage.png, the grey levels
-  with --mode sdf:       section-{x,y,z}-distance.png (diverging map) and
+  with a mode of values, their middle sections and previews:
+                         section-{x,y,z}-coverage.png (grey levels),
+                         section-{x,y,z}-distance.png (diverging map) and
                          preview-sdf-from{+x,...}.png (the zero level set
-                         ray-marched); the other files measure the solid
+                         ray-marched) for distances, section-{x,y,z}-colour.png
+                         and preview-colour-from{+x,...}.png for colours;
+                         the other files measure the solid
   analyses/KEY.EXT       each entry of the job JSON's "analyses" array, the
                          bytes its /v1/jobs/{id}/KIND route answers
 Lengths are in the mesh's model units. The thickness files need the local
@@ -148,17 +151,18 @@ int analyze_command(int argc, char** argv) {
     write_png("section-" + a + ".png", section_png(result.volume, axis, result.grid.dims[axis] / 2));
     if (map) write_png("section-" + a + "-thickness.png", section_png(result.volume, axis, result.grid.dims[axis] / 2, &*map));
   }
-  // A coverage or sdf job's values: their middle sections, and the sdf's
+  // A value job's values: their middle sections, and a distance field's
   // surface rendered from its distances.
   std::optional<SdfRenderInput> sdf;
-  if (params.sdf) sdf = sdf_render_input(std::get<DenseVolume<float>>(*result.values), *params.sdf);
-  if (result.values && !params.palette) {
+  if (result.values) sdf = params.mode->distance_field(params, *result.values);
+  const bool colours = params.mode->colour_values();
+  if (result.values && params.mode->values_are_image()) {
     for (int axis = 0; axis < 3; ++axis) {
       const std::string a(1, "xyz"[axis]);
       const std::int64_t middle = result.grid.dims[axis] / 2;
       if (sdf) {
         write_png("section-" + a + "-distance.png", sdf_section_png(*sdf, axis, middle, true));
-      } else if (params.slice) {
+      } else if (colours) {
         write_png("section-" + a + "-colour.png", colour_section_png(std::get<DenseVolume<Rgba8>>(*result.values), axis, middle));
       } else {
         write_png("section-" + a + "-coverage.png",
@@ -176,7 +180,7 @@ int analyze_command(int argc, char** argv) {
   for (const char* name : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
     const View view = *parse_view(name);
     if (sdf) write_png(std::string("preview-sdf-from") + name + ".png", sdf_preview_png(*sdf, view, {}, threads));
-    if (params.slice)
+    if (colours)
       write_png(std::string("preview-colour-from") + name + ".png",
                 colour_preview_png(result.volume, std::get<DenseVolume<Rgba8>>(*result.values), view, {}, threads));
     write_png(std::string("preview-from") + name + ".png", preview_png(result.volume, view, nullptr, {}, threads));
@@ -208,16 +212,17 @@ int analyze_command(int argc, char** argv) {
     server::JobSnapshot job;
     job.id = "cli";
     job.params = params_json;
+    job.job = std::make_shared<const api::JobParams>(params);
     job.grid = result.grid;
     job.mesh = result.report;
     job.mesh_mass = result.mesh_mass;
     job.values = result.values_info;
     // Non-owning views of this run's volumes (they outlive the loop).
-    const server::JobOutput output{
+    server::JobOutput output{
         std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
-        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr,
-        result.similarity ? std::shared_ptr<const DenseVolume<std::uint8_t>>(std::shared_ptr<void>(), &*result.similarity)
-                          : nullptr};
+        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}};
+    for (const auto& [name, volume] : result.layers)
+      output.layers.emplace_back(name, std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume));
     std::filesystem::create_directories(*out_dir + "/analyses");
     for (std::size_t i = 0; i < params.analyses.size(); ++i) {
       const api::AnalysisRequest& request = params.analyses[i];

@@ -19,6 +19,16 @@
 namespace voxd::cli {
 namespace {
 
+// This run's volumes by name, for a mode that writes a format itself.
+api::VolumeSource result_volumes(const VoxelJobResult& result) {
+  return [&result](const std::string& name) -> std::shared_ptr<const ValueVolume> {
+    if (name == "values") return std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values);
+    for (const auto& [layer, volume] : result.layers)
+      if (layer == name) return std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume);
+    throw Error(ErrorCode::invalid_argument, "this run made no volume named " + name);
+  };
+}
+
 using nlohmann::json;
 
 constexpr const char* kUsage = R"(usage: voxd voxelize MESH -o OUT [options]
@@ -33,13 +43,12 @@ volume to OUT ("-" for standard output).
   --origin X,Y,Z         minimum corner of voxel (0,0,0) (with --voxel-size, --dims)
   --dims NX,NY,NZ        grid size in voxels (with --voxel-size, --origin)
   --padding P            empty voxels added on every side
-  --mode M               solid | surface | solid+surface | coverage | sdf | palette | slice
-                         (their options in --params: "coverage": {...}, "sdf": {...},
-                         "palette": {...}, "slice": {...}; slice needs "function")
-  --inside T             parity | vote | winding (for sdf: the sign)
+  --mode M               one of the modes below (their options in --params,
+                         under the mode's name: {"MODE": {...}})
+  --inside T             parity | vote | winding (also the sign of a distance field)
   --format F             rle | binvox | raw | nrrd | vox | png-stack | stl | glb
                          (default: from OUT's extension; vox and png-stack (.zip)
-                         for mode slice, stl and glb for mode palette)
+                         hold colours, stl and glb a mode's own meshes)
   --raw-packing P        bytes (default) | bits, for --format raw
   --nrrd-encoding E      raw (default) | gzip, for --format nrrd
   --quantize Q           none (default) | u8 | u16: float values as rle levels
@@ -52,11 +61,20 @@ volume to OUT ("-" for standard output).
 Flags override the matching fields of --params. A summary (grid, filled
 voxels, volume, time per stage) is printed on standard error.
 
-Modes coverage and sdf write values: coverage as bytes (0..255, Thon's grey
-levels; "values": "f32" for fractions) or, with a threshold, bits; sdf as
-float32 distances (rle, raw or nrrd; binvox holds no floats). "Filled" is
-then the solid (voxel centres inside) the values come with.
+Modes (a mode that writes values reports as "filled" the solid, voxel
+centres inside, that its values come with):
 )";
+
+// The usage with every mode's line (api/modes/).
+std::string usage() {
+  std::string text = kUsage;
+  for (const api::JobMode* mode : api::job_modes()) {
+    std::string name(mode->name());
+    name.resize(std::max<std::size_t>(name.size() + 2, 15), ' ');
+    text.append("  ").append(name).append(mode->summary()).append("\n");
+  }
+  return text;
+}
 
 std::string format_seconds(double s) {
   char buf[32];
@@ -72,7 +90,7 @@ int voxelize_command(int argc, char** argv) {
              "raw-packing", "nrrd-encoding", "quantize", "threads", "output", "max-voxels"},
             {"json", "report", "help"});
   if (args.has("help")) {
-    std::cout << kUsage;
+    std::cout << usage();
     return 0;
   }
   if (args.positional().size() != 1) throw UsageError("voxelize takes exactly one mesh file (see voxd voxelize --help)");
@@ -108,10 +126,10 @@ int voxelize_command(int argc, char** argv) {
     else if (*q != "none") throw UsageError("--quantize must be none, u8 or u16, got '" + *q + "'");
   }
   if (encode_options.quantize != Quantize::none && !params.has_values())
-    throw UsageError("--quantize applies to the float values of modes coverage (f32) and sdf, not to bits");
+    throw UsageError("--quantize applies to float values (a volume of type f32), not to bits");
   // A format that cannot hold the values is refused before any work.
-  const bool palette_mesh = params.palette && (*format == VolumeFormat::stl || *format == VolumeFormat::glb);
-  if (const auto probe = api::value_type_probe(params); probe && !palette_mesh) {
+  const bool mode_writes = params.mode->writes(*format);
+  if (const auto probe = params.value_type(); probe && !mode_writes) {
     if (auto refusal = format_refusal(*probe, *format, encode_options)) throw UsageError("mode " + params.mode_name() + ": " + *refusal);
   } else if (!probe) {
     if (auto refusal = format_refusal(BitVolume(), *format)) throw UsageError("mode " + params.mode_name() + ": " + *refusal);
@@ -137,8 +155,8 @@ int voxelize_command(int argc, char** argv) {
                                                     result.values_info.value("unit", "") + ")"
                                               : "voxels (1 = filled)";
   auto encode = [&](ByteSink& sink) {
-    if (palette_mesh)
-      write_palette_mesh(*params.palette, std::get<DenseVolume<std::uint8_t>>(*result.values), *format, sink);
+    if (mode_writes)
+      params.mode->write(*format, params, result_volumes(result), sink);
     else if (result.values)
       encode_volume(*result.values, *format, sink, encode_options);
     else

@@ -31,7 +31,7 @@ FinishedJob finished_job(JobManager& jobs, const std::string& id) {
   if (job->state != JobState::succeeded)
     throw ProblemError(make_problem(409, "job-not-finished", "The job has no volume yet",
                                     std::string("the job is ") + to_string(job->state) + "; its analyses exist once it has succeeded"));
-  JobOutput output{jobs.volume(id), jobs.values(id), jobs.similarity(id)};
+  JobOutput output{jobs.volume(id), jobs.values(id), {}};
   if (!output.solid || (job->has_value_volume() && !output.values)) throw unknown();
   return {*job, std::move(output)};
 }

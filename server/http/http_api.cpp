@@ -16,7 +16,7 @@
 #include "server/http/connection_server.h"
 #include "server/http/problem.h"
 #include "server/job_pipeline.h"
-#include "server/http/value_routes.h"
+#include "server/http/mode_routes.h"
 #include "server/log_safe.h"
 #include "server/http/volume_stream.h"
 #include "server/jobs/job_record.h"
@@ -234,13 +234,13 @@ std::string volume_content(const JobSnapshot& job) {
 void refuse_quantized_bits(const VolumeRequest& v) {
   if (v.options.quantize != Quantize::none)
     throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter",
-                                    "quantize applies to the float values of coverage (f32) and sdf jobs; this volume is bits"));
+                                    "quantize applies to float values (a volume of type f32); this volume is bits"));
 }
 
 // Refuses a format that cannot hold a value job's values before any work.
 void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {
-  if (params.palette && (v.format == VolumeFormat::stl || v.format == VolumeFormat::glb)) return;
-  const std::optional<ValueVolume> probe = api::value_type_probe(params);
+  if (params.mode->writes(v.format)) return;
+  const std::optional<ValueVolume> probe = params.value_type();
   if (!probe) {
     refuse_quantized_bits(v);
     if (auto refusal = format_refusal(BitVolume(), v.format))
@@ -249,6 +249,16 @@ void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {
   }
   if (auto refusal = format_refusal(*probe, v.format, v.options))
     throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
+}
+
+// The volumes of a synchronous job's output, which is never stored.
+api::VolumeSource sync_volumes(const JobOutput& output) {
+  return [output](const std::string& name) -> std::shared_ptr<const ValueVolume> {
+    if (name == "values") return output.values;
+    for (const auto& [layer, volume] : output.layers)
+      if (layer == name) return volume;
+    throw std::logic_error("a synchronous job has no layer " + name);
+  };
 }
 
 bool accepts_gzip(const Request& req) {
@@ -486,21 +496,17 @@ void HttpApi::install(httplib::Server& server) {
     VolumeRequest request = v;
     request.options.content = volume_content(*job);
     const std::string filename = id + file_extension(v.format);
-    if (v.format == VolumeFormat::stl || v.format == VolumeFormat::glb) {
-      const api::JobParams params = api::parse_job_params(job->params);
-      if (!params.palette)
-        throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *format_refusal(BitVolume(), v.format)));
-      auto values = jobs_.values(id);
-      if (!values) throw unknown_job(id);
+    const api::JobParams& params = *job->job;
+    if (params.mode->writes(v.format)) {
       return stream_encoded(
           res, media_type(v.format),
-          [values, palette = *params.palette, format = v.format](ByteSink& sink) {
-            write_palette_mesh(palette, std::get<DenseVolume<std::uint8_t>>(*values), format, sink);
+          [volumes = volumes_of(jobs_, *job), job = job->job, format = v.format](ByteSink& sink) {
+            job->mode->write(format, *job, volumes, sink);
           },
           accepts_gzip(req), filename, &metrics_);
     }
     if (req.has_param("layer")) {
-      auto layer = palette_layer(jobs_, *job, req.get_param_value("layer"));
+      auto layer = job_layer(jobs_, *job, req.get_param_value("layer"));
       if (auto refusal = format_refusal(*layer, v.format, v.options))
         throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", *refusal));
       res.set_header("X-Voxd-Value-Type", value_type_name(*layer));
@@ -526,14 +532,14 @@ void HttpApi::install(httplib::Server& server) {
 
   for (const std::string& pattern : install_analysis_routes(server, jobs_, job_path, [guarded](PlainHandler h) { return guarded(h); }))
     allow_only(pattern, "GET");
-  for (const std::string& pattern : install_value_routes(server, jobs_, job_path, [guarded](PlainHandler h) { return guarded(h); }))
+  for (const std::string& pattern : install_mode_routes(server, jobs_, job_path, [guarded](PlainHandler h) { return guarded(h); }))
     allow_only(pattern, "GET");
 
   server.Post("/v1/voxelize", guarded_upload([this](const Request& req, Response& res, const httplib::ContentReader& reader) {
     const VolumeRequest v = read_volume_request(req);
     Submission s = read_submission(req, reader, metrics_, config_.max_upload_bytes, params_limits_);
     const api::JobParams params = api::parse_job_params(s.params);
-    check_format_holds(params, v);
+    check_format_holds(params, v);  // before any work
     JobSnapshot job;
     // A client that gives up on the answer cancels the job.
     JobOutput output =
@@ -549,11 +555,11 @@ void HttpApi::install(httplib::Server& server) {
     VolumeRequest request = v;
     request.options.content = volume_content(job);
     const std::string filename = "voxels" + std::string(file_extension(v.format));
-    if (output.values && params.palette && (v.format == VolumeFormat::stl || v.format == VolumeFormat::glb)) {
+    if (output.values && params.mode->writes(v.format)) {
       return stream_encoded(
           res, media_type(v.format),
-          [values = output.values, palette = *params.palette, format = v.format](ByteSink& sink) {
-            write_palette_mesh(palette, std::get<DenseVolume<std::uint8_t>>(*values), format, sink);
+          [output, job = job.job, format = v.format](ByteSink& sink) {
+            job->mode->write(format, *job, sync_volumes(output), sink);
           },
           accepts_gzip(req), filename, &metrics_);
     }

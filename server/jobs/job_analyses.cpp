@@ -140,31 +140,36 @@ DenseVolume<float> thickness_in(DenseVolume<float> map, const std::string& unit)
   return map;
 }
 
-// An sdf job's field and how to read it (its convention and units come
-// from the job JSON); nullopt for other jobs.
-std::optional<SdfRenderInput> sdf_input(const JobSnapshot& job, const JobOutput& output) {
-  if (!output.values || !std::holds_alternative<DenseVolume<float>>(*output.values)) return std::nullopt;
-  const api::JobParams params = api::parse_job_params(job.params);
-  if (!params.sdf) return std::nullopt;
-  return sdf_render_input(std::get<DenseVolume<float>>(*output.values), *params.sdf);
+// The modes whose values are distances, "a or b".
+std::string distance_modes() {
+  std::string names;
+  for (const api::JobMode* m : api::job_modes())
+    if (m->distance_values()) names.append(names.empty() ? "" : " or ").append(m->name());
+  return names;
 }
 
-// A coverage or sdf job's section shows its values (colour none or
+// A distance field's values and how to read them (its convention and units
+// come from the job's mode and options); nullopt for other jobs.
+std::optional<SdfRenderInput> sdf_input(const JobSnapshot& job, const JobOutput& output) {
+  if (!output.values) return std::nullopt;
+  return job.job->mode->distance_field(*job.job, *output.values);
+}
+
+// A value job's section shows its values (colour none or
 // distance); colour thickness and peeled sections show the solid.
 std::optional<std::string> value_job_section(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
                                              std::int64_t layer, const std::vector<PngText>& text) {
-  const std::optional<SdfRenderInput> sdf = sdf_input(job, output);
-  if (r.colour == "distance" && !sdf)
-    throw AnalysisRejected("colour=distance shows the distances of an sdf job; this job's mode is " +
-                           api::parse_job_params(job.params).mode_name() + ": use colour none or thickness");
+  const std::optional<SdfRenderInput> field = sdf_input(job, output);
+  if (r.colour == "distance" && !field)
+    throw AnalysisRejected("colour=distance shows the distances of an " + distance_modes() + " job; this job's mode is " +
+                           job.job->mode_name() + ": use colour none or thickness");
   if (!output.values || r.colour == "thickness") return std::nullopt;
-  // A palette job's element indices are not an image: its sections show the solid.
-  if (std::holds_alternative<DenseVolume<std::uint8_t>>(*output.values) && api::parse_job_params(job.params).palette)
-    return std::nullopt;
+  // Values that are not an image (indices into a table): the section shows the solid.
+  if (!job.job->mode->values_are_image()) return std::nullopt;
   if (r.peel > 0)
     throw AnalysisRejected("peel removes skin from the solid; a section of the job's values takes no peel "
                            "(use colour=thickness for the peeled solid)");
-  if (sdf) return to_bytes(sdf_section_png(*sdf, r.axis, layer, r.colour == "distance", text));
+  if (field) return to_bytes(sdf_section_png(*field, r.axis, layer, r.colour == "distance", text));
   return std::visit(
       [&](const auto& v) {
         if constexpr (std::is_same_v<std::decay_t<decltype(v)>, DenseVolume<Rgba8>>)
@@ -253,12 +258,12 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
       break;
     }
     case AnalysisKind::preview: {
-      // An sdf job's surface is its zero level set, rendered directly.
-      if (const auto sdf = sdf_input(job, output); sdf && r.colour == "none") {
-        bytes = to_bytes(sdf_preview_png(*sdf, *parse_view(r.view), {{"voxd:job", job.id}}));
+      // A distance field's surface is its zero level set, rendered directly.
+      if (const auto field = sdf_input(job, output); field && r.colour == "none") {
+        bytes = to_bytes(sdf_preview_png(*field, *parse_view(r.view), {{"voxd:job", job.id}}));
         break;
       }
-      // A slice job's preview shows its colours.
+      // A colour job's preview shows its colours.
       if (output.values && std::holds_alternative<DenseVolume<Rgba8>>(*output.values) && r.colour == "none") {
         bytes = to_bytes(colour_preview_png(volume, std::get<DenseVolume<Rgba8>>(*output.values), *parse_view(r.view),
                                             {{"voxd:job", job.id}}));

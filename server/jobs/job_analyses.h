@@ -46,8 +46,8 @@ struct AnalysisResult {
 
 // The result, from the kept artifact when there is one, else computed, kept
 // and returned. The measurements (analysis, radiography, thickness) are of
-// the job's solid; a coverage or sdf job's section shows its values, and an
-// sdf job's preview renders its zero level set. `control` (may be null)
+// the job's solid; a value job's section shows its values, and a distance
+// field's preview renders its zero level set. `control` (may be null)
 // carries progress and cancellation.
 AnalysisResult job_analysis(const api::AnalysisRequest& request, const JobSnapshot& job, const JobOutput& output,
                             const ArtifactAccess& artifacts, JobControl* control = nullptr);

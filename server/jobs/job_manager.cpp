@@ -97,12 +97,10 @@ struct JobManager::Impl {
   bool stopping = false;
   double recent_job_seconds = 1.0;  // moving average, for Retry-After
 
-  // Recently used result volumes (a job's solid under its id, its values
-  // under id + kValuesKey, a palette job's similarity under id +
-  // kSimilarityKey), so streaming a fresh result reads no disk.
+  // Recently used result volumes (a job's solid under its id, its layers of
+  // values under id + "/" + name), so streaming a fresh result reads no disk.
   static constexpr std::size_t kCacheBytes = std::size_t{1} << 30;
-  static constexpr const char* kValuesKey = "/values";
-  static constexpr const char* kSimilarityKey = "/similarity";
+  static std::string layer_key(const std::string& id, const std::string& name) { return id + "/" + name; }
   struct CacheEntry {
     std::string key;
     std::shared_ptr<const void> item;
@@ -167,8 +165,8 @@ struct JobManager::Impl {
     }
   }
   void cache_put(const std::string& id, const JobOutput& output) {
-    if (output.values) cache_put(id + kValuesKey, output.values, byte_size(*output.values));
-    if (output.similarity) cache_put(id + kSimilarityKey, output.similarity, output.similarity->values().size());
+    if (output.values) cache_put(layer_key(id, "values"), output.values, byte_size(*output.values));
+    for (const auto& [name, layer] : output.layers) cache_put(layer_key(id, name), layer, byte_size(*layer));
     cache_put(id, output.solid, output.solid->byte_size());
   }
   void cache_erase(const std::string& key) {
@@ -180,9 +178,15 @@ struct JobManager::Impl {
       }
   }
   void cache_drop(const std::string& id) {
-    cache_erase(id);
-    cache_erase(id + kValuesKey);
-    cache_erase(id + kSimilarityKey);
+    const std::string prefix = id + "/";
+    for (auto it = cache.begin(); it != cache.end();) {
+      if (it->key == id || it->key.rfind(prefix, 0) == 0) {
+        cache_bytes -= it->bytes;
+        it = cache.erase(it);
+      } else {
+        ++it;
+      }
+    }
   }
   template <class T>
   std::shared_ptr<const T> cache_get(const std::string& key) {
@@ -307,11 +311,12 @@ struct JobManager::Impl {
         JobOutput output;
         output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
         if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
-        if (r.similarity) output.similarity = std::make_shared<const DenseVolume<std::uint8_t>>(std::move(*r.similarity));
+        for (auto& [name, layer] : r.layers)
+          output.layers.emplace_back(name, std::make_shared<const ValueVolume>(std::move(layer)));
         if (!job->ephemeral) {
           store.save_volume(job->snap.id, *output.solid);
-          if (output.values) store.save_values(job->snap.id, *output.values);
-          if (output.similarity) store.save_similarity(job->snap.id, *output.similarity);
+          if (output.values) store.save_layer(job->snap.id, "values", *output.values);
+          for (const auto& [name, layer] : output.layers) store.save_layer(job->snap.id, name, *layer);
         }
         nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
         std::lock_guard lock(mutex);
@@ -470,7 +475,8 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
       throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later",
                       retry_after());
   }
-  const api::JobParams params = api::parse_job_params(params_json);
+  const auto parsed = std::make_shared<const api::JobParams>(api::parse_job_params(params_json));
+  const api::JobParams& params = *parsed;
   if (!ephemeral && store.free_bytes() < config.min_free_disk)
     throw StorageFull("the service's disk has less than " + std::to_string(config.min_free_disk >> 20) +
                       " MiB free and takes no new jobs until results expire or are deleted; retry later");
@@ -491,6 +497,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
       s.id = new_job_id();
       s.created_at = s.started_at = s.finished_at = format_time(Clock::now());
       s.params = params_json;
+      s.job = parsed;
       s.cached = true;
       s.timings.clear();
       s.analyses = analyses_status(params.analyses, s.id, "on_request");
@@ -546,6 +553,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   s.state = JobState::queued;
   s.created_at = format_time(Clock::now());
   s.params = params_json;
+  s.job = parsed;
   s.mesh_format = to_string(prepared.format);
   s.triangles = prepared.triangles;
   s.grid = prepared.grid;
@@ -683,34 +691,26 @@ std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
 }
 
 std::shared_ptr<const ValueVolume> JobManager::values(const std::string& id) {
-  const std::string key = id + Impl::kValuesKey;
   {
     std::lock_guard lock(impl_->mutex);
     auto it = impl_->jobs.find(id);
-    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded || !it->second->snap.has_value_volume())
-      return nullptr;
-    if (auto v = impl_->cache_get<ValueVolume>(key)) return v;
+    if (it == impl_->jobs.end() || !it->second->snap.has_value_volume()) return nullptr;
   }
-  auto v = impl_->store.load_values(id);
-  if (v) {
-    std::lock_guard lock(impl_->mutex);
-    if (impl_->jobs.count(id)) impl_->cache_put(key, v, byte_size(*v));
-  }
-  return v;
+  return layer(id, "values");
 }
 
-std::shared_ptr<const DenseVolume<std::uint8_t>> JobManager::similarity(const std::string& id) {
-  const std::string key = id + Impl::kSimilarityKey;
+std::shared_ptr<const ValueVolume> JobManager::layer(const std::string& id, const std::string& name) {
+  const std::string key = Impl::layer_key(id, name);
   {
     std::lock_guard lock(impl_->mutex);
     auto it = impl_->jobs.find(id);
     if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
-    if (auto v = impl_->cache_get<DenseVolume<std::uint8_t>>(key)) return v;
+    if (auto v = impl_->cache_get<ValueVolume>(key)) return v;
   }
-  auto v = impl_->store.load_similarity(id);
+  auto v = impl_->store.load_layer(id, name);
   if (v) {
     std::lock_guard lock(impl_->mutex);
-    if (impl_->jobs.count(id)) impl_->cache_put(key, v, v->values().size());
+    if (impl_->jobs.count(id)) impl_->cache_put(key, v, byte_size(*v));
   }
   return v;
 }

@@ -43,6 +43,9 @@ struct JobSnapshot {
   double progress = 0.0;  // 0..1
   std::string created_at, started_at, finished_at;  // RFC 3339 UTC, empty until reached
   nlohmann::json params;                            // the job JSON as submitted
+  // The job JSON parsed, once, when the job is accepted or its record read:
+  // its mode (params->mode) says what the job makes and serves.
+  std::shared_ptr<const api::JobParams> job;
   std::string mesh_format;
   std::uint64_t triangles = 0;
   std::optional<MeshReport> mesh;  // set once the worker made it
@@ -57,21 +60,21 @@ struct JobSnapshot {
   // "error"}; state pending -> ready | failed, or on_request for a job
   // answered from an earlier one's result (computed when first asked).
   nlohmann::json analyses = nlohmann::json::array();
-  // A coverage or sdf job's values once succeeded: {"type": "u8"|"f32",
+  // A value job's values once succeeded: {"type": "u8"|"f32"|"rgba8",
   // "quantity", "unit", ...} (VoxelJobResult::values_info); null otherwise.
-  // A coverage threshold's has no "type": its volume is bits.
+  // A mode that makes bits from its values (a threshold) gives no "type".
   nlohmann::json values = nullptr;
   // Whether the job's result is a volume of values rather than bits.
   bool has_value_volume() const { return values.is_object() && values.contains("type"); }
 };
 
-// What a succeeded job produced: its binary volume (the result of a solid or
-// surface job, the solid of a coverage or sdf job) and, for a coverage or
-// sdf job, its values, which are then the job's result.
+// What a succeeded job produced: its binary volume (the result of a job of
+// bits, the solid of a value job) and, for a value job, its values, which are
+// then the job's result, and the layers its mode keeps beside them.
 struct JobOutput {
   std::shared_ptr<const BitVolume> solid;
   std::shared_ptr<const ValueVolume> values;
-  std::shared_ptr<const DenseVolume<std::uint8_t>> similarity;  // a palette job's
+  std::vector<std::pair<std::string, std::shared_ptr<const ValueVolume>>> layers;
 };
 
 struct JobManagerConfig {
@@ -147,10 +150,11 @@ class JobManager {
   // The result volume of a succeeded job (loaded from the store if not in
   // memory); nullptr if the job is unknown or not succeeded.
   std::shared_ptr<const BitVolume> volume(const std::string& id);
-  // A succeeded coverage or sdf job's values; nullptr for other jobs.
+  // A succeeded value job's values; nullptr for other jobs.
   std::shared_ptr<const ValueVolume> values(const std::string& id);
-  // A succeeded palette job's similarity volume; nullptr for other jobs.
-  std::shared_ptr<const DenseVolume<std::uint8_t>> similarity(const std::string& id);
+  // A succeeded job's volume of values by name: "values" or one of its
+  // mode's stored layers; nullptr when it has none of that name.
+  std::shared_ptr<const ValueVolume> layer(const std::string& id, const std::string& name);
 
   // Submits and waits for the result (POST /v1/voxelize). The job goes
   // through the same queue, so it cannot starve asynchronous jobs, but it is

@@ -1,5 +1,7 @@
 #include "server/jobs/job_record.h"
 
+#include "api/job_params.h"
+
 #include <ctime>
 #include <iomanip>
 #include <sstream>
@@ -131,6 +133,8 @@ JobSnapshot job_from_json(const json& r) {
   job.started_at = time_from(r.at("started_at"));
   job.finished_at = time_from(r.at("finished_at"));
   job.params = r.at("params");
+  // Recorded by this service, so it parses; the mode comes from it once.
+  job.job = std::make_shared<const api::JobParams>(api::parse_job_params(job.params));
   if (!r.at("mesh").is_null()) job.mesh = report_from_json(r.at("mesh"));
   if (r.contains("mesh_mass")) {
     const json& m = r.at("mesh_mass");

@@ -121,23 +121,21 @@ void JobStore::save_volume(const std::string& id, const BitVolume& volume) const
   write_atomically(job_dir(id) / "volume.rle", [&](ByteSink& sink) { write_rle(volume, sink); });
 }
 
-void JobStore::save_values(const std::string& id, const ValueVolume& values) const {
+void JobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {
   make_dirs(job_dir(id));
-  const std::string name = std::string("values.") + value_type_name(values) + ".rle";
-  write_atomically(job_dir(id) / name, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
-}
-
-void JobStore::save_similarity(const std::string& id, const DenseVolume<std::uint8_t>& similarity) const {
-  make_dirs(job_dir(id));
-  write_atomically(job_dir(id) / "similarity.u8.rle", [&](ByteSink& sink) { write_rle(similarity, sink); });
+  const std::string file = name + "." + value_type_name(values) + ".rle";
+  write_atomically(job_dir(id) / file, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
 }
 
 void JobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
   make_dirs(job_dir(to_id));
-  for (const char* name : {"volume.rle", "values.u8.rle", "values.f32.rle", "values.rgba8.rle", "similarity.u8.rle"}) {
-    const fs::path from = job_dir(from_id) / name, to = job_dir(to_id) / name;
-    // The volume must be there (else the original is gone: throw); values only for value jobs.
-    if (std::string_view(name) != "volume.rle" && !fs::exists(from)) continue;
+  // The volume must be there (else the original is gone: throw); then every
+  // layer of values the original has.
+  std::vector<fs::path> files{job_dir(from_id) / "volume.rle"};
+  for (const auto& entry : fs::directory_iterator(job_dir(from_id)))
+    if (entry.path().extension() == ".rle" && entry.path().filename() != "volume.rle") files.push_back(entry.path());
+  for (const fs::path& from : files) {
+    const fs::path to = job_dir(to_id) / from.filename();
     std::error_code ec;
     fs::create_hard_link(from, to, ec);
     if (ec) fs::copy_file(from, to, fs::copy_options::overwrite_existing);
@@ -164,20 +162,14 @@ std::shared_ptr<const BitVolume> JobStore::load_volume(const std::string& id) co
   return std::make_shared<const BitVolume>(read_rle_bits(*bytes, kStoredVolumeLimits));
 }
 
-std::shared_ptr<const ValueVolume> JobStore::load_values(const std::string& id) const {
-  if (const auto bytes = read_file(job_dir(id) / "values.u8.rle"))
+std::shared_ptr<const ValueVolume> JobStore::load_layer(const std::string& id, const std::string& name) const {
+  if (const auto bytes = read_file(job_dir(id) / (name + ".u8.rle")))
     return std::make_shared<const ValueVolume>(read_rle_u8(*bytes, kStoredVolumeLimits));
-  if (const auto bytes = read_file(job_dir(id) / "values.f32.rle"))
+  if (const auto bytes = read_file(job_dir(id) / (name + ".f32.rle")))
     return std::make_shared<const ValueVolume>(read_rle_f32(*bytes, kStoredVolumeLimits));
-  if (const auto bytes = read_file(job_dir(id) / "values.rgba8.rle"))
+  if (const auto bytes = read_file(job_dir(id) / (name + ".rgba8.rle")))
     return std::make_shared<const ValueVolume>(read_rle_rgba8(*bytes, kStoredVolumeLimits));
   return nullptr;
-}
-
-std::shared_ptr<const DenseVolume<std::uint8_t>> JobStore::load_similarity(const std::string& id) const {
-  const auto bytes = read_file(job_dir(id) / "similarity.u8.rle");
-  if (!bytes) return nullptr;
-  return std::make_shared<const DenseVolume<std::uint8_t>>(read_rle_u8(*bytes, kStoredVolumeLimits));
 }
 
 void JobStore::remove(const std::string& id) const {

@@ -1,8 +1,9 @@
 #pragma once
 // The embedded job store: one directory per job under DATA_DIR/jobs/ID with
-// record.json (the job snapshot) and, once succeeded, volume.rle (and, for a
-// value job, values.u8.rle, values.f32.rle or values.rgba8.rle, and for a
-// palette job similarity.u8.rle). Every file is
+// record.json (the job snapshot) and, once succeeded, volume.rle and, for a
+// value job, its layers of values as NAME.TYPE.rle (values.f32.rle, and e.g.
+// similarity.u8.rle for a mode that keeps more, api::JobMode::stored_layers).
+// Every file is
 // written to a temporary name, flushed to disk and renamed, so a crash or a
 // kill never leaves a half-written record or result behind.
 #include <filesystem>
@@ -35,12 +36,10 @@ class JobStore {
   void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const;
   void save(const JobSnapshot& job) const;
   void save_volume(const std::string& id, const BitVolume& volume) const;
-  // A coverage or sdf job's values, as RLE beside the volume.
-  void save_values(const std::string& id, const ValueVolume& values) const;
-  std::shared_ptr<const ValueVolume> load_values(const std::string& id) const;
-  // A palette job's similarity volume.
-  void save_similarity(const std::string& id, const DenseVolume<std::uint8_t>& similarity) const;
-  std::shared_ptr<const DenseVolume<std::uint8_t>> load_similarity(const std::string& id) const;
+  // A value job's volume of values by name ("values", the result, or a
+  // layer its mode keeps beside it), as RLE beside the volume.
+  void save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const;
+  std::shared_ptr<const ValueVolume> load_layer(const std::string& id, const std::string& name) const;
   // Shares a finished result (volume and values) with a job created from an
   // identical submission: hard links, so deleting either job leaves the
   // other's files intact.

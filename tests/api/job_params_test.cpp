@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include "api/job_params.h"
+#include "api/modes/coverage_mode.h"
+#include "api/modes/sdf_mode.h"
 #include "api/param_error.h"
 
 namespace voxd::api {
@@ -33,7 +35,7 @@ TEST(JobParams, DefaultsAreSolidParityAt128) {
   const JobParams p = parse_job_params(json::object());
   EXPECT_EQ(p.grid.kind, GridRequest::Kind::resolution);
   EXPECT_EQ(p.grid.resolution, 128);
-  EXPECT_EQ(p.mode, VoxelMode::solid);
+  EXPECT_EQ(p.mode->voxel_mode(), VoxelMode::solid);
   EXPECT_EQ(p.inside, InsideTest::parity);
   EXPECT_FALSE(p.rotation.has_value());
   EXPECT_FALSE(p.orient_auto);
@@ -57,7 +59,7 @@ TEST(JobParams, ParsesTheThreeGridForms) {
 TEST(JobParams, ParsesModesInsideTestsAndRotations) {
   JobParams p = parse_job_params(json::parse(
       R"({"mode": "solid+surface", "inside": "winding", "orient": "auto", "rotation": {"axis": [0, 0, 2], "angle_deg": 90}})"));
-  EXPECT_EQ(p.mode, VoxelMode::solid_and_surface);
+  EXPECT_EQ(p.mode->voxel_mode(), VoxelMode::solid_and_surface);
   EXPECT_EQ(p.inside, InsideTest::winding);
   EXPECT_TRUE(p.orient_auto);
   ASSERT_TRUE(p.rotation.has_value());
@@ -127,28 +129,28 @@ TEST(JobParams, EveryExampleOfThePublishedSchemaIsAccepted) {
 
 TEST(JobParams, CoverageModeDefaultsToExactIntegrationWithFourByFourRaysAsBytes) {
   const JobParams p = parse_job_params(json::parse(R"({"mode": "coverage"})"));
-  ASSERT_TRUE(p.coverage.has_value());
-  EXPECT_FALSE(p.sdf.has_value());
+  ASSERT_TRUE(p.options_as<CoverageParams>() != nullptr);
+  EXPECT_FALSE(p.options_as<SdfParams>() != nullptr);
   EXPECT_EQ(p.mode_name(), "coverage");
-  EXPECT_EQ(p.coverage->options.sampling, CoverageSampling::exact);
-  EXPECT_EQ(p.coverage->options.rays, 4);
-  EXPECT_FALSE(p.coverage->threshold.has_value());
-  EXPECT_FALSE(p.coverage->float_values);
+  EXPECT_EQ(p.options_as<CoverageParams>()->options.sampling, CoverageSampling::exact);
+  EXPECT_EQ(p.options_as<CoverageParams>()->options.rays, 4);
+  EXPECT_FALSE(p.options_as<CoverageParams>()->threshold.has_value());
+  EXPECT_FALSE(p.options_as<CoverageParams>()->float_values);
   EXPECT_TRUE(p.has_values());
 }
 
 TEST(JobParams, CoverageOptionsAreParsed) {
   JobParams p = parse_job_params(json::parse(R"({"mode": "coverage", "coverage": {"sampling": "stochastic", "rays": 8, "seed": 18446744073709551615, "values": "f32"}})"));
-  EXPECT_EQ(p.coverage->options.sampling, CoverageSampling::stochastic);
-  EXPECT_EQ(p.coverage->options.rays, 8);
-  EXPECT_EQ(p.coverage->options.seed, UINT64_MAX);
-  EXPECT_TRUE(p.coverage->float_values);
+  EXPECT_EQ(p.options_as<CoverageParams>()->options.sampling, CoverageSampling::stochastic);
+  EXPECT_EQ(p.options_as<CoverageParams>()->options.rays, 8);
+  EXPECT_EQ(p.options_as<CoverageParams>()->options.seed, UINT64_MAX);
+  EXPECT_TRUE(p.options_as<CoverageParams>()->float_values);
   p = parse_job_params(json::parse(R"({"mode": "coverage", "coverage": {"sampling": "uniform", "rays": 2, "points": 16}})"));
-  EXPECT_EQ(p.coverage->options.sampling, CoverageSampling::uniform);
-  EXPECT_EQ(p.coverage->options.points, 16);
+  EXPECT_EQ(p.options_as<CoverageParams>()->options.sampling, CoverageSampling::uniform);
+  EXPECT_EQ(p.options_as<CoverageParams>()->options.points, 16);
   // A threshold turns the result into bits.
   p = parse_job_params(json::parse(R"({"mode": "coverage", "coverage": {"threshold": 0.25}})"));
-  EXPECT_FLOAT_EQ(*p.coverage->threshold, 0.25f);
+  EXPECT_FLOAT_EQ(*p.options_as<CoverageParams>()->threshold, 0.25f);
   EXPECT_FALSE(p.has_values());
 }
 
@@ -169,23 +171,23 @@ TEST(JobParams, CoverageOptionsThatWouldBeIgnoredAreRefusedAtTheirPaths) {
 
 TEST(JobParams, SdfModeDefaultsToABandOfThreeVoxelsInsideNegativeInModelUnits) {
   const JobParams p = parse_job_params(json::parse(R"({"mode": "sdf", "inside": "winding"})"));
-  ASSERT_TRUE(p.sdf.has_value());
+  ASSERT_TRUE(p.options_as<SdfParams>() != nullptr);
   EXPECT_EQ(p.mode_name(), "sdf");
-  EXPECT_DOUBLE_EQ(p.sdf->band, 3.0);
-  EXPECT_FALSE(p.sdf->full);
-  EXPECT_EQ(p.sdf->sign, SignConvention::inside_negative);
-  EXPECT_TRUE(p.sdf->model_units);
-  EXPECT_EQ(p.sdf->inside, InsideTest::winding);  // the sign comes from the job's inside test
+  EXPECT_DOUBLE_EQ(p.options_as<SdfParams>()->band, 3.0);
+  EXPECT_FALSE(p.options_as<SdfParams>()->full);
+  EXPECT_EQ(p.options_as<SdfParams>()->sign, SignConvention::inside_negative);
+  EXPECT_TRUE(p.options_as<SdfParams>()->model_units);
+  EXPECT_EQ(p.options_as<SdfParams>()->inside, InsideTest::winding);  // the sign comes from the job's inside test
   EXPECT_TRUE(p.has_values());
 }
 
 TEST(JobParams, SdfOptionsAreParsedAndCheckedAtTheirPaths) {
   JobParams p = parse_job_params(json::parse(R"({"mode": "sdf", "sdf": {"band": "full", "sign_convention": "inside_positive", "units": "voxels"}})"));
-  EXPECT_TRUE(p.sdf->full);
-  EXPECT_EQ(p.sdf->sign, SignConvention::inside_positive);
-  EXPECT_FALSE(p.sdf->model_units);
+  EXPECT_TRUE(p.options_as<SdfParams>()->full);
+  EXPECT_EQ(p.options_as<SdfParams>()->sign, SignConvention::inside_positive);
+  EXPECT_FALSE(p.options_as<SdfParams>()->model_units);
   p = parse_job_params(json::parse(R"({"mode": "sdf", "sdf": {"band": 1.5}})"));
-  EXPECT_DOUBLE_EQ(p.sdf->band, 1.5);
+  EXPECT_DOUBLE_EQ(p.options_as<SdfParams>()->band, 1.5);
   auto e = errors_of(json::parse(R"({"mode": "sdf", "sdf": {"band": "wide", "units": "mm", "sign_convention": "negative"}})"));
   EXPECT_TRUE(has_error(e, "/sdf/band", "or \"full\""));
   EXPECT_TRUE(has_error(e, "/sdf/units", "\"model\", \"voxels\""));

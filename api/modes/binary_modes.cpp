@@ -1,0 +1,50 @@
+// "mode": "solid", "surface" and "solid+surface": the job's result is bits,
+// the voxelization of voxd/voxelize/voxelize.h with the job's inside test.
+// No options object; the three differ only in which voxels they fill.
+#include "api/job_mode.h"
+#include "api/job_params.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd::api {
+namespace {
+
+class BinaryMode final : public JobMode {
+ public:
+  BinaryMode(std::string_view name, VoxelMode mode, std::string_view summary) : name_(name), summary_(summary), mode_(mode) {}
+  std::string_view name() const override { return name_; }
+  std::string_view summary() const override { return summary_; }
+  VoxelMode voxel_mode() const override { return mode_; }
+  std::string_view stage_name() const override { return "voxelize"; }
+
+  ModeResult run(const ModeInput& in) const override {
+    VoxelizeOptions options;
+    options.mode = mode_;
+    options.inside = in.params.inside;
+    options.threads = in.threads;
+    ModeResult r;
+    r.volume = voxelize(in.mesh, in.grid, options, in.control);
+    return r;
+  }
+
+ private:
+  std::string_view name_, summary_;
+  VoxelMode mode_;
+};
+
+}  // namespace
+
+const JobMode& solid_mode() {
+  static const BinaryMode mode(to_string(VoxelMode::solid), VoxelMode::solid, "bits: the voxels whose centres are inside");
+  return mode;
+}
+const JobMode& surface_mode() {
+  static const BinaryMode mode(to_string(VoxelMode::surface), VoxelMode::surface, "bits: the voxels the surface passes through");
+  return mode;
+}
+const JobMode& solid_and_surface_mode() {
+  static const BinaryMode mode(to_string(VoxelMode::solid_and_surface), VoxelMode::solid_and_surface,
+                               "bits: both, the solid and every voxel the surface passes through");
+  return mode;
+}
+
+}  // namespace voxd::api

@@ -1,0 +1,113 @@
+#include "api/modes/coverage_mode.h"
+
+#include <nlohmann/json.hpp>
+
+#include "api/job_params.h"
+#include "api/param_validator.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd::api {
+namespace {
+
+using nlohmann::json;
+
+void parse_coverage(ParamValidator& val, const json& c, CoverageParams& out) {
+  const std::string path = "/coverage";
+  if (!val.is_object(c, path)) return;
+  val.allow_keys(c, path, {"sampling", "rays", "points", "seed", "threshold", "values"});
+  if (auto s = val.one_of(c, path, "sampling", {"exact", "uniform", "stochastic"}))
+    out.options.sampling = *s == "exact" ? CoverageSampling::exact : *s == "uniform" ? CoverageSampling::uniform
+                                                                                      : CoverageSampling::stochastic;
+  if (auto k = val.integer(c, path, "rays", 1, 64)) out.options.rays = static_cast<int>(*k);
+  if (auto m = val.integer(c, path, "points", 1, 256)) out.options.points = static_cast<int>(*m);
+  // Options that the chosen sampling would silently ignore are refused, so a
+  // client never believes it set something it did not.
+  if (c.contains("points") && out.options.sampling != CoverageSampling::uniform)
+    val.fail(path + "/points", "points per voxel apply only to sampling \"uniform\" (the paper's point sampling); "
+                               "\"exact\" and \"stochastic\" integrate along each ray exactly");
+  if (c.contains("seed")) {
+    const json& v = c.at("seed");
+    if (!v.is_number_integer() || (v.is_number_integer() && !v.is_number_unsigned() && v.get<std::int64_t>() < 0))
+      val.fail(path + "/seed", "must be a non-negative integer, got " + brief_json(v));
+    else
+      out.options.seed = v.get<std::uint64_t>();
+    if (out.options.sampling != CoverageSampling::stochastic)
+      val.fail(path + "/seed", "the seed applies only to sampling \"stochastic\" (the other samplings place rays regularly)");
+  }
+  if (auto t = val.number(c, path, "threshold", 0.0, 1.0, true)) out.threshold = static_cast<float>(*t);
+  if (auto v = val.one_of(c, path, "values", {"u8", "f32"})) out.float_values = *v == "f32";
+  if (c.contains("threshold") && c.contains("values"))
+    val.fail(path + "/values", "with a threshold the volume is bits (coverage >= threshold); drop one of the two");
+}
+
+class CoverageMode final : public JobMode {
+ public:
+  std::string_view name() const override { return "coverage"; }
+  std::string_view summary() const override {
+    return "each voxel's share inside (Thon): bytes 0..255, \"values\": \"f32\" for fractions, bits with a threshold";
+  }
+  bool has_options() const override { return true; }
+
+  std::shared_ptr<ModeOptions> parse_options(ParamValidator& val, const json* options, const JobParams&) const override {
+    auto out = std::make_shared<CoverageParams>();
+    if (options) parse_coverage(val, *options, *out);
+    return out;
+  }
+
+  void complete(ParamValidator& val, const json& job, JobParams&) const override {
+    if (job.contains("inside"))
+      val.fail("/inside", std::string(name()) + " counts crossings along rays (parity); the inside test does not apply to it");
+  }
+
+  std::optional<ValueVolume> value_type(const JobParams& params) const override {
+    const CoverageParams& c = options(params);
+    if (c.threshold) return std::nullopt;
+    if (c.float_values) return ValueVolume(DenseVolume<float>());
+    return ValueVolume(DenseVolume<std::uint8_t>());
+  }
+
+  // Coverage is computed as one float per voxel; bytes are made from the
+  // floats (both alive for a moment).
+  std::uint64_t memory_estimate(const Grid& grid, const JobParams& params) const override {
+    return bit_volumes_memory(grid, VoxelMode::solid, params.inside) + 4 * grid.voxel_count() +
+           (options(params).float_values ? 0 : grid.voxel_count());
+  }
+
+  // The solid is the parity solid of its crossings; a threshold makes the
+  // job's bits from the values instead.
+  bool needs_parity_solid(const JobParams& params) const override { return !options(params).threshold; }
+
+  ModeResult run(const ModeInput& in) const override {
+    const CoverageParams& c = options(in.params);
+    CoverageOptions o = c.options;
+    o.threads = in.threads;
+    DenseVolume<float> coverage = voxelize_coverage(in.mesh, in.grid, o, in.control);
+    ModeResult result;
+    result.values_info = {{"quantity", "coverage"},
+                          {"sampling", to_string(o.sampling)},
+                          {"covered_volume", covered_voxels(coverage, in.threads) * in.grid.voxel_volume()}};
+    if (c.threshold) {
+      result.volume = coverage_threshold(coverage, *c.threshold);
+      result.values_info["threshold"] = *c.threshold;
+    } else if (c.float_values) {
+      result.values = std::move(coverage);
+      result.values_info["unit"] = "fraction of the voxel";
+    } else {
+      result.values = coverage_bytes(coverage, in.threads);
+      result.values_info["unit"] = "fraction of the voxel x 255";
+    }
+    return result;
+  }
+
+ private:
+  static const CoverageParams& options(const JobParams& params) { return *params.options_as<CoverageParams>(); }
+};
+
+}  // namespace
+
+const JobMode& coverage_mode() {
+  static const CoverageMode mode;
+  return mode;
+}
+
+}  // namespace voxd::api
