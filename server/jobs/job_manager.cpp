@@ -16,7 +16,11 @@
 #include "server/jobs/content_hash.h"
 #include "server/jobs/job_analyses.h"
 #include "server/jobs/job_record.h"
+#include "server/jobs/job_events.h"
+#include "server/jobs/job_queue.h"
 #include "server/jobs/job_store.h"
+#include "server/jobs/local_job_store.h"
+#include "server/jobs/volume_cache.h"
 #include "server/log_safe.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
@@ -78,124 +82,52 @@ struct Job {
 struct JobManager::Impl {
   explicit Impl(JobManagerConfig c)
       : config(std::move(c)),
-        store(config.data_dir),
+        store(config.store ? config.store : std::make_shared<LocalJobStore>(config.data_dir)),
+        queue(config.queue ? config.queue : std::make_shared<InProcessJobQueue>(config.queue_size)),
+        events(config.on_state_change),
         budget(config.memory_budget ? config.memory_budget : available_memory() / 10 * 6) {}
 
   JobManagerConfig config;
-  JobStore store;
+  // The seams a shared backend replaces (server/jobs/job_store.h, job_queue.h).
+  std::shared_ptr<JobStore> store;
+  std::shared_ptr<JobQueue> queue;
+  JobEvents events;
+  VolumeCache cache{std::size_t{1} << 30};
   MemoryBudget budget;
   int engine_threads = 0;
 
+  // The job table: every job this process knows, by id.
   mutable std::mutex mutex;
-  std::condition_variable work_cv;      // workers wait here for jobs
   std::condition_variable finished_cv;  // synchronous callers wait here
   std::condition_variable expiry_cv;
   std::unordered_map<std::string, std::shared_ptr<Job>> jobs;
-  std::deque<std::shared_ptr<Job>> queue;
   std::unordered_map<std::string, std::string> succeeded_by_hash;  // content hash -> job id
   bool accepting = true;
   bool stopping = false;
   double recent_job_seconds = 1.0;  // moving average, for Retry-After
 
-  // Recently used result volumes (a job's solid under its id, its layers of
-  // values under id + "/" + name), so streaming a fresh result reads no disk.
-  static constexpr std::size_t kCacheBytes = std::size_t{1} << 30;
-  static std::string layer_key(const std::string& id, const std::string& name) { return id + "/" + name; }
-  struct CacheEntry {
-    std::string key;
-    std::shared_ptr<const void> item;
-    std::size_t bytes;
-  };
-  std::list<CacheEntry> cache;
-  std::size_t cache_bytes = 0;
-
   std::vector<std::thread> workers;
   std::thread expirer;
   bool shut_down = false;
 
-  // State changes are queued under `mutex` in the order they happen and handed
-  // to the listener outside it, one at a time and in that order: a worker that
-  // starts a job the instant it is queued must not report "running" before the
-  // submitter reports "queued".
-  std::deque<JobSnapshot> pending_events;  // guarded by mutex
-  std::mutex delivery_mutex;
-
-  void announce(const JobSnapshot& s) {  // caller holds mutex
-    if (config.on_state_change) pending_events.push_back(s);
-  }
-
-  void deliver() {  // caller holds no lock
-    if (!config.on_state_change) return;
-    std::lock_guard delivering(delivery_mutex);
-    for (;;) {
-      JobSnapshot event;
-      {
-        std::lock_guard lock(mutex);
-        if (pending_events.empty()) return;
-        event = std::move(pending_events.front());
-        pending_events.pop_front();
-      }
-      try {
-        config.on_state_change(event);
-      } catch (const std::exception& e) {
-        spdlog::error("job state listener failed: {}", e.what());
-      }
-    }
-  }
+  void announce(const JobSnapshot& s) { events.announce(s); }  // caller holds mutex: the table's order
+  void deliver() { events.deliver(); }                         // caller holds no lock
 
   void persist(Job& job, const JobSnapshot& s) const {
     if (job.ephemeral) return;
     std::lock_guard guard(job.store_mutex);
     if (job.removed) return;
     try {
-      store.save(s);
+      store->save(s);
     } catch (const std::exception& e) {
       spdlog::error("job {}: cannot write its record: {}", s.id, e.what());
     }
   }
 
-  // Require the lock.
-  void cache_put(const std::string& key, std::shared_ptr<const void> item, std::size_t bytes) {
-    cache_erase(key);
-    cache_bytes += bytes;
-    cache.push_front({key, std::move(item), bytes});
-    while (cache_bytes > kCacheBytes && cache.size() > 1) {
-      cache_bytes -= cache.back().bytes;
-      cache.pop_back();
-    }
-  }
   void cache_put(const std::string& id, const JobOutput& output) {
-    if (output.values) cache_put(layer_key(id, "values"), output.values, byte_size(*output.values));
-    for (const auto& [name, layer] : output.layers) cache_put(layer_key(id, name), layer, byte_size(*layer));
-    cache_put(id, output.solid, output.solid->byte_size());
-  }
-  void cache_erase(const std::string& key) {
-    for (auto it = cache.begin(); it != cache.end(); ++it)
-      if (it->key == key) {
-        cache_bytes -= it->bytes;
-        cache.erase(it);
-        return;
-      }
-  }
-  void cache_drop(const std::string& id) {
-    const std::string prefix = id + "/";
-    for (auto it = cache.begin(); it != cache.end();) {
-      if (it->key == id || it->key.rfind(prefix, 0) == 0) {
-        cache_bytes -= it->bytes;
-        it = cache.erase(it);
-      } else {
-        ++it;
-      }
-    }
-  }
-  template <class T>
-  std::shared_ptr<const T> cache_get(const std::string& key) {
-    for (auto it = cache.begin(); it != cache.end(); ++it)
-      if (it->key == key) {
-        cache.splice(cache.begin(), cache, it);
-        return std::static_pointer_cast<const T>(it->item);
-      }
-    return nullptr;
+    if (output.values) cache.put(VolumeCache::layer_key(id, "values"), output.values, byte_size(*output.values));
+    for (const auto& [name, layer] : output.layers) cache.put(VolumeCache::layer_key(id, name), layer, byte_size(*layer));
+    cache.put(id, output.solid, output.solid->byte_size());
   }
 
   JobSnapshot snapshot_of(const Job& job) const {
@@ -221,12 +153,12 @@ struct JobManager::Impl {
     view.values = r.values_info;
     const std::string id = view.id;
     const ArtifactAccess artifacts{
-        id, [this, id](const std::string& key) { return store.load_artifact(id, key); },
+        id, [this, id](const std::string& key) { return store->load_artifact(id, key); },
         [this, &job, id](const std::string& key, const std::string& bytes) {
           std::lock_guard guard(job.store_mutex);
           if (job.removed) return;
           try {
-            store.save_artifact(id, key, bytes);
+            store->save_artifact(id, key, bytes);
           } catch (const std::exception& e) {
             spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
           }
@@ -272,7 +204,7 @@ struct JobManager::Impl {
     s.started_at = format_time(Clock::now());
     if (!job.ephemeral && !job.removed) {
       try {
-        store.save(s);
+        store->save(s);
       } catch (const std::exception& e) {
         spdlog::error("job {}: cannot write its record: {}", s.id, e.what());
       }
@@ -287,19 +219,25 @@ struct JobManager::Impl {
 
   void work() {
     for (;;) {
+      const std::optional<std::string> id = queue->take();
+      if (!id) return;  // closed: the service stops
       std::shared_ptr<Job> job;
       PreparedVoxelJob prepared;
       {
-        std::unique_lock lock(mutex);
-        work_cv.wait(lock, [&] { return stopping || !queue.empty(); });
-        if (stopping) return;
-        job = queue.front();
-        queue.pop_front();
-        if (job->snap.state != JobState::queued) continue;  // cancelled while waiting
+        std::lock_guard lock(mutex);
+        auto it = jobs.find(*id);
+        if (it == jobs.end() || it->second->snap.state != JobState::queued || !it->second->prepared) {
+          queue->ack(*id);  // cancelled while waiting
+          continue;
+        }
+        job = it->second;
         prepared = std::move(*job->prepared);
         job->prepared.reset();
       }
-      if (!mark_running(*job)) continue;  // cancelled meanwhile
+      if (!mark_running(*job)) {  // cancelled meanwhile
+        queue->ack(*id);
+        continue;
+      }
       deliver();
       const auto t0 = std::chrono::steady_clock::now();
       JobSnapshot done;
@@ -314,9 +252,9 @@ struct JobManager::Impl {
         for (auto& [name, layer] : r.layers)
           output.layers.emplace_back(name, std::make_shared<const ValueVolume>(std::move(layer)));
         if (!job->ephemeral) {
-          store.save_volume(job->snap.id, *output.solid);
-          if (output.values) store.save_layer(job->snap.id, "values", *output.values);
-          for (const auto& [name, layer] : output.layers) store.save_layer(job->snap.id, name, *layer);
+          store->save_volume(job->snap.id, *output.solid);
+          if (output.values) store->save_layer(job->snap.id, "values", *output.values);
+          for (const auto& [name, layer] : output.layers) store->save_layer(job->snap.id, name, *layer);
         }
         nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
         std::lock_guard lock(mutex);
@@ -354,7 +292,7 @@ struct JobManager::Impl {
         // Nothing half-written stays: the disk is not kept full by this job.
         spdlog::error("job {}: cannot store its result: {}", job->snap.id, e.what());
         std::lock_guard guard(job->store_mutex);
-        if (!job->removed) store.remove(job->snap.id);
+        if (!job->removed) store->remove(job->snap.id);
         std::lock_guard lock(mutex);
         job->snap.state = JobState::failed;
         job->snap.failure = JobFailure{"storage-full", "The service's storage is full",
@@ -375,6 +313,7 @@ struct JobManager::Impl {
       }
       job->memory.release();
       persist(*job, done);
+      queue->ack(*id);
       deliver();
       finished_cv.notify_all();
     }
@@ -410,7 +349,7 @@ struct JobManager::Impl {
   void remove_from_store(Job& job) const {
     std::lock_guard guard(job.store_mutex);
     job.removed = true;
-    store.remove(job.snap.id);
+    store->remove(job.snap.id);
   }
 
   // Requires the lock.
@@ -419,13 +358,13 @@ struct JobManager::Impl {
     if (it == jobs.end()) return;
     auto h = succeeded_by_hash.find(it->second->snap.content_hash);
     if (h != succeeded_by_hash.end() && h->second == id) succeeded_by_hash.erase(h);
-    cache_drop(id);
+    cache.drop_job(id);
     jobs.erase(it);
   }
 
   int retry_after() const {
     const int workers_n = std::max<int>(1, static_cast<int>(workers.size()));
-    const double seconds = recent_job_seconds * static_cast<double>(queue.size() + 1) / workers_n;
+    const double seconds = recent_job_seconds * static_cast<double>(queue->depth() + 1) / workers_n;
     return std::clamp(static_cast<int>(std::ceil(seconds)), 1, 3600);
   }
 
@@ -439,12 +378,12 @@ JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(s
   // Jobs a previous process left queued or running are reported failed with
   // reason "interrupted" rather than silently re-run: a client polling them
   // learns what happened and decides whether to resubmit.
-  for (JobSnapshot s : m.store.load_all()) {
+  for (JobSnapshot s : m.store->load_all()) {
     if (!finished(s.state)) {
       s.failure = interrupted(s.state == JobState::queued ? "queued" : "running");
       s.state = JobState::failed;
       s.finished_at = format_time(Clock::now());
-      m.store.save(s);
+      m.store->save(s);
     }
     if (s.state == JobState::succeeded) {
       auto prev = m.succeeded_by_hash.find(s.content_hash);
@@ -471,13 +410,13 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   {
     std::lock_guard lock(mutex);
     if (!accepting) throw NotAccepting("the service is shutting down and accepts no new jobs");
-    if (queue.size() >= config.queue_size)
+    if (queue->depth() >= config.queue_size)
       throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later",
                       retry_after());
   }
   const auto parsed = std::make_shared<const api::JobParams>(api::parse_job_params(params_json));
   const api::JobParams& params = *parsed;
-  if (!ephemeral && store.free_bytes() < config.min_free_disk)
+  if (!ephemeral && store->free_bytes() < config.min_free_disk)
     throw StorageFull("the service's disk has less than " + std::to_string(config.min_free_disk >> 20) +
                       " MiB free and takes no new jobs until results expire or are deleted; retry later");
   // Synchronous jobs are never stored, so never answered from the store: they
@@ -502,8 +441,8 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
       s.timings.clear();
       s.analyses = analyses_status(params.analyses, s.id, "on_request");
       try {
-        store.share_volume(original->id, s.id);
-        store.save(s);
+        store->share_volume(original->id, s.id);
+        store->save(s);
         auto job = std::make_shared<Job>();
         job->snap = s;
         {
@@ -514,7 +453,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
         return nullptr;
       } catch (const std::exception& e) {
         // The original was deleted meanwhile: fall through and compute.
-        store.remove(s.id);
+        store->remove(s.id);
         spdlog::info("job cache miss for {}: {}", original->id, e.what());
       }
     }
@@ -563,21 +502,20 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   job->prepared = std::move(prepared);
   // Recorded before a worker can see it, so the final record always wins. A
   // job that cannot be recorded is not accepted (a full disk is a 507).
-  if (!ephemeral) store.save(s);
+  if (!ephemeral) store->save(s);
   {
     std::lock_guard lock(mutex);
-    if (!accepting || queue.size() >= config.queue_size) {
-      const bool closing = !accepting;
+    // Queued under the table's lock: a worker that takes it at once finds it.
+    const bool closing = !accepting;
+    if (closing || !queue->submit(s.id)) {
       const int wait = retry_after();
-      if (!ephemeral) store.remove(s.id);
+      if (!ephemeral) store->remove(s.id);
       if (closing) throw NotAccepting("the service is shutting down and accepts no new jobs");
       throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later", wait);
     }
     jobs.emplace(s.id, job);
-    queue.push_back(job);
     announce(s);
   }
-  work_cv.notify_one();
   deliver();
   return job;
 }
@@ -631,6 +569,7 @@ JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
     target = it->second;
     Job& job = *target;
     if (job.snap.state == JobState::queued) {
+      impl_->queue->cancel(id);
       job.snap.state = JobState::cancelled;
       job.snap.finished_at = format_time(Clock::now());
       job.prepared.reset();
@@ -655,7 +594,7 @@ JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
 }
 
 std::optional<std::string> JobManager::load_artifact(const std::string& id, const std::string& key) const {
-  return impl_->store.load_artifact(id, key);
+  return impl_->store->load_artifact(id, key);
 }
 
 void JobManager::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) {
@@ -669,7 +608,7 @@ void JobManager::save_artifact(const std::string& id, const std::string& key, co
   std::lock_guard guard(job->store_mutex);
   if (job->removed) return;  // deleted meanwhile: do not bring its directory back
   try {
-    impl_->store.save_artifact(id, key, bytes);
+    impl_->store->save_artifact(id, key, bytes);
   } catch (const std::exception& e) {
     spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
   }
@@ -680,12 +619,12 @@ std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
     std::lock_guard lock(impl_->mutex);
     auto it = impl_->jobs.find(id);
     if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
-    if (auto v = impl_->cache_get<BitVolume>(id)) return v;
   }
-  auto v = impl_->store.load_volume(id);
+  if (auto v = impl_->cache.get<BitVolume>(id)) return v;
+  auto v = impl_->store->load_volume(id);
   if (v) {
     std::lock_guard lock(impl_->mutex);
-    if (impl_->jobs.count(id)) impl_->cache_put(id, v, v->byte_size());
+    if (impl_->jobs.count(id)) impl_->cache.put(id, v, v->byte_size());
   }
   return v;
 }
@@ -700,17 +639,17 @@ std::shared_ptr<const ValueVolume> JobManager::values(const std::string& id) {
 }
 
 std::shared_ptr<const ValueVolume> JobManager::layer(const std::string& id, const std::string& name) {
-  const std::string key = Impl::layer_key(id, name);
+  const std::string key = VolumeCache::layer_key(id, name);
   {
     std::lock_guard lock(impl_->mutex);
     auto it = impl_->jobs.find(id);
     if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
-    if (auto v = impl_->cache_get<ValueVolume>(key)) return v;
   }
-  auto v = impl_->store.load_layer(id, name);
+  if (auto v = impl_->cache.get<ValueVolume>(key)) return v;
+  auto v = impl_->store->load_layer(id, name);
   if (v) {
     std::lock_guard lock(impl_->mutex);
-    if (impl_->jobs.count(id)) impl_->cache_put(key, v, byte_size(*v));
+    if (impl_->jobs.count(id)) impl_->cache.put(key, v, byte_size(*v));
   }
   return v;
 }
@@ -730,6 +669,7 @@ JobOutput JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::
     cancelled = true;
     spdlog::info("job {}: the client of a synchronous request went away; cancelling", job->snap.id);
     if (job->snap.state == JobState::queued) {
+      impl_->queue->cancel(job->snap.id);
       job->snap.state = JobState::cancelled;  // the worker skips it
       job->snap.finished_at = format_time(Clock::now());
       job->prepared.reset();
@@ -755,7 +695,7 @@ JobCounts JobManager::counts() const {
       case JobState::cancelled: ++c.cancelled; break;
     }
   }
-  c.queue_depth = impl_->queue.size();
+  c.queue_depth = impl_->queue->depth();
   return c;
 }
 
@@ -765,7 +705,7 @@ MemoryBudget::Reservation JobManager::reserve_memory(std::uint64_t bytes, const 
 
 std::uint64_t JobManager::memory_budget() const { return impl_->budget.total(); }
 std::uint64_t JobManager::memory_in_use() const { return impl_->budget.used(); }
-bool JobManager::storage_ok() const { return impl_->store.free_bytes() >= impl_->config.min_free_disk; }
+bool JobManager::storage_ok() const { return impl_->store->free_bytes() >= impl_->config.min_free_disk; }
 
 bool JobManager::accepting() const {
   std::lock_guard lock(impl_->mutex);
@@ -781,7 +721,10 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
     m.shut_down = true;
     m.accepting = false;
     // Queued jobs will not run in this process: record them as interrupted.
-    for (auto& job : m.queue) {
+    for (const std::string& id : m.queue->close()) {
+      auto it = m.jobs.find(id);
+      if (it == m.jobs.end()) continue;
+      const std::shared_ptr<Job>& job = it->second;
       if (job->snap.state != JobState::queued) continue;
       job->snap.state = JobState::failed;
       job->snap.failure = interrupted("queued");
@@ -791,7 +734,6 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
       abandoned.push_back(job->snap);
       m.announce(job->snap);
     }
-    m.queue.clear();
     auto running = [&] {
       for (const auto& [id, job] : m.jobs)
         if (job->snap.state == JobState::running) return true;
@@ -807,10 +749,9 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
     }
     m.stopping = true;
   }
-  for (const auto& s : abandoned) m.store.save(s);
+  for (const auto& s : abandoned) m.store->save(s);
   m.deliver();
   m.finished_cv.notify_all();
-  m.work_cv.notify_all();
   m.expiry_cv.notify_all();
   for (auto& t : m.workers) t.join();
   if (m.expirer.joinable()) m.expirer.join();

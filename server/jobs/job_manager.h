@@ -1,8 +1,11 @@
 #pragma once
-// The service's job engine: a bounded queue feeding worker threads, a job
-// table with states and progress, results persisted in an on-disk store that
-// survives restarts, and expiry. No HTTP here: server/http turns requests into
-// these calls and these results into responses.
+// The service's job engine: the job table (states, progress, the identical-
+// submission index) and the worker loop, over parts with seams: a queue
+// (server/jobs/job_queue.h), a store of records and result blobs
+// (job_store.h), a volume cache (volume_cache.h), event delivery
+// (job_events.h) and memory admission (memory_budget.h). No HTTP here:
+// server/http turns requests into these calls and these results into
+// responses.
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -77,7 +80,15 @@ struct JobOutput {
   std::vector<std::pair<std::string, std::shared_ptr<const ValueVolume>>> layers;
 };
 
+class JobQueue;  // server/jobs/job_queue.h
+class JobStore;  // server/jobs/job_store.h
+
 struct JobManagerConfig {
+  // Where jobs wait and where they are kept: null = the embedded ones (an
+  // in-process queue of queue_size, the data directory). Replicas sharing one
+  // backend pass theirs.
+  std::shared_ptr<JobQueue> queue;
+  std::shared_ptr<JobStore> store;
   int workers = 0;              // 0 = hardware concurrency
   std::size_t queue_size = 64;  // jobs waiting (not running) at most
   std::filesystem::path data_dir = "voxd-data";

@@ -1,4 +1,5 @@
-#include "server/jobs/job_store.h"
+#include "server/jobs/local_job_store.h"
+
 #include "api/analysis_json.h"
 
 #include <sstream>
@@ -65,19 +66,19 @@ void write_atomically(const fs::path& target, WriteFn&& write) {
 
 }  // namespace
 
-std::uint64_t JobStore::free_bytes() const {
+std::uint64_t LocalJobStore::free_bytes() const {
   struct statvfs s {};
   if (::statvfs(jobs_.c_str(), &s) != 0) return UINT64_MAX;  // unknown: do not refuse on it
   return static_cast<std::uint64_t>(s.f_bavail) * s.f_frsize;
 }
 
-JobStore::JobStore(fs::path data_dir) : jobs_(std::move(data_dir) / "jobs") {
+LocalJobStore::LocalJobStore(fs::path data_dir) : jobs_(std::move(data_dir) / "jobs") {
   std::error_code ec;
   fs::create_directories(jobs_, ec);
   if (ec) throw Error(ErrorCode::io_error, "cannot create data directory '" + jobs_.string() + "': " + ec.message());
 }
 
-std::vector<JobSnapshot> JobStore::load_all() const {
+std::vector<JobSnapshot> LocalJobStore::load_all() const {
   std::vector<JobSnapshot> jobs;
   for (const auto& entry : fs::directory_iterator(jobs_)) {
     if (!entry.is_directory()) continue;
@@ -95,7 +96,7 @@ std::vector<JobSnapshot> JobStore::load_all() const {
   return jobs;
 }
 
-void JobStore::save(const JobSnapshot& job) const {
+void LocalJobStore::save(const JobSnapshot& job) const {
   make_dirs(job_dir(job.id));
   nlohmann::json record = to_json(job);
   if (job.mesh_mass) record["mesh_mass"] = api::to_json(*job.mesh_mass);
@@ -103,7 +104,7 @@ void JobStore::save(const JobSnapshot& job) const {
   write_atomically(job_dir(job.id) / "record.json", [&](ByteSink& sink) { sink.write(text.data(), text.size()); });
 }
 
-std::optional<std::string> JobStore::load_artifact(const std::string& id, const std::string& key) const {
+std::optional<std::string> LocalJobStore::load_artifact(const std::string& id, const std::string& key) const {
   std::ifstream in(job_dir(id) / "artifacts" / key, std::ios::binary);
   if (!in) return std::nullopt;
   std::ostringstream text;
@@ -111,23 +112,23 @@ std::optional<std::string> JobStore::load_artifact(const std::string& id, const 
   return text.str();
 }
 
-void JobStore::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const {
+void LocalJobStore::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const {
   make_dirs(job_dir(id) / "artifacts");
   write_atomically(job_dir(id) / "artifacts" / key, [&](ByteSink& sink) { sink.write(bytes.data(), bytes.size()); });
 }
 
-void JobStore::save_volume(const std::string& id, const BitVolume& volume) const {
+void LocalJobStore::save_volume(const std::string& id, const BitVolume& volume) const {
   make_dirs(job_dir(id));
   write_atomically(job_dir(id) / "volume.rle", [&](ByteSink& sink) { write_rle(volume, sink); });
 }
 
-void JobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {
+void LocalJobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {
   make_dirs(job_dir(id));
   const std::string file = name + "." + value_type_name(values) + ".rle";
   write_atomically(job_dir(id) / file, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
 }
 
-void JobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
+void LocalJobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
   make_dirs(job_dir(to_id));
   // The volume must be there (else the original is gone: throw); then every
   // layer of values the original has.
@@ -156,13 +157,13 @@ constexpr ReadLimits kStoredVolumeLimits{std::uint64_t{1} << 36};
 
 }  // namespace
 
-std::shared_ptr<const BitVolume> JobStore::load_volume(const std::string& id) const {
+std::shared_ptr<const BitVolume> LocalJobStore::load_volume(const std::string& id) const {
   const auto bytes = read_file(job_dir(id) / "volume.rle");
   if (!bytes) return nullptr;
   return std::make_shared<const BitVolume>(read_rle_bits(*bytes, kStoredVolumeLimits));
 }
 
-std::shared_ptr<const ValueVolume> JobStore::load_layer(const std::string& id, const std::string& name) const {
+std::shared_ptr<const ValueVolume> LocalJobStore::load_layer(const std::string& id, const std::string& name) const {
   if (const auto bytes = read_file(job_dir(id) / (name + ".u8.rle")))
     return std::make_shared<const ValueVolume>(read_rle_u8(*bytes, kStoredVolumeLimits));
   if (const auto bytes = read_file(job_dir(id) / (name + ".f32.rle")))
@@ -172,7 +173,7 @@ std::shared_ptr<const ValueVolume> JobStore::load_layer(const std::string& id, c
   return nullptr;
 }
 
-void JobStore::remove(const std::string& id) const {
+void LocalJobStore::remove(const std::string& id) const {
   std::error_code ec;
   fs::remove_all(job_dir(id), ec);
   if (ec) spdlog::warn("job store: cannot remove {}: {}", job_dir(id).string(), ec.message());
