@@ -1,6 +1,7 @@
 #include "api/job_mode.h"
 
 #include "api/job_params.h"
+#include "api/param_validator.h"
 #include "voxd/error.h"
 
 namespace voxd::api {
@@ -64,6 +65,11 @@ std::string modes_with(const std::function<bool(const JobMode&)>& has) {
   std::string out;
   for (std::size_t i = 0; i < names.size(); ++i) out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
   return out;
+}
+
+void refuse_inside_test(ParamValidator& val, const nlohmann::json& job, std::string_view mode) {
+  if (job.contains("inside"))
+    val.fail("/inside", std::string(mode) + " counts crossings along rays (parity); the inside test does not apply to it");
 }
 
 std::uint64_t bit_volumes_memory(const Grid& grid, VoxelMode mode, InsideTest inside) {

@@ -154,6 +154,27 @@ class JobMode {
   virtual bool colour_values() const { return false; }
 };
 
+// A mode with an options object of type `Options` (a ModeOptions): it
+// parses them with parse(), called with the object when the job JSON has one
+// and with null when it has none (defaults, or a "required" problem).
+template <class Options>
+class ModeWithOptions : public JobMode {
+ public:
+  bool has_options() const override { return true; }
+  std::shared_ptr<ModeOptions> parse_options(ParamValidator& val, const nlohmann::json* options,
+                                             const JobParams&) const override {
+    auto out = std::make_shared<Options>();
+    parse(val, options, *out);
+    return out;
+  }
+
+ protected:
+  virtual void parse(ParamValidator& val, const nlohmann::json* options, Options& out) const = 0;
+  // The job's options (defined in api/job_params.h, where JobParams is complete).
+  static const Options& options(const JobParams& params);
+  static Options& options(JobParams& params);
+};
+
 // Every mode, in the order the job JSON schema lists them.
 std::span<const JobMode* const> job_modes();
 // The mode named `name`, or null.
@@ -165,5 +186,9 @@ std::string modes_with(const std::function<bool(const JobMode&)>& has);
 // Bytes of the job's bit volumes: one, three for the vote test (its three
 // axes), one more for solid+surface.
 std::uint64_t bit_volumes_memory(const Grid& grid, VoxelMode mode, InsideTest inside);
+
+// For a mode whose solid comes from counting crossings: the inside test does
+// not apply, and a job JSON that sets one is refused.
+void refuse_inside_test(ParamValidator& val, const nlohmann::json& job, std::string_view mode);
 
 }  // namespace voxd::api

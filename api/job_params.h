@@ -47,6 +47,16 @@ struct JobParams {
   }
 };
 
+template <class Options>
+const Options& ModeWithOptions<Options>::options(const JobParams& params) {
+  return *params.template options_as<Options>();
+}
+
+template <class Options>
+Options& ModeWithOptions<Options>::options(JobParams& params) {
+  return const_cast<Options&>(options(static_cast<const JobParams&>(params)));
+}
+
 // Validates and converts. Unknown keys, wrong types and out-of-range values
 // are all reported together in InvalidParams.
 JobParams parse_job_params(const nlohmann::json& params);

@@ -40,23 +40,19 @@ void parse_coverage(ParamValidator& val, const json& c, CoverageParams& out) {
     val.fail(path + "/values", "with a threshold the volume is bits (coverage >= threshold); drop one of the two");
 }
 
-class CoverageMode final : public JobMode {
+class CoverageMode final : public ModeWithOptions<CoverageParams> {
  public:
   std::string_view name() const override { return "coverage"; }
   std::string_view summary() const override {
     return "each voxel's share inside (Thon): bytes 0..255, \"values\": \"f32\" for fractions, bits with a threshold";
   }
-  bool has_options() const override { return true; }
 
-  std::shared_ptr<ModeOptions> parse_options(ParamValidator& val, const json* options, const JobParams&) const override {
-    auto out = std::make_shared<CoverageParams>();
-    if (options) parse_coverage(val, *options, *out);
-    return out;
+  void parse(ParamValidator& val, const json* options, CoverageParams& out) const override {
+    if (options) parse_coverage(val, *options, out);
   }
 
   void complete(ParamValidator& val, const json& job, JobParams&) const override {
-    if (job.contains("inside"))
-      val.fail("/inside", std::string(name()) + " counts crossings along rays (parity); the inside test does not apply to it");
+    refuse_inside_test(val, job, name());
   }
 
   std::optional<ValueVolume> value_type(const JobParams& params) const override {
@@ -98,9 +94,6 @@ class CoverageMode final : public JobMode {
     }
     return result;
   }
-
- private:
-  static const CoverageParams& options(const JobParams& params) { return *params.options_as<CoverageParams>(); }
 };
 
 }  // namespace

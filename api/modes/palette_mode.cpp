@@ -190,23 +190,19 @@ json element_json(const PaletteElement& e, std::size_t index) {
   return {{"index", index}, {"name", e.name}, {"pieces", std::move(pieces)}, {"volume", element_volume(e)}};
 }
 
-class PaletteMode final : public JobMode {
+class PaletteMode final : public ModeWithOptions<PaletteParams> {
  public:
   std::string_view name() const override { return "palette"; }
   std::string_view summary() const override {
     return "each voxel's palette element (Cavagnino & Gribaudo): bytes, or the reconstruction as stl or glb";
   }
-  bool has_options() const override { return true; }
 
-  std::shared_ptr<ModeOptions> parse_options(ParamValidator& val, const json* options, const JobParams&) const override {
-    auto out = std::make_shared<PaletteParams>();
-    if (options) parse_palette(val, *options, *out);
-    return out;
+  void parse(ParamValidator& val, const json* options, PaletteParams& out) const override {
+    if (options) parse_palette(val, *options, out);
   }
 
   void complete(ParamValidator& val, const json& job, JobParams& params) const override {
-    if (job.contains("inside"))
-      val.fail("/inside", std::string(name()) + " counts crossings along rays (parity); the inside test does not apply to it");
+    refuse_inside_test(val, job, name());
     if (job.contains("mode") && options(params).voxel_aspect != glm::dvec3(1.0) &&
         params.grid.kind == GridRequest::Kind::explicit_grid)
       val.fail("/palette/voxel_aspect",
@@ -326,9 +322,6 @@ class PaletteMode final : public JobMode {
     }
     return body;
   }
-
- private:
-  static const PaletteParams& options(const JobParams& params) { return *params.options_as<PaletteParams>(); }
 };
 
 }  // namespace

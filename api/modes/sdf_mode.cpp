@@ -32,23 +32,19 @@ void parse_sdf(ParamValidator& val, const json& d, SdfOptions& out) {
   if (auto u = val.one_of(d, path, "units", {"model", "voxels"})) out.model_units = *u == "model";
 }
 
-class SdfMode final : public JobMode {
+class SdfMode final : public ModeWithOptions<SdfParams> {
  public:
   std::string_view name() const override { return "sdf"; }
   std::string_view summary() const override {
     return "signed distance to the surface (Jones): float32 (rle, raw or nrrd; binvox holds no floats)";
   }
-  bool has_options() const override { return true; }
-
-  std::shared_ptr<ModeOptions> parse_options(ParamValidator& val, const json* options, const JobParams&) const override {
-    auto out = std::make_shared<SdfParams>();
-    if (options) parse_sdf(val, *options, *out);
-    return out;
+  // The sign comes from the job's inside test.
+  void parse(ParamValidator& val, const json* options, SdfParams& out) const override {
+    if (options) parse_sdf(val, *options, out);
   }
 
-  // The sign comes from the job's inside test.
   void complete(ParamValidator&, const json&, JobParams& params) const override {
-    static_cast<SdfParams&>(*params.options).inside = params.inside;
+    options(params).inside = params.inside;
   }
 
   std::optional<ValueVolume> value_type(const JobParams&) const override { return ValueVolume(DenseVolume<float>()); }
@@ -81,9 +77,6 @@ class SdfMode final : public JobMode {
   std::optional<SdfRenderInput> distance_field(const JobParams& params, const ValueVolume& values) const override {
     return sdf_render_input(std::get<DenseVolume<float>>(values), options(params));
   }
-
- private:
-  static const SdfParams& options(const JobParams& params) { return *params.options_as<SdfParams>(); }
 };
 
 }  // namespace

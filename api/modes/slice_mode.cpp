@@ -122,26 +122,22 @@ void parse_slice(ParamValidator& val, const json& d, SliceOptions& out) {
   }
 }
 
-class SliceMode final : public JobMode {
+class SliceMode final : public ModeWithOptions<SliceParams> {
  public:
   std::string_view name() const override { return "slice"; }
   std::string_view summary() const override {
     return "an RGBA colour per voxel from a slice function (needs \"function\"): vox, png-stack, rle or raw";
   }
-  bool has_options() const override { return true; }
-
-  std::shared_ptr<ModeOptions> parse_options(ParamValidator& val, const json* options, const JobParams&) const override {
-    auto out = std::make_shared<SliceParams>();
+  // Which voxels are coloured is the job's inside test.
+  void parse(ParamValidator& val, const json* options, SliceParams& out) const override {
     if (options)
-      parse_slice(val, *options, *out);
+      parse_slice(val, *options, out);
     else
       val.fail("/slice", "required with mode \"slice\": at least {\"function\": ...}");
-    return out;
   }
 
-  // Which voxels are coloured is the job's inside test.
   void complete(ParamValidator&, const json&, JobParams& params) const override {
-    static_cast<SliceParams&>(*params.options).inside = params.inside;
+    options(params).inside = params.inside;
   }
 
   std::optional<ValueVolume> value_type(const JobParams&) const override { return ValueVolume(DenseVolume<Rgba8>()); }
@@ -175,9 +171,6 @@ class SliceMode final : public JobMode {
     result.values = std::move(colours);
     return result;
   }
-
- private:
-  static const SliceParams& options(const JobParams& params) { return *params.options_as<SliceParams>(); }
 };
 
 }  // namespace
