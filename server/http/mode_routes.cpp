@@ -1,5 +1,6 @@
 #include "server/http/mode_routes.h"
 
+#include <algorithm>
 #include <string>
 
 #include <httplib.h>

@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <condition_variable>
-#include <deque>
-#include <list>
 #include <mutex>
 #include <random>
 #include <thread>
@@ -103,7 +101,7 @@ struct JobManager::Impl {
   std::unordered_map<std::string, std::shared_ptr<Job>> jobs;
   std::unordered_map<std::string, std::string> succeeded_by_hash;  // content hash -> job id
   bool accepting = true;
-  bool stopping = false;
+  bool stopping = false;  // the expiry loop ends (workers end when the queue is closed)
   double recent_job_seconds = 1.0;  // moving average, for Retry-After
 
   std::vector<std::thread> workers;
