@@ -7,7 +7,9 @@
 
 #include "api/analysis_request.h"
 #include "api/param_error.h"
+#include "server/http/job_lookup.h"
 #include "server/http/problem.h"
+#include "server/http/route_table.h"
 #include "server/jobs/job_analyses.h"
 #include "server/jobs/job_manager.h"
 
@@ -23,17 +25,10 @@ struct FinishedJob {
 };
 
 FinishedJob finished_job(JobManager& jobs, const std::string& id) {
-  auto unknown = [&] {
-    return ProblemError(make_problem(404, "not-found", "Unknown job", "no job with id " + id + " (it may have expired or been deleted)"));
-  };
-  const auto job = jobs.get(id);
-  if (!job) throw unknown();
-  if (job->state != JobState::succeeded)
-    throw ProblemError(make_problem(409, "job-not-finished", "The job has no volume yet",
-                                    std::string("the job is ") + to_string(job->state) + "; its analyses exist once it has succeeded"));
+  JobSnapshot job = succeeded_job(jobs, id, "volume", "its analyses exist");
   JobOutput output{jobs.volume(id), jobs.values(id), {}};
-  if (!output.solid || (job->has_value_volume() && !output.values)) throw unknown();
-  return {*job, std::move(output)};
+  if (!output.solid || (job.has_value_volume() && !output.values)) throw unknown_job(id);
+  return {std::move(job), std::move(output)};
 }
 
 ProblemError invalid_query(const std::string& detail) {
@@ -54,14 +49,10 @@ api::AnalysisRequest request_of(api::AnalysisKind kind, const Request& req) {
 
 }  // namespace
 
-std::vector<std::string> install_analysis_routes(httplib::Server& server, JobManager& jobs, const std::string& job_path,
-                                                 const Guard& guarded) {
-  std::vector<std::string> patterns;
+void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
   for (api::AnalysisKind kind : {api::AnalysisKind::analysis, api::AnalysisKind::radiography, api::AnalysisKind::section,
                                  api::AnalysisKind::preview, api::AnalysisKind::thickness}) {
-    const std::string pattern = job_path + "/" + to_string(kind);
-    patterns.push_back(pattern);
-    server.Get(pattern, guarded([&jobs, kind](const Request& req, Response& res) {
+    routes.get(kJobPath + "/" + to_string(kind), [&jobs, kind](const Request& req, Response& res) {
       const std::string id = req.matches[1];
       const api::AnalysisRequest request = request_of(kind, req);
       const FinishedJob job = finished_job(jobs, id);
@@ -78,9 +69,8 @@ std::vector<std::string> install_analysis_routes(httplib::Server& server, JobMan
       for (const auto& [name, value] : analysis_headers(request, job.snapshot.grid)) res.set_header(name, value);
       res.set_header("X-Voxd-Cache", result.kept ? "hit" : "miss");
       res.set_content(std::move(result.bytes), request.content_type());
-    }));
+    });
   }
-  return patterns;
 }
 
 }  // namespace voxd::server

@@ -7,7 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include "api/job_params.h"
+#include "server/http/job_lookup.h"
 #include "server/http/problem.h"
+#include "server/http/route_table.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/png_stack.h"
 
@@ -16,19 +18,6 @@ namespace {
 
 using httplib::Request;
 using httplib::Response;
-
-ProblemError unknown_job(const std::string& id) {
-  return ProblemError(make_problem(404, "not-found", "Unknown job", "no job with id " + id + " (it may have expired or been deleted)"));
-}
-
-JobSnapshot succeeded_job(JobManager& jobs, const std::string& id) {
-  const auto job = jobs.get(id);
-  if (!job) throw unknown_job(id);
-  if (job->state != JobState::succeeded)
-    throw ProblemError(make_problem(409, "job-not-finished", "The job has no result yet",
-                                    std::string("the job is ") + to_string(job->state) + "; its result exists once it has succeeded"));
-  return *job;
-}
 
 ProblemError wrong_mode(const JobSnapshot& job, const std::string& what, const std::function<bool(const api::JobMode&)>& has) {
   return ProblemError(make_problem(409, "wrong-mode", "Not available for this job's mode",
@@ -60,30 +49,25 @@ std::shared_ptr<const ValueVolume> job_layer(JobManager& jobs, const JobSnapshot
   }
 }
 
-std::vector<std::string> install_mode_routes(httplib::Server& server, JobManager& jobs, const std::string& job_path,
-                                             const Guard& guarded) {
-  std::vector<std::string> patterns;
+void install_mode_routes(RouteTable& routes, JobManager& jobs) {
   std::vector<std::string> documents;
   for (const api::JobMode* mode : api::job_modes())
     for (const std::string& d : mode->documents())
       if (std::find(documents.begin(), documents.end(), d) == documents.end()) documents.push_back(d);
   for (const std::string& document : documents) {
-    const std::string path = job_path + "/" + document;
-    server.Get(path, guarded([&jobs, document](const Request& req, Response& res) {
-      const JobSnapshot job = succeeded_job(jobs, req.matches[1]);
+    routes.get(kJobPath + "/" + document, [&jobs, document](const Request& req, Response& res) {
+      const JobSnapshot job = succeeded_job(jobs, req.matches[1], "result", "its result exists");
       const api::JobMode& mode = *job.job->mode;
       if (!has_document(mode, document))
         throw wrong_mode(job, "the " + document, [&](const api::JobMode& m) { return has_document(m, document); });
       nlohmann::json body = mode.document(document, *job.job, volumes_of(jobs, job));
       body["job"] = job.id;
       res.set_content(body.dump(2), "application/json");
-    }));
-    patterns.push_back(path);
+    });
   }
 
-  const std::string layer_path = job_path + "/layers/(\\d{1,9})";
-  server.Get(layer_path, guarded([&jobs](const Request& req, Response& res) {
-    const JobSnapshot job = succeeded_job(jobs, req.matches[1]);
+  routes.get(kJobPath + "/layers/(\\d{1,9})", [&jobs](const Request& req, Response& res) {
+    const JobSnapshot job = succeeded_job(jobs, req.matches[1], "result", "its result exists");
     if (!job.job->mode->colour_values())
       throw wrong_mode(job, "PNG layers", [](const api::JobMode& m) { return m.colour_values(); });
     const auto values = volumes_of(jobs, job)("values");
@@ -96,9 +80,7 @@ std::vector<std::string> install_mode_routes(httplib::Server& server, JobManager
     VectorSink out;
     write_png_layer(colours, k, out);
     res.set_content(std::string(out.data.begin(), out.data.end()), "image/png");
-  }));
-  patterns.push_back(layer_path);
-  return patterns;
+  });
 }
 
 }  // namespace voxd::server

@@ -12,13 +12,13 @@
 #include <vector>
 
 #include "api/job_mode.h"
-#include "server/http/analysis_routes.h"
 #include "server/jobs/job_manager.h"
 
 namespace voxd::server {
 
-std::vector<std::string> install_mode_routes(httplib::Server& server, JobManager& jobs, const std::string& job_path,
-                                             const Guard& guarded);
+class RouteTable;
+
+void install_mode_routes(RouteTable& routes, JobManager& jobs);
 
 // The volumes of a succeeded job by name ("values" and its mode's layers);
 // a 404 problem when they are gone (the job expired or was deleted meanwhile).

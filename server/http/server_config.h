@@ -19,8 +19,8 @@ struct ServeConfig {
   std::uint64_t max_voxels = std::uint64_t{1} << 33;
   std::uint64_t max_job_memory = std::uint64_t{4} << 30;
   std::uint64_t max_decode_memory = std::uint64_t{2} << 30;  // the isolated Draco decoder's data segment
-  std::uint64_t memory_budget = 0;
-  std::uint64_t min_free_disk = std::uint64_t{64} << 20;  // 507 and not ready below  // all jobs, decodes and analyses at once; 0 = 60% of memory
+  std::uint64_t memory_budget = 0;  // all jobs, decodes and analyses at once; 0 = 60% of memory
+  std::uint64_t min_free_disk = std::uint64_t{64} << 20;  // 507 and not ready below
   std::uint64_t result_ttl = 86400;       // seconds
   std::uint64_t sync_max_voxels = 1 << 24;  // POST /v1/voxelize
   int http_threads = 16;

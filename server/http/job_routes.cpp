@@ -1,0 +1,95 @@
+#include "server/http/job_routes.h"
+
+#include <httplib.h>
+
+#include "server/http/job_lookup.h"
+#include "server/http/json_response.h"
+#include "server/http/metrics.h"
+#include "server/http/mode_routes.h"
+#include "server/http/route_table.h"
+#include "server/http/server_config.h"
+#include "server/http/submission.h"
+#include "server/http/volume_request.h"
+#include "server/jobs/job_record.h"
+
+namespace voxd::server {
+namespace {
+
+using httplib::Request;
+using httplib::Response;
+using nlohmann::json;
+
+std::size_t query_size(const Request& req, const char* name, std::size_t fallback, std::size_t lo, std::size_t hi) {
+  if (!req.has_param(name)) return fallback;
+  const std::string v = req.get_param_value(name);
+  try {
+    std::size_t pos = 0;
+    const unsigned long long n = std::stoull(v, &pos);
+    if (pos == v.size() && n >= lo && n <= hi && v.find('-') == std::string::npos) return n;
+  } catch (const std::exception&) {
+  }
+  throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter",
+                                  std::string(name) + " must be an integer between " + std::to_string(lo) + " and " +
+                                      std::to_string(hi) + ", got '" + v + "'"));
+}
+
+}  // namespace
+
+void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, const ServeConfig& config,
+                        const api::JsonLimits& params_limits) {
+  routes.post_upload("/v1/jobs", [&](const Request& req, Response& res, const httplib::ContentReader& reader) {
+    Submission s = read_submission(req, reader, metrics, config.max_upload_bytes, params_limits);
+    const JobSnapshot job = jobs.submit(std::move(s.mesh), s.filename, s.params);
+    res.set_header("Location", "/v1/jobs/" + job.id);
+    send_json(res, 202, to_json(job));
+  });
+  routes.get("/v1/jobs", [&](const Request& req, Response& res) {
+    const std::size_t offset = query_size(req, "offset", 0, 0, std::size_t{1} << 40);
+    const std::size_t limit = query_size(req, "limit", 20, 1, 100);
+    std::size_t total = 0;
+    json list = json::array();
+    for (const auto& job : jobs.list(offset, limit, &total)) list.push_back(to_json(job));
+    const bool more = offset + limit < total;
+    send_json(res, 200, {{"jobs", list}, {"total", total}, {"offset", offset}, {"limit", limit},
+                         {"next", more ? json("/v1/jobs?offset=" + std::to_string(offset + limit) + "&limit=" + std::to_string(limit)) : json(nullptr)}});
+  });
+
+  routes.get(kJobPath, [&](const Request& req, Response& res) {
+    const auto job = jobs.get(req.matches[1]);
+    if (!job) throw unknown_job(req.matches[1]);
+    send_json(res, 200, to_json(*job));
+  });
+  routes.del(kJobPath, [&](const Request& req, Response& res) {
+    const std::string id = req.matches[1];
+    switch (jobs.cancel_or_delete(id)) {
+      case JobManager::RemoveResult::not_found: throw unknown_job(id);
+      case JobManager::RemoveResult::deleted: res.status = 204; return;
+      case JobManager::RemoveResult::cancelled: {
+        const auto job = jobs.get(id);
+        send_json(res, 202, job ? to_json(*job) : json{{"id", id}, {"state", "cancelled"}});
+        return;
+      }
+    }
+  });
+
+  routes.get(kJobPath + "/volume", [&](const Request& req, Response& res) {
+    const std::string id = req.matches[1];
+    VolumeRequest v = read_volume_request(req);
+    const JobSnapshot job = succeeded_job(jobs, id, "volume", "its volume exists");
+    v.options.content = volume_content(job);
+    const std::string filename = id + file_extension(v.format);
+    if (job.job->mode->writes(v.format)) return answer_mode_written(res, job.job, volumes_of(jobs, job), v, filename, metrics);
+    if (req.has_param("layer")) return answer_values(res, job_layer(jobs, job, req.get_param_value("layer")), v, filename, metrics);
+    if (job.has_value_volume()) {
+      auto values = jobs.values(id);
+      if (!values) throw unknown_job(id);
+      return answer_values(res, std::move(values), v, filename, metrics);
+    }
+    check_bits_format(v);
+    auto volume = jobs.volume(id);
+    if (!volume) throw unknown_job(id);
+    answer_bits(res, std::move(volume), v, filename, metrics);
+  });
+}
+
+}  // namespace voxd::server

@@ -1,0 +1,151 @@
+#include "server/http/middleware.h"
+
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
+
+#include "server/http/connection_server.h"
+#include "server/http/metrics.h"
+#include "server/http/problem.h"
+#include "server/http/server_config.h"
+#include "server/http/submission.h"
+#include "server/log_safe.h"
+
+namespace voxd::server {
+namespace {
+
+using httplib::Request;
+using httplib::Response;
+using nlohmann::json;
+
+struct RequestClock {
+  std::chrono::steady_clock::time_point start;
+  std::string request_id;
+};
+thread_local RequestClock current_request;
+std::string new_request_id() {
+  thread_local std::mt19937_64 rng{std::random_device{}()};
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(rng()));
+  return buf;
+}
+
+bool constant_time_equal(const std::string& a, const std::string& b) {
+  if (a.size() != b.size()) return false;
+  unsigned char diff = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
+  return diff == 0;
+}
+
+// Route label for metrics: the pattern, not the concrete path (bounded cardinality).
+std::string route_of(const std::string& path) {
+  if (path.rfind("/v1/jobs/", 0) == 0) return path.size() > 41 ? "/v1/jobs/{id}" + path.substr(41) : "/v1/jobs/{id}";
+  static const char* known[] = {"/v1/jobs", "/v1/voxelize", "/healthz", "/readyz", "/metrics", "/openapi.json"};
+  for (const char* k : known)
+    if (path == k) return k;
+  return "other";
+}
+
+// Every request gets an id (the client's, if it is a plain token) in its
+// answer and its log line; its clock starts.
+void start_request(const Request& req, Response& res) {
+  begin_request_body();  // the head is parsed: the body's deadline applies from here
+  current_request.start = std::chrono::steady_clock::now();
+  const std::string client_id = req.get_header_value("X-Request-Id");
+  current_request.request_id = is_plain_request_id(client_id) ? client_id : new_request_id();
+  res.set_header("X-Request-Id", current_request.request_id);
+}
+
+// CORS for allowed web front ends; true when this was a preflight, answered.
+bool answer_cors(const Request& req, Response& res, const ServeConfig& config) {
+  const std::string origin = req.get_header_value("Origin");
+  bool cors = false;
+  if (!origin.empty())
+    for (const auto& o : config.cors_origins) cors = cors || o == "*" || o == origin;
+  if (!cors) return false;
+  res.set_header("Access-Control-Allow-Origin", origin);
+  res.set_header("Vary", "Origin");
+  res.set_header("Access-Control-Expose-Headers", "Location, Retry-After, X-Request-Id, X-Voxd-Job-Id, X-Voxd-Dims, X-Voxd-Filled-Voxels, X-Voxd-Value-Type");
+  if (req.method != "OPTIONS" || !req.has_header("Access-Control-Request-Method")) return false;
+  res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
+  res.set_header("Access-Control-Allow-Headers", "Authorization, Content-Type, X-Request-Id");
+  res.set_header("Access-Control-Max-Age", "600");
+  res.status = 204;
+  return true;
+}
+
+// Optional API keys on the /v1 routes; probes and metrics stay open. True
+// when the request was refused.
+bool refuse_unauthorized(const Request& req, Response& res, const ServeConfig& config, Metrics& metrics) {
+  if (config.api_keys.empty() || req.path.rfind("/v1/", 0) != 0) return false;
+  const std::string auth = req.get_header_value("Authorization");
+  bool ok = false;
+  if (auth.rfind("Bearer ", 0) == 0)
+    for (const auto& key : config.api_keys) ok = constant_time_equal(auth.substr(7), key) || ok;
+  if (ok) return false;
+  metrics.count_rejected("unauthorized");
+  res.set_header("WWW-Authenticate", "Bearer");
+  send_problem(res, make_problem(401, "unauthorized", "Unauthorized", "this service needs an API key: send Authorization: Bearer KEY"), req.path);
+  return true;
+}
+
+}  // namespace
+
+void install_middleware(httplib::Server& server, const ServeConfig& config, Metrics& metrics) {
+  server.set_pre_routing_handler([&config, &metrics](const Request& req, Response& res) {
+    start_request(req, res);
+    if (answer_cors(req, res, config) || refuse_unauthorized(req, res, config, metrics))
+      return httplib::Server::HandlerResponse::Handled;
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
+
+  // Clients that ask before sending a body (curl does for large uploads) learn
+  // at once that it is too large.
+  server.set_expect_100_continue_handler([&config, &metrics](const Request& req, Response& res) {
+    if (declared_length(req).value_or(0) > config.max_upload_bytes) {
+      metrics.count_rejected("upload-too-large");
+      send_problem(res, upload_too_large(config.max_upload_bytes).problem(), req.path);
+      res.set_header("Connection", "close");
+      close_connection_after_response();
+      return 413;
+    }
+    return 100;
+  });
+
+  // Errors httplib produces itself (unknown route, body over the limit,
+  // unparsable request) get problem bodies too.
+  server.set_error_handler([&config, &metrics](const Request& req, Response& res) {
+    if (!res.body.empty()) return;
+    if (res.status == 404)
+      send_problem(res, make_problem(404, "not-found", "Not found", "no route " + req.method + " " + req.path), req.path);
+    else if (res.status == 413) {
+      close_connection_after_response();  // httplib left the body unread
+      metrics.count_rejected("upload-too-large");
+      send_problem(res, make_problem(413, "upload-too-large", "Upload too large",
+                                     "the request body is over the limit of " + std::to_string(config.max_upload_bytes) + " bytes"),
+                   req.path);
+    } else
+      send_problem(res, make_problem(res.status, "bad-request", "Bad request", "the request could not be read"), req.path);
+  });
+
+  server.set_logger([&config, &metrics](const Request& req, const Response& res) {
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - current_request.start).count();
+    metrics.count_request(req.method, route_of(req.path), res.status);
+    metrics.add_bytes_out(res.body.size());
+    if (config.log_format == "json")
+      spdlog::info(json{{"event", "request"}, {"method", req.method}, {"path", req.path}, {"status", res.status},
+                        {"bytes", res.body.size()}, {"duration_ms", ms}, {"request_id", current_request.request_id}}
+                       // Paths are not always UTF-8: replace, never throw.
+                       .dump(-1, ' ', false, json::error_handler_t::replace));
+    else
+      spdlog::info("{} {} {} {}B {:.1f}ms id={}", log_safe(req.method), log_safe(req.path), res.status, res.body.size(), ms,
+                   current_request.request_id);
+  });
+}
+
+}  // namespace voxd::server

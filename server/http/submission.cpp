@@ -1,0 +1,132 @@
+#include "server/http/submission.h"
+
+#include <charconv>
+
+#include "server/http/metrics.h"
+#include "server/http/route_table.h"
+
+namespace voxd::server {
+namespace {
+
+using nlohmann::json;
+using httplib::Request;
+
+ProblemError params_too_large(std::size_t limit) {
+  return ProblemError(make_problem(413, "params-too-large", "Job parameters too large",
+                                   "the job parameters are over the limit of " + std::to_string(limit) +
+                                       " bytes; custom palettes and lookups fit well within it"));
+}
+
+json parse_params_text(const std::string& text, const api::JsonLimits& limits) {
+  if (text.empty()) return json::object();
+  try {
+    return api::parse_bounded_json(text, "params", limits);
+  } catch (const api::InvalidJson& e) {
+    if (e.reason() == api::InvalidJson::Reason::too_large) throw params_too_large(limits.max_bytes);
+    throw ProblemError(make_problem(400, "malformed-json", "Malformed job parameters", e.what()));
+  }
+}
+
+ProblemError unsupported_media_type() {
+  return ProblemError(make_problem(415, "unsupported-media-type", "Unsupported content type",
+                                   "send the mesh as multipart/form-data (parts mesh and params) or as the raw "
+                                   "request body (e.g. application/octet-stream) with params in the query string"));
+}
+
+}  // namespace
+
+std::optional<std::uint64_t> declared_length(const httplib::Request& req) {
+  if (!req.has_header("Content-Length")) return std::nullopt;
+  const std::string v = req.get_header_value("Content-Length");
+  std::uint64_t n = 0;
+  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+  if (ec != std::errc() || end != v.data() + v.size()) return UINT64_MAX;
+  return n;
+}
+
+ProblemError upload_too_large(std::uint64_t limit) {
+  return ProblemError(make_problem(413, "upload-too-large", "Upload too large",
+                                   "the request body is over the limit of " + std::to_string(limit) +
+                                       " bytes; send a smaller mesh (Draco compresses meshes about 10x)"));
+}
+
+Submission read_submission(const httplib::Request& req, const httplib::ContentReader& reader, Metrics& metrics,
+                           std::uint64_t max_bytes, const api::JsonLimits& params_limits) {
+  Submission s;
+  const std::string type = req.get_header_value("Content-Type");
+  if (declared_length(req).value_or(0) > max_bytes)
+    throw upload_too_large(max_bytes);
+  std::uint64_t received = 0;
+  auto count = [&](std::size_t n) {
+    received += n;
+    metrics.add_bytes_in(n);
+    return received <= max_bytes;
+  };
+  bool read_ok = true;
+  if (req.is_multipart_form_data()) {
+    enum class Part { mesh, params, other } part = Part::other;
+    std::string params_text;
+    bool has_mesh = false, has_params = false, params_over_limit = false;
+    read_ok = reader(
+        [&](const httplib::MultipartFormData& header) {
+          if (header.name == "mesh") {
+            part = Part::mesh;
+            has_mesh = true;
+            s.filename = header.filename;
+            s.mesh.clear();
+          } else if (header.name == "params") {
+            part = Part::params;
+            has_params = true;
+            params_text.clear();
+          } else {
+            part = Part::other;
+          }
+          return true;
+        },
+        [&](const char* data, std::size_t n) {
+          if (!count(n)) return false;
+          if (part == Part::mesh) {
+            s.mesh.insert(s.mesh.end(), data, data + n);
+          } else if (part == Part::params) {
+            // Stop reading past the limit instead of holding the whole part.
+            if (params_text.size() + n > params_limits.max_bytes) {
+              params_over_limit = true;
+              return false;
+            }
+            params_text.append(data, n);
+          }
+          return true;
+        });
+    if (read_ok && !has_mesh)
+      throw ProblemError(make_problem(400, "missing-mesh", "No mesh uploaded",
+                                      "the multipart body has no part named \"mesh\"; send the mesh file in it"));
+    if (params_over_limit) {
+      set_body_consumed(false);
+      throw params_too_large(params_limits.max_bytes);
+    }
+    s.params = has_params ? parse_params_text(params_text, params_limits) : json::object();
+  } else {
+    if (type.rfind("application/json", 0) == 0 || type.rfind("text/", 0) == 0 || type.rfind("multipart/", 0) == 0)
+      throw unsupported_media_type();
+    // One buffer of the declared size rather than a doubling series of
+    // copies (gzip bodies grow past it as they are unpacked).
+    if (!req.has_header("Content-Encoding")) s.mesh.reserve(declared_length(req).value_or(0));
+    read_ok = reader([&](const char* data, std::size_t n) {
+      if (!count(n)) return false;
+      s.mesh.insert(s.mesh.end(), data, data + n);
+      return true;
+    });
+    s.filename = req.get_param_value("filename");
+    if (read_ok) s.params = parse_params_text(req.get_param_value("params"), params_limits);
+  }
+  set_body_consumed(read_ok);
+  if (!read_ok && received > max_bytes) throw upload_too_large(max_bytes);
+  if (!read_ok)
+    throw ProblemError(make_problem(400, "bad-request", "Bad request",
+                                    "the request body could not be read completely (truncated, malformed multipart or timed out)"));
+  if (s.mesh.empty())
+    throw ProblemError(make_problem(400, "missing-mesh", "No mesh uploaded", "the uploaded mesh is empty"));
+  return s;
+}
+
+}  // namespace voxd::server

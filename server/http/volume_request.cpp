@@ -1,0 +1,103 @@
+#include "server/http/volume_request.h"
+
+#include "server/http/problem.h"
+#include "server/http/volume_stream.h"
+
+namespace voxd::server {
+namespace {
+
+ProblemError invalid_query(const std::string& detail) {
+  return ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", detail));
+}
+
+void refuse_quantized_bits(const VolumeRequest& v) {
+  if (v.options.quantize != Quantize::none)
+    throw invalid_query("quantize applies to float values (a volume of type f32); this volume is bits");
+}
+
+}  // namespace
+
+VolumeRequest read_volume_request(const httplib::Request& req) {
+  VolumeRequest v;
+  v.gzip = req.get_header_value("Accept-Encoding").find("gzip") != std::string::npos;
+  if (req.has_param("format")) {
+    const auto f = volume_format_from_string(req.get_param_value("format"));
+    if (!f)
+      throw invalid_query("format must be rle, binvox, raw, nrrd, vox, png-stack, stl or glb, got '" +
+                          req.get_param_value("format") + "'");
+    v.format = *f;
+  }
+  if (req.has_param("quantize")) {
+    const std::string q = req.get_param_value("quantize");
+    if (q == "u8") v.options.quantize = Quantize::u8;
+    else if (q == "u16") v.options.quantize = Quantize::u16;
+    else if (q != "none")
+      throw invalid_query("quantize must be none, u8 or u16, got '" + q + "'");
+  }
+  if (req.has_param("encoding")) {
+    const std::string e = req.get_param_value("encoding");
+    if (v.format != VolumeFormat::nrrd)
+      throw invalid_query("encoding applies to format nrrd only (for compression in transit send Accept-Encoding: gzip)");
+    if (e == "gzip") v.options.nrrd_encoding = NrrdEncoding::gzip;
+    else if (e != "raw")
+      throw invalid_query("encoding must be raw or gzip, got '" + e + "'");
+  }
+  if (req.has_param("packing")) {
+    const std::string p = req.get_param_value("packing");
+    if (p == "bits") v.options.raw_packing = RawPacking::bits;
+    else if (p != "bytes")
+      throw invalid_query("packing must be bytes or bits, got '" + p + "'");
+  }
+  return v;
+}
+
+std::string volume_content(const JobSnapshot& job) {
+  if (!job.has_value_volume()) return "voxels (1 = filled)";
+  const nlohmann::json& values = job.values;
+  std::string text = values.value("quantity", "values");
+  if (values.contains("unit")) text += " (" + values.at("unit").get<std::string>();
+  if (values.contains("sign_convention")) text += ", " + values.at("sign_convention").get<std::string>();
+  if (values.contains("unit")) text += ")";
+  return text;
+}
+
+void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {
+  if (params.mode->writes(v.format)) return;
+  const std::optional<ValueVolume> probe = params.value_type();
+  if (!probe) {
+    check_bits_format(v);
+    return;
+  }
+  if (auto refusal = format_refusal(*probe, v.format, v.options))
+    throw invalid_query(*refusal);
+}
+
+void check_bits_format(const VolumeRequest& v) {
+  refuse_quantized_bits(v);
+  if (auto refusal = format_refusal(BitVolume(), v.format)) throw invalid_query(*refusal);
+}
+
+void answer_values(httplib::Response& res, std::shared_ptr<const ValueVolume> values, const VolumeRequest& v,
+                   const std::string& filename, Metrics& metrics) {
+  if (auto refusal = format_refusal(*values, v.format, v.options)) throw invalid_query(*refusal);
+  res.set_header("X-Voxd-Value-Type", value_type_name(*values));
+  stream_volume(res, std::move(values), v.format, v.options, v.gzip, filename, &metrics);
+}
+
+void answer_bits(httplib::Response& res, std::shared_ptr<const BitVolume> bits, const VolumeRequest& v,
+                 const std::string& filename, Metrics& metrics) {
+  res.set_header("X-Voxd-Value-Type", "bit");
+  stream_volume(res, std::move(bits), v.format, v.options, v.gzip, filename, &metrics);
+}
+
+void answer_mode_written(httplib::Response& res, std::shared_ptr<const api::JobParams> job, api::VolumeSource volumes,
+                         const VolumeRequest& v, const std::string& filename, Metrics& metrics) {
+  stream_encoded(
+      res, media_type(v.format),
+      [volumes = std::move(volumes), job = std::move(job), format = v.format](ByteSink& sink) {
+        job->mode->write(format, *job, volumes, sink);
+      },
+      v.gzip, filename, &metrics);
+}
+
+}  // namespace voxd::server
