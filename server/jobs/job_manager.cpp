@@ -13,6 +13,7 @@
 #include "api/param_error.h"
 #include "server/jobs/content_hash.h"
 #include "server/jobs/job_analyses.h"
+#include "server/jobs/expiry.h"
 #include "server/jobs/job_record.h"
 #include "server/jobs/job_events.h"
 #include "server/jobs/job_queue.h"
@@ -40,7 +41,6 @@ namespace {
 
 using Clock = std::chrono::system_clock;
 
-bool finished(JobState s) { return s == JobState::succeeded || s == JobState::failed || s == JobState::cancelled; }
 
 std::string new_job_id() {
   thread_local std::mt19937_64 rng{std::random_device{}() ^ (static_cast<std::uint64_t>(std::random_device{}()) << 32)};
@@ -97,15 +97,13 @@ struct JobManager::Impl {
   // The job table: every job this process knows, by id.
   mutable std::mutex mutex;
   std::condition_variable finished_cv;  // synchronous callers wait here
-  std::condition_variable expiry_cv;
   std::unordered_map<std::string, std::shared_ptr<Job>> jobs;
   std::unordered_map<std::string, std::string> succeeded_by_hash;  // content hash -> job id
   bool accepting = true;
-  bool stopping = false;  // the expiry loop ends (workers end when the queue is closed)
   double recent_job_seconds = 1.0;  // moving average, for Retry-After
 
   std::vector<std::thread> workers;
-  std::thread expirer;
+  std::unique_ptr<ExpiryTimer> expiry;  // sweeps expired jobs until shutdown
   bool shut_down = false;
 
   void announce(const JobSnapshot& s) { events.announce(s); }  // caller holds mutex: the table's order
@@ -317,27 +315,13 @@ struct JobManager::Impl {
     }
   }
 
-  void expire_loop() {
-    const auto ttl = config.result_ttl;
-    const auto period = std::max(std::chrono::seconds(1), std::min<std::chrono::seconds>(std::chrono::seconds(60), ttl / 10));
-    std::unique_lock lock(mutex);
-    while (!stopping) {
-      expiry_cv.wait_for(lock, period, [&] { return stopping; });
-      if (stopping) return;
-      lock.unlock();
-      expire();
-      lock.lock();
-    }
-  }
-
   std::size_t expire() {
-    const auto cutoff = Clock::now() - config.result_ttl;
+    const auto now = Clock::now();
     std::vector<std::shared_ptr<Job>> victims;
     {
       std::lock_guard lock(mutex);
       for (const auto& [id, job] : jobs)
-        if (finished(job->snap.state) && !job->snap.finished_at.empty() && parse_time(job->snap.finished_at) < cutoff)
-          victims.push_back(job);
+        if (expired(job->snap, now, config.result_ttl)) victims.push_back(job);
       for (const auto& job : victims) forget(job->snap.id);
     }
     for (const auto& job : victims) remove_from_store(*job);
@@ -397,7 +381,7 @@ JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(s
   // idle cores, and two concurrent ones share them through the scheduler.
   m.engine_threads = 0;
   for (int i = 0; i < n; ++i) m.workers.emplace_back([&m] { m.work(); });
-  m.expirer = std::thread([&m] { m.expire_loop(); });
+  m.expiry = std::make_unique<ExpiryTimer>(m.config.result_ttl, [&m] { m.expire(); });
 }
 
 JobManager::~JobManager() { shutdown(std::chrono::seconds(0)); }
@@ -745,14 +729,12 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
         }
       m.finished_cv.wait(lock, [&] { return !running(); });
     }
-    m.stopping = true;
   }
   for (const auto& s : abandoned) m.store->save(s);
   m.deliver();
   m.finished_cv.notify_all();
-  m.expiry_cv.notify_all();
   for (auto& t : m.workers) t.join();
-  if (m.expirer.joinable()) m.expirer.join();
+  m.expiry.reset();
 }
 
 std::size_t JobManager::expire_now() { return impl_->expire(); }

@@ -30,6 +30,8 @@ namespace voxd::server {
 
 enum class JobState { queued, running, succeeded, failed, cancelled };
 const char* to_string(JobState state) noexcept;
+// Succeeded, failed or cancelled: the state will not change again.
+inline bool finished(JobState s) { return s == JobState::succeeded || s == JobState::failed || s == JobState::cancelled; }
 
 // Why a job failed, in the terms of an RFC 9457 problem ("type" is a short
 // slug such as "interrupted", "invalid-mesh", "limit-exceeded", "internal").
