@@ -48,9 +48,8 @@ struct FieldReader {
   std::optional<T> parsed(const std::string& name, Ok ok, const char* wanted) {
     const std::string* v = find(name);
     if (!v) return std::nullopt;
-    T x{};
-    const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), x);
-    if (ec != std::errc() || end != v->data() + v->size() || !ok(x)) {
+    const std::optional<T> x = parse_number<T>(*v);
+    if (!x || !ok(*x)) {
       errors.push_back({prefix + "/" + name, std::string("must be ") + wanted + ", got '" + *v + "'"});
       return std::nullopt;
     }

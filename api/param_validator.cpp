@@ -1,4 +1,5 @@
 #include "api/param_validator.h"
+#include "voxd/encode/number_text.h"
 
 #include <array>
 
@@ -19,7 +20,8 @@ std::optional<Rgba8> ParamValidator::color(const json& v, const std::string& pat
              v.get<std::string>()[0] == '#' &&
              v.get<std::string>().find_first_not_of("0123456789abcdefABCDEF", 1) == std::string::npos) {
     const std::string h = v.get<std::string>();
-    for (std::size_t i = 0; 1 + 2 * i < h.size(); ++i) c[i] = std::stoi(h.substr(1 + 2 * i, 2), nullptr, 16);
+    for (std::size_t i = 0; 1 + 2 * i < h.size(); ++i)
+      c[i] = parse_number<int>(std::string_view(h).substr(1 + 2 * i, 2), 16).value();  // two hex digits, checked above
   } else {
     fail(path, hint + ", got " + brief_json(v));
     return std::nullopt;

@@ -25,6 +25,7 @@
 #include "voxd/analysis/sdf_render.h"
 #include "voxd/analysis/value_images.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::cli {
 namespace {
@@ -106,11 +107,9 @@ int analyze_command(int argc, char** argv) {
   options.min_wall_voxels = positive("min-wall") / result.grid.voxel_size;
   options.max_wall_voxels = positive("max-wall") / result.grid.voxel_size;
   if (auto n = args.value("min-region")) {
-    try {
-      options.min_region_voxels = std::stoull(*n);
-    } catch (const std::exception&) {
-      throw UsageError("--min-region expects a number of voxels");
-    }
+    const auto voxels = parse_number<std::uint64_t>(*n);
+    if (!voxels) throw UsageError("--min-region expects a number of voxels");
+    options.min_region_voxels = *voxels;
   }
   if (args.has("cleanup") || args.has("cleanup-sheets")) options.cleanup = CleanupOptions{true, true, args.has("cleanup-sheets")};
   // One local thickness map for the report, the images and the volume.

@@ -1,4 +1,5 @@
 #include "server/cli/cli_args.h"
+#include "voxd/encode/number_text.h"
 
 #include <cerrno>
 #include <cmath>
@@ -52,12 +53,10 @@ std::vector<double> parse_number_list(const std::string& text, std::size_t count
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    errno = 0;
-    const double v = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || errno != 0 || !std::isfinite(v))
+    const std::optional<double> v = parse_number<double>(item);
+    if (!v || !std::isfinite(*v))
       throw UsageError("--" + flag + " expects " + std::to_string(count) + " comma-separated numbers, got '" + text + "'");
-    out.push_back(v);
+    out.push_back(*v);
   }
   if (out.size() != count)
     throw UsageError("--" + flag + " expects " + std::to_string(count) + " comma-separated numbers, got '" + text + "'");

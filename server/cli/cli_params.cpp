@@ -3,6 +3,7 @@
 #include <string>
 
 #include "api/bounded_json.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::cli {
 
@@ -31,14 +32,8 @@ void apply_param_flags(const Args& args, json& params) {
     json& grid = params["grid"];
     if (!grid.is_object()) grid = json::object();
     auto integer = [](const std::string& flag, const std::string& v) {
-      try {
-        std::size_t pos = 0;
-        const long long n = std::stoll(v, &pos);
-        if (pos != v.size()) throw std::invalid_argument(v);
-        return n;
-      } catch (const std::exception&) {
-        throw UsageError("--" + flag + " expects an integer, got '" + v + "'");
-      }
+      if (const auto n = parse_number<long long>(v)) return *n;
+      throw UsageError("--" + flag + " expects an integer, got '" + v + "'");
     };
     if (auto v = grid_flag("resolution")) {
       grid.erase("voxel_size");
@@ -74,15 +69,9 @@ void apply_param_flags(const Args& args, json& params) {
 int thread_count(const Args& args) {
   const auto t = args.value("threads");
   if (!t) return 0;
-  int threads = -1;
-  try {
-    std::size_t pos = 0;
-    threads = std::stoi(*t, &pos);
-    if (pos != t->size()) threads = -1;
-  } catch (const std::exception&) {
-  }
-  if (threads < 1 || threads > 1024) throw UsageError("--threads must be between 1 and 1024");
-  return threads;
+  const std::optional<int> threads = parse_number<int>(*t);
+  if (!threads || *threads < 1 || *threads > 1024) throw UsageError("--threads must be between 1 and 1024");
+  return *threads;
 }
 
 }  // namespace voxd::cli

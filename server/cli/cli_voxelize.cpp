@@ -15,6 +15,7 @@
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::cli {
 namespace {
@@ -142,13 +143,9 @@ int voxelize_command(int argc, char** argv) {
   // A local run may use the machine: 2^36 voxels is a 4096^3 grid (8 GiB of bits).
   limits.max_voxels = std::uint64_t{1} << 36;
   if (auto m = args.value("max-voxels")) {
-    try {
-      std::size_t pos = 0;
-      limits.max_voxels = std::stoull(*m, &pos);
-      if (pos != m->size() || limits.max_voxels == 0) throw std::invalid_argument(*m);
-    } catch (const std::exception&) {
-      throw UsageError("--max-voxels expects a positive integer, got '" + *m + "'");
-    }
+    const auto n = parse_number<std::uint64_t>(*m);
+    if (!n || *n == 0) throw UsageError("--max-voxels expects a positive integer, got '" + *m + "'");
+    limits.max_voxels = *n;
   }
   VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, args.has("report"), nullptr, threads);
   encode_options.content = result.values ? result.values_info.value("quantity", "values") + " (" +

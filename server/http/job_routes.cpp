@@ -11,6 +11,7 @@
 #include "server/http/submission.h"
 #include "server/http/volume_request.h"
 #include "server/jobs/job_record.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::server {
 namespace {
@@ -22,12 +23,7 @@ using nlohmann::json;
 std::size_t query_size(const Request& req, const char* name, std::size_t fallback, std::size_t lo, std::size_t hi) {
   if (!req.has_param(name)) return fallback;
   const std::string v = req.get_param_value(name);
-  try {
-    std::size_t pos = 0;
-    const unsigned long long n = std::stoull(v, &pos);
-    if (pos == v.size() && n >= lo && n <= hi && v.find('-') == std::string::npos) return n;
-  } catch (const std::exception&) {
-  }
+  if (const auto n = parse_number<std::size_t>(v); n && *n >= lo && *n <= hi) return *n;
   throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter",
                                   std::string(name) + " must be an integer between " + std::to_string(lo) + " and " +
                                       std::to_string(hi) + ", got '" + v + "'"));

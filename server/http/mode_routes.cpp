@@ -12,6 +12,7 @@
 #include "server/http/route_table.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/png_stack.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::server {
 namespace {
@@ -72,7 +73,7 @@ void install_mode_routes(RouteTable& routes, JobManager& jobs) {
       throw wrong_mode(job, "PNG layers", [](const api::JobMode& m) { return m.colour_values(); });
     const auto values = volumes_of(jobs, job)("values");
     const auto& colours = std::get<DenseVolume<Rgba8>>(*values);
-    const std::int64_t k = std::stoll(req.matches[2]);
+    const std::int64_t k = parse_number<std::int64_t>(req.matches[2].str()).value();  // the route matched 1-9 digits
     if (k >= colours.grid().dims.z)
       throw ProblemError(make_problem(404, "not-found", "No such layer",
                                       "layer " + std::to_string(k) + " is outside 0.." + std::to_string(colours.grid().dims.z - 1) +

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "server/cli/cli_args.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::server {
 namespace {
@@ -19,12 +20,7 @@ struct Option {
 };
 
 std::uint64_t to_u64(const std::string& v, const std::string& source, std::uint64_t lo, std::uint64_t hi) {
-  try {
-    std::size_t pos = 0;
-    const unsigned long long n = std::stoull(v, &pos);
-    if (pos == v.size() && n >= lo && n <= hi && v.find('-') == std::string::npos) return n;
-  } catch (const std::exception&) {
-  }
+  if (const auto n = parse_number<std::uint64_t>(v); n && *n >= lo && *n <= hi) return *n;
   throw UsageError(source + " expects an integer between " + std::to_string(lo) + " and " + std::to_string(hi) +
                    ", got '" + v + "'");
 }

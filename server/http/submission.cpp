@@ -1,9 +1,9 @@
 #include "server/http/submission.h"
 
-#include <charconv>
 
 #include "server/http/metrics.h"
 #include "server/http/route_table.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::server {
 namespace {
@@ -38,10 +38,7 @@ ProblemError unsupported_media_type() {
 std::optional<std::uint64_t> declared_length(const httplib::Request& req) {
   if (!req.has_header("Content-Length")) return std::nullopt;
   const std::string v = req.get_header_value("Content-Length");
-  std::uint64_t n = 0;
-  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-  if (ec != std::errc() || end != v.data() + v.size()) return UINT64_MAX;
-  return n;
+  return parse_number<std::uint64_t>(v).value_or(UINT64_MAX);
 }
 
 ProblemError upload_too_large(std::uint64_t limit) {

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "voxd/error.h"
+#include "voxd/encode/number_text.h"
 
 namespace voxd::server {
 namespace {
@@ -34,10 +35,7 @@ std::uint64_t available_memory() {
     std::ifstream in(path);
     std::string text;
     if (in >> text && !text.empty() && text != "max") {
-      try {
-        memory = std::min<std::uint64_t>(memory, std::stoull(text));
-      } catch (const std::exception&) {
-      }
+      if (const auto limit = parse_number<std::uint64_t>(text)) memory = std::min(memory, *limit);
     }
   }
   return memory;

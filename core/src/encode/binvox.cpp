@@ -168,11 +168,10 @@ std::vector<std::string_view> split_words(std::string_view line) {
 }
 
 template <typename T>
-T parse_number(std::string_view word, std::string_view line) {
-  T value{};
-  const auto result = std::from_chars(word.data(), word.data() + word.size(), value);
-  if (result.ec != std::errc() || result.ptr != word.data() + word.size())
-    malformed("bad number \"" + std::string(word) + "\" in header line \"" + std::string(line) + "\"");
+T header_number(std::string_view word, std::string_view line) {
+  const std::optional<T> parsed = voxd::parse_number<T>(word);
+  if (!parsed) malformed("bad number \"" + std::string(word) + "\" in header line \"" + std::string(line) + "\"");
+  const T value = *parsed;
   if constexpr (std::is_floating_point_v<T>)
     if (!std::isfinite(value)) malformed("non-finite number in header line \"" + std::string(line) + "\"");
   return value;
@@ -208,7 +207,7 @@ BinvoxHeader parse_header(std::span<const std::uint8_t> data) {
     if (first_line) {
       if (words.size() != 2 || words[0] != kMagic)
         malformed("the first line must be \"#binvox <version>\", found \"" + std::string(line) + "\"");
-      header.version = parse_number<int>(words[1], line);
+      header.version = header_number<int>(words[1], line);
       if (header.version != 1 && header.version != 2)
         malformed("version " + std::string(words[1]) + " is not supported (this reader reads 1 and 2)");
       continue;
@@ -218,7 +217,7 @@ BinvoxHeader parse_header(std::span<const std::uint8_t> data) {
       expect_words(words, 4, line);
       std::int64_t d[3];
       for (int a = 0; a < 3; ++a) {
-        d[a] = parse_number<std::int64_t>(words[static_cast<std::size_t>(a) + 1], line);
+        d[a] = header_number<std::int64_t>(words[static_cast<std::size_t>(a) + 1], line);
         if (d[a] < 1 || d[a] > kMaxGridDim)
           malformed("dim " + std::to_string(d[a]) + " is out of range 1.." + std::to_string(kMaxGridDim));
       }
@@ -229,10 +228,10 @@ BinvoxHeader parse_header(std::span<const std::uint8_t> data) {
       have_dim = true;
     } else if (words[0] == "translate") {
       expect_words(words, 4, line);
-      for (int a = 0; a < 3; ++a) header.translate[a] = parse_number<double>(words[static_cast<std::size_t>(a) + 1], line);
+      for (int a = 0; a < 3; ++a) header.translate[a] = header_number<double>(words[static_cast<std::size_t>(a) + 1], line);
     } else if (words[0] == "scale") {
       expect_words(words, 2, line);
-      header.scale = parse_number<double>(words[1], line);
+      header.scale = header_number<double>(words[1], line);
       if (!(header.scale > 0.0)) malformed("scale must be positive, found \"" + std::string(words[1]) + "\"");
     } else if (words[0] == "data") {
       expect_words(words, 1, line);

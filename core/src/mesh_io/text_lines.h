@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <string_view>
+#include "voxd/encode/number_text.h"
 
 namespace voxd::mesh_io {
 
@@ -141,10 +142,9 @@ inline bool equals_ignoring_case(std::string_view a, std::string_view b) {
 
 // Parses a whole token as a decimal integer (an optional sign allowed).
 inline bool parse_integer(std::string_view token, std::int64_t& out) {
-  token = detail::without_plus_sign(token);
-  if (token.empty()) return false;
-  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), out);
-  return ec == std::errc() && ptr == token.data() + token.size();
+  const std::optional<std::int64_t> n = parse_number<std::int64_t>(detail::without_plus_sign(token));
+  if (n) out = *n;
+  return n.has_value();
 }
 
 }  // namespace voxd::mesh_io
