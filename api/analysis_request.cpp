@@ -31,6 +31,15 @@ struct FieldReader {
     return found;
   }
 
+  template <typename E, std::size_t N>
+  E choice(const std::string& name, const EnumNames<E, N>& names, E fallback) {
+    const std::string* v = find(name);
+    if (!v) return fallback;
+    if (const auto value = value_named(names, *v)) return *value;
+    errors.push_back({prefix + "/" + name, "must be one of " + names_listed(names) + ", got '" + *v + "'"});
+    return fallback;
+  }
+
   std::string choice(const std::string& name, std::initializer_list<const char*> allowed, const char* fallback) {
     const std::string* v = find(name);
     if (!v) return fallback;
@@ -87,24 +96,6 @@ constexpr std::size_t kMaxAnalyses = 64;
 
 }  // namespace
 
-const char* to_string(AnalysisKind kind) {
-  switch (kind) {
-    case AnalysisKind::analysis: return "analysis";
-    case AnalysisKind::radiography: return "radiography";
-    case AnalysisKind::section: return "section";
-    case AnalysisKind::preview: return "preview";
-    case AnalysisKind::thickness: return "thickness";
-  }
-  return "?";
-}
-
-std::optional<AnalysisKind> analysis_kind_from_string(std::string_view name) {
-  for (AnalysisKind k : {AnalysisKind::analysis, AnalysisKind::radiography, AnalysisKind::section, AnalysisKind::preview,
-                         AnalysisKind::thickness})
-    if (name == to_string(k)) return k;
-  return std::nullopt;
-}
-
 AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, const std::string& path_prefix) {
   // A '+' left unescaped in a URL query arrives as a space: "+z" as " z".
   Fields fields = given;
@@ -116,12 +107,12 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, c
   auto axis = [&] { return axis_index(in.choice("axis", {"x", "y", "z"}, "z")); };
   auto peel = [&] {
     if (auto n = in.count("peel")) r.peel = *n;
-    r.peel_metric = in.choice("peel_metric", {"faces", "euclidean"}, "faces");
+    r.peel_metric = in.choice("peel_metric", kPeelMetricNames, PeelMetric::faces);
   };
   switch (kind) {
     case AnalysisKind::analysis:
       in.allowed = {"cleanup", "thickness", "min_wall", "max_wall", "peel_metric"};
-      r.peel_metric = in.choice("peel_metric", {"faces", "euclidean"}, "faces");
+      r.peel_metric = in.choice("peel_metric", kPeelMetricNames, PeelMetric::faces);
       r.cleanup = in.choice("cleanup", {"none", "debris", "sheets"}, "none");
       r.thickness = in.choice("thickness", {"true", "false"}, "true") == "true";
       r.min_wall = in.positive("min_wall");
@@ -133,7 +124,7 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, c
       in.allowed = {"axis", "measure", "format", "unit", "peel", "peel_metric"};
       r.axis = axis();
       peel();
-      r.measure = in.choice("measure", {"min", "max", "total"}, "max");
+      r.measure = in.choice("measure", kRadiographyMeasureNames, RadiographyMeasure::max);
       r.format = in.choice("format", {"png16", "png", "json"}, "png16");
       r.unit = in.choice("unit", {"voxels", "model"}, "voxels");
       break;
@@ -165,7 +156,7 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, c
 
 std::string AnalysisRequest::peel_query() const {
   // Only when peeling, so the plain requests keep their short URLs.
-  return peel > 0 ? "&peel=" + std::to_string(peel) + "&peel_metric=" + peel_metric : std::string();
+  return peel > 0 ? "&peel=" + std::to_string(peel) + "&peel_metric=" + to_string(peel_metric) : std::string();
 }
 
 std::string AnalysisRequest::query() const {
@@ -175,11 +166,11 @@ std::string AnalysisRequest::query() const {
       std::string q = "cleanup=" + cleanup + "&thickness=" + (thickness ? "true" : "false");
       if (min_wall) q += "&min_wall=" + number_text(*min_wall);
       if (max_wall) q += "&max_wall=" + number_text(*max_wall);
-      if (peel_metric != "faces") q += "&peel_metric=" + peel_metric;
+      if (peel_metric != PeelMetric::faces) q += std::string("&peel_metric=") + to_string(peel_metric);
       return q;
     }
     case AnalysisKind::radiography:
-      return "axis=" + a + "&measure=" + measure + "&format=" + format + "&unit=" + unit + peel_query();
+      return "axis=" + a + "&measure=" + to_string(measure) + "&format=" + format + "&unit=" + unit + peel_query();
     case AnalysisKind::section:
       return "axis=" + a + (index ? "&index=" + std::to_string(*index) : "&coordinate=" + number_text(*coordinate)) +
              "&colour=" + colour + peel_query();
@@ -263,15 +254,15 @@ nlohmann::json to_json(const AnalysisRequest& r) {
   json j{{"kind", to_string(r.kind)}};
   switch (r.kind) {
     case AnalysisKind::analysis:
-      j["peel_metric"] = r.peel_metric;
+      j["peel_metric"] = to_string(r.peel_metric);
       j["cleanup"] = r.cleanup;
       j["thickness"] = r.thickness;
       if (r.min_wall) j["min_wall"] = *r.min_wall;
       if (r.max_wall) j["max_wall"] = *r.max_wall;
       break;
     case AnalysisKind::radiography:
-      j.update({{"axis", std::string(1, "xyz"[r.axis])}, {"measure", r.measure}, {"format", r.format}, {"unit", r.unit},
-                {"peel", r.peel}, {"peel_metric", r.peel_metric}});
+      j.update({{"axis", std::string(1, "xyz"[r.axis])}, {"measure", to_string(r.measure)}, {"format", r.format}, {"unit", r.unit},
+                {"peel", r.peel}, {"peel_metric", to_string(r.peel_metric)}});
       break;
     case AnalysisKind::section:
       j["axis"] = std::string(1, "xyz"[r.axis]);
@@ -279,7 +270,7 @@ nlohmann::json to_json(const AnalysisRequest& r) {
       if (r.coordinate) j["coordinate"] = *r.coordinate;
       j["colour"] = r.colour;
       j["peel"] = r.peel;
-      j["peel_metric"] = r.peel_metric;
+      j["peel_metric"] = to_string(r.peel_metric);
       break;
     case AnalysisKind::preview: j.update({{"view", r.view}, {"colour", r.colour}}); break;
     case AnalysisKind::thickness: j.update({{"format", r.format}, {"unit", r.unit}}); break;

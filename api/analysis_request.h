@@ -11,11 +11,24 @@
 
 #include <nlohmann/json.hpp>
 
+#include "voxd/analysis/analysis_images.h"
+#include "voxd/analysis/skin_removal.h"
+#include "voxd/enum_names.h"
+
 namespace voxd::api {
 
 enum class AnalysisKind { analysis, radiography, section, preview, thickness };
-const char* to_string(AnalysisKind kind);
-std::optional<AnalysisKind> analysis_kind_from_string(std::string_view name);
+inline constexpr EnumNames<AnalysisKind, 5> kAnalysisKindNames{{
+    {AnalysisKind::analysis, "analysis"},
+    {AnalysisKind::radiography, "radiography"},
+    {AnalysisKind::section, "section"},
+    {AnalysisKind::preview, "preview"},
+    {AnalysisKind::thickness, "thickness"},
+}};
+inline const char* to_string(AnalysisKind kind) noexcept { return name_of(kAnalysisKindNames, kind); }
+inline std::optional<AnalysisKind> analysis_kind_from_string(std::string_view name) {
+  return value_named(kAnalysisKindNames, name);
+}
 
 struct AnalysisRequest {
   AnalysisKind kind = AnalysisKind::analysis;
@@ -26,9 +39,9 @@ struct AnalysisRequest {
   std::optional<double> min_wall, max_wall;
   // radiography, section: the axis (0 = x).
   int axis = 2;
-  // radiography: min | max | total; png16 | png | json; voxels | model.
+  // radiography: the measure; format png16 | png | json; unit voxels | model.
   // thickness: format raw | rle | nrrd; unit model | voxels.
-  std::string measure = "max";
+  RadiographyMeasure measure = RadiographyMeasure::max;
   std::string format;
   std::string unit;
   // section: exactly one of a voxel layer index or a model coordinate.
@@ -36,7 +49,7 @@ struct AnalysisRequest {
   std::optional<double> coordinate;
   // analysis: how the skin-removal layers are counted. radiography, section:
   // the model after `peel` layers of skin removal (0 = as voxelized).
-  std::string peel_metric = "faces";  // faces | euclidean
+  PeelMetric peel_metric = PeelMetric::faces;
   std::int64_t peel = 0;
   // section, preview: none | thickness (colour by local thickness); section
   // also distance (a distance field's diverging map).

@@ -132,8 +132,7 @@ JobParams parse_job_params(const json& params) {
     else
       out.options = m->parse_options(val, &params.at(key), out);
   }
-  if (auto i = val.one_of(params, "", "inside", {"parity", "vote", "winding"}))
-    out.inside = *i == "parity" ? InsideTest::parity : *i == "vote" ? InsideTest::vote : InsideTest::winding;
+  if (auto i = val.one_of(params, "", "inside", kInsideTestNames)) out.inside = *i;
   out.mode->complete(val, params, out);
   if (params.contains("analyses")) {
     try {

@@ -19,6 +19,7 @@
 #include "api/bounded_json.h"
 #include "api/param_error.h"
 #include "voxd/dense_volume.h"
+#include "voxd/enum_names.h"
 
 namespace voxd::api {
 
@@ -111,6 +112,14 @@ class ParamValidator {
       if (s == a) return s;
     fail(p, "must be one of " + list + ", got " + brief_json(v));
     return std::nullopt;
+  }
+
+  // One of an enum's names (voxd/enum_names.h), as its value.
+  template <typename E, std::size_t N>
+  std::optional<E> one_of(const nlohmann::json& obj, const std::string& path, const char* key, const EnumNames<E, N>& names) {
+    const std::array<std::string_view, N> allowed = names_in(names);
+    const auto name = one_of(obj, path, key, std::span<const std::string_view>(allowed));
+    return name ? value_named(names, *name) : std::nullopt;
   }
 
   std::optional<glm::dvec3> vec3(const nlohmann::json& obj, const std::string& path, const char* key) {

@@ -15,9 +15,7 @@ void parse_coverage(ParamValidator& val, const json& c, CoverageParams& out) {
   const std::string path = "/coverage";
   if (!val.is_object(c, path)) return;
   val.allow_keys(c, path, {"sampling", "rays", "points", "seed", "threshold", "values"});
-  if (auto s = val.one_of(c, path, "sampling", {"exact", "uniform", "stochastic"}))
-    out.options.sampling = *s == "exact" ? CoverageSampling::exact : *s == "uniform" ? CoverageSampling::uniform
-                                                                                      : CoverageSampling::stochastic;
+  if (auto s = val.one_of(c, path, "sampling", kCoverageSamplingNames)) out.options.sampling = *s;
   if (auto k = val.integer(c, path, "rays", 1, 64)) out.options.rays = static_cast<int>(*k);
   if (auto m = val.integer(c, path, "points", 1, 256)) out.options.points = static_cast<int>(*m);
   // Options that the chosen sampling would silently ignore are refused, so a

@@ -165,7 +165,7 @@ void parse_palette(ParamValidator& val, const json& d, PaletteParams& out) {
                                        std::to_string(kMaxPaletteElements) + " custom elements");
     }
   }
-  if (auto m = val.one_of(d, path, "metric", {"nearest", "outer", "inner"})) out.options.metric = *palette_metric_from_string(*m);
+  if (auto m = val.one_of(d, path, "metric", kPaletteMetricNames)) out.options.metric = *m;
   if (auto t = val.integer(d, path, "rays", 1, 256)) out.options.rays = static_cast<int>(*t);
   if (auto p = val.integer(d, path, "points", 1, 64)) out.options.points = static_cast<int>(*p);
   if (out.options.rays * out.options.points > 4096)

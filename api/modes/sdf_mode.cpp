@@ -27,8 +27,7 @@ void parse_sdf(ParamValidator& val, const json& d, SdfOptions& out) {
       out.band = *w;
     }
   }
-  if (auto s = val.one_of(d, path, "sign_convention", {"inside_negative", "inside_positive"}))
-    out.sign = *s == "inside_negative" ? SignConvention::inside_negative : SignConvention::inside_positive;
+  if (auto s = val.one_of(d, path, "sign_convention", kSignConventionNames)) out.sign = *s;
   if (auto u = val.one_of(d, path, "units", {"model", "voxels"})) out.model_units = *u == "model";
 }
 
@@ -65,7 +64,7 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
     const auto [lo, hi] = std::minmax_element(sdf.values().begin(), sdf.values().end());
     result.values_info = {{"quantity", "signed distance"},
                           {"unit", o.model_units ? "model units" : "voxels"},
-                          {"sign_convention", o.sign == SignConvention::inside_negative ? "inside_negative" : "inside_positive"},
+                          {"sign_convention", to_string(o.sign)},
                           {"band", o.full ? json("full") : json(o.band)},
                           {"min", *lo},
                           {"max", *hi}};

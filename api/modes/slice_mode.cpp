@@ -22,14 +22,12 @@ void parse_slice(ParamValidator& val, const json& d, SliceOptions& out) {
   val.allow_keys(d, path, {"function", "axis", "color", "ramp", "corners", "checker_colors", "checker_size", "seed",
                            "noise_scale", "octaves", "period", "turbulence", "noise_colors", "lookup"});
   if (!d.contains("function")) {
-    val.fail(path + "/function",
-             "required: one of single_color, color_ramp, interpolated_colors, checker, wood, marble, rock, custom");
+    val.fail(path + "/function", "required: one of " + names_listed(kSliceFunctionNames));
     return;
   }
-  const auto f = val.one_of(d, path, "function",
-                            {"single_color", "color_ramp", "interpolated_colors", "checker", "wood", "marble", "rock", "custom"});
+  const auto f = val.one_of(d, path, "function", kSliceFunctionNames);
   if (!f) return;
-  out.function = *slice_function_from_string(*f);
+  out.function = *f;
   if (auto a = val.vec3(d, path, "axis")) {
     if (*a == glm::dvec3(0.0))
       val.fail(path + "/axis", "must not be the zero vector: it is the slicing direction");
@@ -42,7 +40,7 @@ void parse_slice(ParamValidator& val, const json& d, SliceOptions& out) {
                      out.function == SliceFunction::rock;
   const auto only_for = [&](const char* key, bool applies, const char* functions) {
     if (d.contains(key) && !applies)
-      val.fail(path + "/" + key, std::string("applies only to function ") + functions + ", not \"" + *f + "\"");
+      val.fail(path + "/" + key, std::string("applies only to function ") + functions + ", not \"" + to_string(*f) + "\"");
     return d.contains(key) && applies;
   };
   if (only_for("color", out.function == SliceFunction::single_color, "single_color"))

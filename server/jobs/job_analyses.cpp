@@ -61,10 +61,6 @@ std::shared_ptr<std::mutex> key_lock(const ArtifactAccess& artifacts, const std:
 
 std::string to_bytes(const std::vector<std::uint8_t>& v) { return std::string(v.begin(), v.end()); }
 
-RadiographyMeasure measure_of(const AnalysisRequest& r) {
-  return r.measure == "min" ? RadiographyMeasure::min : r.measure == "max" ? RadiographyMeasure::max : RadiographyMeasure::total;
-}
-
 PngScale radiography_scale(const AnalysisRequest& r, const Grid& g) {
   return r.unit == "model" ? PngScale{g.voxel_size, "model units"} : PngScale{1.0, "voxel"};
 }
@@ -74,7 +70,7 @@ std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, cons
   AnalysisOptions options;
   if (r.cleanup != "none") options.cleanup = CleanupOptions{true, true, r.cleanup == "sheets"};
   options.thickness = r.thickness;
-  options.peel = r.peel_metric == "euclidean" ? PeelMetric::euclidean : PeelMetric::faces;
+  options.peel = r.peel_metric;
   options.min_wall_voxels = r.min_wall.value_or(0) / job.grid.voxel_size;
   options.max_wall_voxels = r.max_wall.value_or(0) / job.grid.voxel_size;
   std::optional<DenseVolume<float>> map;
@@ -89,7 +85,7 @@ std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, cons
 // The volume after r.peel layers of skin removal, or null for none.
 std::optional<BitVolume> peeled_volume(const AnalysisRequest& r, const BitVolume& volume) {
   if (r.peel <= 0) return std::nullopt;
-  const PeelMetric metric = r.peel_metric == "euclidean" ? PeelMetric::euclidean : PeelMetric::faces;
+  const PeelMetric metric = r.peel_metric;
   return peeled(peel_depth(volume, 0, metric), static_cast<std::uint32_t>(std::min<std::int64_t>(r.peel, UINT32_MAX)));
 }
 
@@ -97,14 +93,14 @@ std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job,
   const std::optional<BitVolume> peeled_model = peeled_volume(r, original);
   const BitVolume& volume = peeled_model ? *peeled_model : original;
   const ThicknessImage image = radiography(volume, r.axis);
-  const RadiographyMeasure m = measure_of(r);
+  const RadiographyMeasure m = r.measure;
   const PngScale scale = radiography_scale(r, job.grid);
   if (r.format == "json") {
     const ThicknessStats s = thickness_stats(values_of(image, m), 32);
     json histogram = json::array();
     for (std::uint64_t n : s.histogram) histogram.push_back(n);
     const double k = scale.per_value;
-    return json{{"axis", std::string(1, "xyz"[r.axis])}, {"measure", r.measure}, {"unit", scale.unit},
+    return json{{"axis", std::string(1, "xyz"[r.axis])}, {"measure", to_string(r.measure)}, {"unit", scale.unit},
                 {"voxel_size", job.grid.voxel_size}, {"width", image.width}, {"height", image.height}, {"rays", s.rays},
                 {"min", s.min * k}, {"max", s.max * k}, {"mean", s.mean * k},
                 {"p5", s.p5 * k}, {"p50", s.p50 * k}, {"p95", s.p95 * k},
@@ -112,7 +108,7 @@ std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job,
         .dump();
   }
   std::vector<PngText> text = {{"voxd:job", job.id}};
-  if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + r.peel_metric + ")"});
+  if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + to_string(r.peel_metric) + ")"});
   return to_bytes(radiography_png(image, r.axis, m, r.format == "png", scale, text));
 }
 
@@ -253,7 +249,7 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
       if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
       const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
       std::vector<PngText> text = {{"voxd:job", job.id}};
-      if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + r.peel_metric + ")"});
+      if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + to_string(r.peel_metric) + ")"});
       bytes = to_bytes(section_png(peeled_model ? *peeled_model : volume, r.axis, layer, map ? &*map : nullptr, text));
       break;
     }

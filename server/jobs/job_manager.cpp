@@ -26,17 +26,6 @@
 
 namespace voxd::server {
 
-const char* to_string(JobState state) noexcept {
-  switch (state) {
-    case JobState::queued: return "queued";
-    case JobState::running: return "running";
-    case JobState::succeeded: return "succeeded";
-    case JobState::failed: return "failed";
-    case JobState::cancelled: return "cancelled";
-  }
-  return "unknown";
-}
-
 namespace {
 
 using Clock = std::chrono::system_clock;

@@ -25,11 +25,19 @@
 #include "server/jobs/memory_budget.h"
 #include "voxd/bit_volume.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/enum_names.h"
 
 namespace voxd::server {
 
 enum class JobState { queued, running, succeeded, failed, cancelled };
-const char* to_string(JobState state) noexcept;
+inline constexpr EnumNames<JobState, 5> kJobStateNames{{
+    {JobState::queued, "queued"},
+    {JobState::running, "running"},
+    {JobState::succeeded, "succeeded"},
+    {JobState::failed, "failed"},
+    {JobState::cancelled, "cancelled"},
+}};
+inline const char* to_string(JobState state) noexcept { return name_of(kJobStateNames, state); }
 // Succeeded, failed or cancelled: the state will not change again.
 inline bool finished(JobState s) { return s == JobState::succeeded || s == JobState::failed || s == JobState::cancelled; }
 

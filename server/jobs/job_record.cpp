@@ -77,9 +77,7 @@ std::chrono::system_clock::time_point parse_time(const std::string& text) {
 }
 
 std::optional<JobState> job_state_from_string(const std::string& name) {
-  for (JobState s : {JobState::queued, JobState::running, JobState::succeeded, JobState::failed, JobState::cancelled})
-    if (name == to_string(s)) return s;
-  return std::nullopt;
+  return value_named(kJobStateNames, name);
 }
 
 json to_json(const JobSnapshot& job) {

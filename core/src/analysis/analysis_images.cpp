@@ -10,15 +10,6 @@
 #include "voxd/analysis/section.h"
 
 namespace voxd {
-const char* to_string(RadiographyMeasure m) {
-  switch (m) {
-    case RadiographyMeasure::min: return "min";
-    case RadiographyMeasure::max: return "max";
-    case RadiographyMeasure::total: return "total";
-  }
-  return "?";
-}
-
 const std::vector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m) {
   return m == RadiographyMeasure::min ? image.min : m == RadiographyMeasure::max ? image.max : image.total;
 }

@@ -33,7 +33,6 @@ void sweep(Depth* d, std::int64_t n, std::int64_t stride) {
 
 }  // namespace
 
-const char* to_string(PeelMetric metric) { return metric == PeelMetric::faces ? "faces" : "euclidean"; }
 
 DenseVolume<Depth> peel_depth(const BitVolume& volume, int threads, PeelMetric metric) {
   const Grid& g = volume.grid();

@@ -13,9 +13,6 @@
 namespace voxd {
 namespace {
 
-constexpr VolumeFormat kAllFormats[] = {VolumeFormat::rle, VolumeFormat::binvox,    VolumeFormat::raw, VolumeFormat::nrrd,
-                                        VolumeFormat::vox, VolumeFormat::png_stack, VolumeFormat::stl, VolumeFormat::glb};
-
 // Formats that only a palette job's reconstruction has.
 bool palette_mesh(VolumeFormat f) { return f == VolumeFormat::stl || f == VolumeFormat::glb; }
 bool colour_only(VolumeFormat f) { return f == VolumeFormat::vox || f == VolumeFormat::png_stack; }
@@ -27,26 +24,6 @@ bool equals_ignoring_case(std::string_view a, std::string_view b) {
 }
 
 }  // namespace
-
-const char* to_string(VolumeFormat format) noexcept {
-  switch (format) {
-    case VolumeFormat::rle: return "rle";
-    case VolumeFormat::binvox: return "binvox";
-    case VolumeFormat::raw: return "raw";
-    case VolumeFormat::nrrd: return "nrrd";
-    case VolumeFormat::vox: return "vox";
-    case VolumeFormat::png_stack: return "png-stack";
-    case VolumeFormat::stl: return "stl";
-    case VolumeFormat::glb: return "glb";
-  }
-  return "unknown";
-}
-
-std::optional<VolumeFormat> volume_format_from_string(std::string_view name) {
-  for (VolumeFormat f : kAllFormats)
-    if (name == to_string(f)) return f;
-  return std::nullopt;
-}
 
 const char* file_extension(VolumeFormat format) noexcept {
   switch (format) {
@@ -64,7 +41,7 @@ const char* file_extension(VolumeFormat format) noexcept {
 
 std::optional<VolumeFormat> volume_format_from_path(std::string_view path) {
   // Extensions compare case-insensitively: "MODEL.BINVOX" is still binvox.
-  for (VolumeFormat f : kAllFormats) {
+  for (const auto& [f, name] : kVolumeFormatNames) {
     const std::string_view ext = file_extension(f);
     if (path.size() > ext.size() && equals_ignoring_case(path.substr(path.size() - ext.size()), ext)) return f;
   }

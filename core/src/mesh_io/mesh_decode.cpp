@@ -28,18 +28,6 @@ std::string_view as_text(std::span<const std::uint8_t> data) {
 
 }  // namespace
 
-const char* to_string(MeshFormat format) noexcept {
-  switch (format) {
-    case MeshFormat::unknown: return "unknown";
-    case MeshFormat::stl_binary: return "stl_binary";
-    case MeshFormat::stl_ascii: return "stl_ascii";
-    case MeshFormat::obj: return "obj";
-    case MeshFormat::ply: return "ply";
-    case MeshFormat::draco: return "draco";
-  }
-  return "unknown";
-}
-
 Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint, const DecodeLimits& limits) {
   check_size(data, limits);
   const MeshFormat format = detect_mesh_format(data, name_hint);

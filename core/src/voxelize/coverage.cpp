@@ -151,15 +151,6 @@ class CoverageVoxelizer {
 
 }  // namespace
 
-const char* to_string(CoverageSampling sampling) noexcept {
-  switch (sampling) {
-    case CoverageSampling::exact: return "exact";
-    case CoverageSampling::uniform: return "uniform";
-    case CoverageSampling::stochastic: return "stochastic";
-  }
-  return "?";
-}
-
 DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
                                      JobControl* control) {
   if (options.rays < 1 || options.rays > 64)

@@ -193,19 +193,4 @@ void validate(const Palette& palette) {
   }
 }
 
-const char* to_string(PaletteMetric metric) noexcept {
-  switch (metric) {
-    case PaletteMetric::nearest: return "nearest";
-    case PaletteMetric::outer: return "outer";
-    case PaletteMetric::inner: return "inner";
-  }
-  return "?";
-}
-
-std::optional<PaletteMetric> palette_metric_from_string(std::string_view name) {
-  for (PaletteMetric m : {PaletteMetric::nearest, PaletteMetric::outer, PaletteMetric::inner})
-    if (name == to_string(m)) return m;
-  return std::nullopt;
-}
-
 }  // namespace voxd

@@ -25,21 +25,6 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-struct FunctionName {
-  SliceFunction function;
-  const char* name;
-};
-constexpr FunctionName kFunctionNames[] = {
-    {SliceFunction::single_color, "single_color"},
-    {SliceFunction::color_ramp, "color_ramp"},
-    {SliceFunction::interpolated_colors, "interpolated_colors"},
-    {SliceFunction::checker, "checker"},
-    {SliceFunction::wood, "wood"},
-    {SliceFunction::marble, "marble"},
-    {SliceFunction::rock, "rock"},
-    {SliceFunction::custom, "custom"},
-};
-
 [[noreturn]] void bad(const std::string& message) { throw Error(ErrorCode::invalid_argument, message); }
 
 std::string text(const glm::dvec3& v) {
@@ -182,18 +167,6 @@ struct SpanRestore {
 };
 
 }  // namespace
-
-const char* to_string(SliceFunction function) noexcept {
-  for (const FunctionName& f : kFunctionNames)
-    if (f.function == function) return f.name;
-  return "unknown";
-}
-
-std::optional<SliceFunction> slice_function_from_string(std::string_view name) {
-  for (const FunctionName& f : kFunctionNames)
-    if (name == f.name) return f.function;
-  return std::nullopt;
-}
 
 glm::dvec3 SliceFrame::coordinates(const glm::dvec3& p) const {
   const glm::dvec3 d = p - origin;

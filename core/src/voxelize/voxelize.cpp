@@ -4,24 +4,6 @@
 
 namespace voxd {
 
-const char* to_string(VoxelMode mode) noexcept {
-  switch (mode) {
-    case VoxelMode::solid: return "solid";
-    case VoxelMode::surface: return "surface";
-    case VoxelMode::solid_and_surface: return "solid+surface";
-  }
-  return "unknown";
-}
-
-const char* to_string(InsideTest inside) noexcept {
-  switch (inside) {
-    case InsideTest::parity: return "parity";
-    case InsideTest::vote: return "vote";
-    case InsideTest::winding: return "winding";
-  }
-  return "unknown";
-}
-
 namespace {
 
 BitVolume voxelize_solid(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, JobControl* control) {

@@ -11,11 +11,17 @@
 #include "voxd/encode/png_image.h"
 #include "voxd/analysis/preview.h"
 #include "voxd/analysis/radiography.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
 enum class RadiographyMeasure { min, max, total };
-const char* to_string(RadiographyMeasure m);
+inline constexpr EnumNames<RadiographyMeasure, 3> kRadiographyMeasureNames{{
+    {RadiographyMeasure::min, "min"},
+    {RadiographyMeasure::max, "max"},
+    {RadiographyMeasure::total, "total"},
+}};
+inline const char* to_string(RadiographyMeasure m) noexcept { return name_of(kRadiographyMeasureNames, m); }
 const std::vector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m);
 
 // 16-bit grey (pixel = thickness in voxels, exact) or, with `colour`, false

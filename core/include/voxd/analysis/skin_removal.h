@@ -12,6 +12,7 @@
 #include "voxd/bit_volume.h"
 #include "voxd/analysis/components.h"
 #include "voxd/dense_volume.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
@@ -23,7 +24,11 @@ namespace voxd {
 //    its centre to the nearest empty voxel centre (voxd/analysis/distance_transform.h),
 //    so every layer is one voxel size deeper whatever the wall's direction.
 enum class PeelMetric { faces, euclidean };
-const char* to_string(PeelMetric metric);
+inline constexpr EnumNames<PeelMetric, 2> kPeelMetricNames{{
+    {PeelMetric::faces, "faces"},
+    {PeelMetric::euclidean, "euclidean"},
+}};
+inline const char* to_string(PeelMetric metric) noexcept { return name_of(kPeelMetricNames, metric); }
 
 // Peel depth of every voxel (0 where empty). Voxels outside the grid count as
 // empty. Exact: faces in three separable forward/backward sweeps, euclidean

@@ -28,15 +28,28 @@
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
 #include "voxd/dense_volume.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
 enum class VolumeFormat { rle, binvox, raw, nrrd, vox, png_stack, stl, glb };
+inline constexpr EnumNames<VolumeFormat, 8> kVolumeFormatNames{{
+    {VolumeFormat::rle, "rle"},
+    {VolumeFormat::binvox, "binvox"},
+    {VolumeFormat::raw, "raw"},
+    {VolumeFormat::nrrd, "nrrd"},
+    {VolumeFormat::vox, "vox"},
+    {VolumeFormat::png_stack, "png-stack"},
+    {VolumeFormat::stl, "stl"},
+    {VolumeFormat::glb, "glb"},
+}};
 enum class RawPacking { bytes, bits };
 enum class NrrdEncoding { raw, gzip };
 
-const char* to_string(VolumeFormat format) noexcept;
-std::optional<VolumeFormat> volume_format_from_string(std::string_view name);
+inline const char* to_string(VolumeFormat format) noexcept { return name_of(kVolumeFormatNames, format); }
+inline std::optional<VolumeFormat> volume_format_from_string(std::string_view name) {
+  return value_named(kVolumeFormatNames, name);
+}
 // From a path's extension (.rle, .binvox, .raw, .nrrd); nullopt if unrecognised.
 std::optional<VolumeFormat> volume_format_from_path(std::string_view path);
 // MIME type used when serving the format.

@@ -8,12 +8,21 @@
 #include <string_view>
 
 #include "voxd/mesh.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
 enum class MeshFormat { unknown, stl_binary, stl_ascii, obj, ply, draco };
 
-const char* to_string(MeshFormat format) noexcept;
+inline constexpr EnumNames<MeshFormat, 6> kMeshFormatNames{{
+    {MeshFormat::unknown, "unknown"},
+    {MeshFormat::stl_binary, "stl_binary"},
+    {MeshFormat::stl_ascii, "stl_ascii"},
+    {MeshFormat::obj, "obj"},
+    {MeshFormat::ply, "ply"},
+    {MeshFormat::draco, "draco"},
+}};
+inline const char* to_string(MeshFormat format) noexcept { return name_of(kMeshFormatNames, format); }
 
 struct DecodeLimits {
   std::size_t max_bytes = std::size_t{2} << 30;  // 2 GiB

@@ -28,11 +28,17 @@
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
 enum class CoverageSampling { exact, uniform, stochastic };
-const char* to_string(CoverageSampling sampling) noexcept;
+inline constexpr EnumNames<CoverageSampling, 3> kCoverageSamplingNames{{
+    {CoverageSampling::exact, "exact"},
+    {CoverageSampling::uniform, "uniform"},
+    {CoverageSampling::stochastic, "stochastic"},
+}};
+inline const char* to_string(CoverageSampling sampling) noexcept { return name_of(kCoverageSamplingNames, sampling); }
 
 struct CoverageOptions {
   CoverageSampling sampling = CoverageSampling::exact;

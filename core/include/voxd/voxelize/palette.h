@@ -73,6 +73,7 @@
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
@@ -120,8 +121,15 @@ PaletteElement complement_of(const PaletteElement& element, std::string name);
 void validate(const Palette& palette);
 
 enum class PaletteMetric { nearest, outer, inner };
-const char* to_string(PaletteMetric metric) noexcept;
-std::optional<PaletteMetric> palette_metric_from_string(std::string_view name);
+inline constexpr EnumNames<PaletteMetric, 3> kPaletteMetricNames{{
+    {PaletteMetric::nearest, "nearest"},
+    {PaletteMetric::outer, "outer"},
+    {PaletteMetric::inner, "inner"},
+}};
+inline const char* to_string(PaletteMetric metric) noexcept { return name_of(kPaletteMetricNames, metric); }
+inline std::optional<PaletteMetric> palette_metric_from_string(std::string_view name) {
+  return value_named(kPaletteMetricNames, name);
+}
 
 struct PaletteOptions {
   Palette palette = builtin_palette(46);

@@ -46,10 +46,16 @@
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
 #include "voxd/voxelize/voxelize.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
 enum class SignConvention { inside_negative, inside_positive };
+inline constexpr EnumNames<SignConvention, 2> kSignConventionNames{{
+    {SignConvention::inside_negative, "inside_negative"},
+    {SignConvention::inside_positive, "inside_positive"},
+}};
+inline const char* to_string(SignConvention sign) noexcept { return name_of(kSignConventionNames, sign); }
 
 struct SdfOptions {
   // Half-width of the band in voxels: exact distances where |d| <= band *

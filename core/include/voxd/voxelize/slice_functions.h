@@ -88,15 +88,27 @@
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
 #include "voxd/voxelize/voxelize.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
 enum class SliceFunction { single_color, color_ramp, interpolated_colors, checker, wood, marble, rock, custom };
 
-// The contract names: "single_color", "color_ramp", "interpolated_colors",
-// "checker", "wood", "marble", "rock", "custom".
-const char* to_string(SliceFunction function) noexcept;
-std::optional<SliceFunction> slice_function_from_string(std::string_view name);
+// The contract's names.
+inline constexpr EnumNames<SliceFunction, 8> kSliceFunctionNames{{
+    {SliceFunction::single_color, "single_color"},
+    {SliceFunction::color_ramp, "color_ramp"},
+    {SliceFunction::interpolated_colors, "interpolated_colors"},
+    {SliceFunction::checker, "checker"},
+    {SliceFunction::wood, "wood"},
+    {SliceFunction::marble, "marble"},
+    {SliceFunction::rock, "rock"},
+    {SliceFunction::custom, "custom"},
+}};
+inline const char* to_string(SliceFunction function) noexcept { return name_of(kSliceFunctionNames, function); }
+inline std::optional<SliceFunction> slice_function_from_string(std::string_view name) {
+  return value_named(kSliceFunctionNames, name);
+}
 
 // One stop of a colour ramp: `position` in [0, 1] of the part's extent along the axis.
 struct RampStop {

@@ -5,6 +5,7 @@
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
+#include "voxd/enum_names.h"
 
 namespace voxd {
 
@@ -15,8 +16,18 @@ enum class InsideTest {
   winding,  // generalized winding number >= 1/2 (Jacobson et al. 2013)
 };
 
-const char* to_string(VoxelMode mode) noexcept;
-const char* to_string(InsideTest inside) noexcept;
+inline constexpr EnumNames<VoxelMode, 3> kVoxelModeNames{{
+    {VoxelMode::solid, "solid"},
+    {VoxelMode::surface, "surface"},
+    {VoxelMode::solid_and_surface, "solid+surface"},
+}};
+inline constexpr EnumNames<InsideTest, 3> kInsideTestNames{{
+    {InsideTest::parity, "parity"},
+    {InsideTest::vote, "vote"},
+    {InsideTest::winding, "winding"},
+}};
+inline const char* to_string(VoxelMode mode) noexcept { return name_of(kVoxelModeNames, mode); }
+inline const char* to_string(InsideTest inside) noexcept { return name_of(kInsideTestNames, inside); }
 
 struct VoxelizeOptions {
   VoxelMode mode = VoxelMode::solid;
