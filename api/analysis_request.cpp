@@ -222,7 +222,7 @@ std::vector<AnalysisRequest> parse_analyses(const json& analyses) {
       continue;
     }
     std::optional<AnalysisKind> kind;
-    if (!a.contains("kind") || !a.at("kind").is_string() || !(kind = analysis_kind_from_string(a.at("kind").get<std::string>()))) {
+    if (!a.contains("kind") || !a.at("kind").is_string() || !(kind = value_named(kAnalysisKindNames, a.at("kind").get<std::string>()))) {
       errors.push_back({path + "/kind", "must be one of analysis, radiography, section, preview, thickness"});
       continue;
     }

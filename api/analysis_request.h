@@ -19,16 +19,9 @@ namespace voxd::api {
 
 enum class AnalysisKind { analysis, radiography, section, preview, thickness };
 inline constexpr EnumNames<AnalysisKind, 5> kAnalysisKindNames{{
-    {AnalysisKind::analysis, "analysis"},
-    {AnalysisKind::radiography, "radiography"},
-    {AnalysisKind::section, "section"},
-    {AnalysisKind::preview, "preview"},
-    {AnalysisKind::thickness, "thickness"},
-}};
+    {AnalysisKind::analysis, "analysis"}, {AnalysisKind::radiography, "radiography"},
+    {AnalysisKind::section, "section"}, {AnalysisKind::preview, "preview"}, {AnalysisKind::thickness, "thickness"}}};
 inline const char* to_string(AnalysisKind kind) noexcept { return name_of(kAnalysisKindNames, kind); }
-inline std::optional<AnalysisKind> analysis_kind_from_string(std::string_view name) {
-  return value_named(kAnalysisKindNames, name);
-}
 
 struct AnalysisRequest {
   AnalysisKind kind = AnalysisKind::analysis;

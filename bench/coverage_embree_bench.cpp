@@ -73,6 +73,7 @@
 
 #include "bench_mesh.h"
 #include "voxd/voxelize/coverage.h"
+#include "voxelize/coverage_runs.h"
 #include "voxelize/fixed_point_mesh.h"
 #include "voxelize/row_rays.h"
 #include "voxelize/splitmix.h"
@@ -132,9 +133,9 @@ class Voxelizer {
     detail::sort_crossings(out);
   }
 
-  // A sorted row of crossings into the row's voxels (fill_column +
-  // integrate_runs of the engine).
-  void fill_row(const std::vector<Crossing>& crossings, float* slab, std::vector<std::pair<double, float>>& events) const {
+  // A sorted row of crossings into the row's voxels, as the engine's
+  // fill_column does (voxelize/coverage_runs.h).
+  void fill_row(const std::vector<Crossing>& crossings, float* slab, detail::RunEvents& events) const {
     for (std::size_t c = 0; c < crossings.size();) {
       std::size_t e = c;
       while (e < crossings.size() && crossings[e].column == crossings[c].column) ++e;
@@ -144,41 +145,11 @@ class Voxelizer {
     }
   }
 
-  void fill_column(const Crossing* begin, const Crossing* end, float* row, std::vector<std::pair<double, float>>& events) const {
-    const double nx = static_cast<double>(grid_.dims.x);
-    const float w = 1.0f / static_cast<float>(k_ * k_);
-    events.clear();
-    for (const Crossing* r = begin; r != end;) {
-      const Crossing* e = r;
-      while (e != end && e->ray == r->ray) ++e;
-      for (const Crossing* c = r; c + 1 < e; c += 2) {
-        const double x0 = std::clamp(c->x, 0.0, nx), x1 = std::clamp((c + 1)->x, 0.0, nx);
-        if (x1 > x0) {
-          events.emplace_back(x0, w);
-          events.emplace_back(x1, -w);
-        }
-      }
-      r = e;
-    }
+  void fill_column(const Crossing* begin, const Crossing* end, float* row, detail::RunEvents& events) const {
+    detail::collect_run_events(begin, end, static_cast<double>(grid_.dims.x), 1.0f / static_cast<float>(k_ * k_), events);
     if (events.empty()) return;
-    std::sort(events.begin(), events.end());
-    double f = 0.0, prev = 0.0;
-    for (const auto& [x, delta] : events) {
-      if (f > 0.0 && x > prev) {
-        const auto i0 = static_cast<std::int64_t>(std::floor(prev));
-        const auto i1 = std::min(static_cast<std::int64_t>(std::floor(x)), grid_.dims.x - 1);
-        if (i0 == i1) {
-          row[i0] += static_cast<float>(f * (x - prev));
-        } else {
-          row[i0] += static_cast<float>(f * (static_cast<double>(i0 + 1) - prev));
-          for (std::int64_t i = i0 + 1; i < i1; ++i) row[i] += static_cast<float>(f);
-          row[i1] += static_cast<float>(f * (x - static_cast<double>(i1)));
-        }
-      }
-      f += delta;
-      prev = x;
-    }
-    for (std::int64_t i = 0; i < grid_.dims.x; ++i) row[i] = std::clamp(row[i], 0.0f, 1.0f);
+    detail::integrate_runs(events, row, grid_.dims.x);
+    detail::clamp_coverage(row, grid_.dims.x);
   }
 
   const Mesh& mesh() const { return *mesh_; }
@@ -432,7 +403,7 @@ DenseVolume<float> replica_volume(const replica::Voxelizer& v, int threads) {
   const replica::Bins bins = v.bins(threads);
   parallel_for(0, g.dims.z, per_chunk, threads, [&](std::int64_t k0, std::int64_t k1) {
     std::vector<replica::Crossing> crossings;
-    std::vector<std::pair<double, float>> events;
+    detail::RunEvents events;
     for (std::int64_t k = k0; k < k1; ++k) {
       v.row_crossings(bins, k0 / per_chunk, k, crossings);
       v.fill_row(crossings, out.slab(k), events);
@@ -447,7 +418,7 @@ DenseVolume<float> embree_volume(const replica::Voxelizer& v, const EmbreeTracer
   const std::int64_t per_chunk = v.per_chunk(threads);
   parallel_for(0, g.dims.z, per_chunk, threads, [&](std::int64_t k0, std::int64_t k1) {
     std::vector<replica::Crossing> crossings;
-    std::vector<std::pair<double, float>> events;
+    detail::RunEvents events;
     for (std::int64_t k = k0; k < k1; ++k) {
       tracer.row_crossings(k, 16, Dedup::facing, crossings);
       v.fill_row(crossings, out.slab(k), events);
@@ -586,7 +557,7 @@ void BM_EmbreeExactness(benchmark::State& state) {
       Tally t;
       std::vector<replica::Crossing> ref, mine[kRules];
       std::vector<std::vector<Hit>> hits;
-      std::vector<std::pair<double, float>> events;
+      detail::RunEvents events;
       std::vector<std::int64_t> ref_count, mine_count;
       for (std::int64_t k = k0; k < k1; ++k) {
         v.row_crossings(bins, k0 / per_chunk, k, ref);

@@ -1,4 +1,4 @@
-#include "server/http/analysis_routes.h"
+#include "server/http/routes.h"
 
 #include <string>
 #include <vector>

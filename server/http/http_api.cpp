@@ -2,13 +2,9 @@
 
 #include <httplib.h>
 
-#include "server/http/analysis_routes.h"
-#include "server/http/job_routes.h"
 #include "server/http/middleware.h"
-#include "server/http/mode_routes.h"
 #include "server/http/route_table.h"
-#include "server/http/service_routes.h"
-#include "server/http/voxelize_route.h"
+#include "server/http/routes.h"
 
 namespace voxd::server {
 

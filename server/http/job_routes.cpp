@@ -1,4 +1,4 @@
-#include "server/http/job_routes.h"
+#include "server/http/routes.h"
 
 #include <httplib.h>
 

@@ -10,6 +10,7 @@
 #include "server/http/job_lookup.h"
 #include "server/http/problem.h"
 #include "server/http/route_table.h"
+#include "server/http/routes.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/png_stack.h"
 #include "voxd/encode/number_text.h"

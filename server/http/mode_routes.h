@@ -16,10 +16,6 @@
 
 namespace voxd::server {
 
-class RouteTable;
-
-void install_mode_routes(RouteTable& routes, JobManager& jobs);
-
 // The volumes of a succeeded job by name ("values" and its mode's layers);
 // a 404 problem when they are gone (the job expired or was deleted meanwhile).
 api::VolumeSource volumes_of(JobManager& jobs, const JobSnapshot& job);

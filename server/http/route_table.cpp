@@ -32,24 +32,22 @@ void RouteTable::note(const std::string& pattern, const char* method) {
 
 void RouteTable::get(const std::string& pattern, Handler handler) {
   note(pattern, "GET");
-  server_.Get(pattern, [&metrics = metrics_, handler = std::move(handler)](const httplib::Request& req, httplib::Response& res) {
-    try {
-      handler(req, res);
-    } catch (...) {
-      answer_exception(req, res, metrics);
-    }
-  });
+  server_.Get(pattern, guarded(std::move(handler)));
 }
 
 void RouteTable::del(const std::string& pattern, Handler handler) {
   note(pattern, "DELETE");
-  server_.Delete(pattern, [&metrics = metrics_, handler = std::move(handler)](const httplib::Request& req, httplib::Response& res) {
+  server_.Delete(pattern, guarded(std::move(handler)));
+}
+
+httplib::Server::Handler RouteTable::guarded(Handler handler) const {
+  return [&metrics = metrics_, handler = std::move(handler)](const httplib::Request& req, httplib::Response& res) {
     try {
       handler(req, res);
     } catch (...) {
       answer_exception(req, res, metrics);
     }
-  });
+  };
 }
 
 void RouteTable::post_upload(const std::string& pattern, UploadHandler handler) {

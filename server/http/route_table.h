@@ -38,6 +38,7 @@ class RouteTable {
 
  private:
   void note(const std::string& pattern, const char* method);
+  Handler guarded(Handler handler) const;
 
   httplib::Server& server_;
   Metrics& metrics_;

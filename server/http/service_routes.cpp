@@ -1,4 +1,4 @@
-#include "server/http/service_routes.h"
+#include "server/http/routes.h"
 
 #include <httplib.h>
 

@@ -1,4 +1,4 @@
-#include "server/http/voxelize_route.h"
+#include "server/http/routes.h"
 
 #include <httplib.h>
 

@@ -31,12 +31,8 @@ namespace voxd::server {
 
 enum class JobState { queued, running, succeeded, failed, cancelled };
 inline constexpr EnumNames<JobState, 5> kJobStateNames{{
-    {JobState::queued, "queued"},
-    {JobState::running, "running"},
-    {JobState::succeeded, "succeeded"},
-    {JobState::failed, "failed"},
-    {JobState::cancelled, "cancelled"},
-}};
+    {JobState::queued, "queued"}, {JobState::running, "running"}, {JobState::succeeded, "succeeded"},
+    {JobState::failed, "failed"}, {JobState::cancelled, "cancelled"}}};
 inline const char* to_string(JobState state) noexcept { return name_of(kJobStateNames, state); }
 // Succeeded, failed or cancelled: the state will not change again.
 inline bool finished(JobState s) { return s == JobState::succeeded || s == JobState::failed || s == JobState::cancelled; }

@@ -37,16 +37,9 @@ using test::kViews;
 using test::view_of;
 using test::ViewCase;
 
-// The camera table (test::kViews) is written out apart from the implementation.
-glm::vec3 unit(int axis, int sign) {
-  glm::vec3 u(0.0f);
-  u[axis] = static_cast<float>(sign);
-  return u;
-}
-glm::vec3 forward(const ViewCase& v) { return unit(v.axis, v.from_positive ? -1 : +1); }
-glm::vec3 light(const ViewCase& v) {
-  return glm::normalize(-forward(v) + 0.5f * unit(v.up_axis, v.up_sign) - 0.35f * unit(v.right_axis, v.right_sign));
-}
+glm::vec3 unit(int axis, int sign) { return test::unit<glm::vec3>(axis, sign); }
+glm::vec3 forward(const ViewCase& v) { return test::forward<glm::vec3>(v); }
+glm::vec3 light(const ViewCase& v) { return test::light<glm::vec3>(v); }
 // Grid coordinates of the voxel a pixel's ray runs along, as the table says.
 std::int64_t right_coord(const ViewCase& v, const glm::i64vec3& dims, std::int64_t c) {
   return v.right_sign > 0 ? c : dims[v.right_axis] - 1 - c;

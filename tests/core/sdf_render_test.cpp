@@ -40,16 +40,8 @@ using test::kViews;
 using test::view_of;
 using test::ViewCase;
 
-// The camera table (test::kViews) is written out apart from the implementation.
-glm::dvec3 unit(int axis, int sign) {
-  glm::dvec3 u(0.0);
-  u[axis] = sign;
-  return u;
-}
-glm::dvec3 forward(const ViewCase& v) { return unit(v.axis, v.from_positive ? -1 : +1); }
-glm::dvec3 light(const ViewCase& v) {
-  return glm::normalize(-forward(v) + 0.5 * unit(v.up_axis, v.up_sign) - 0.35 * unit(v.right_axis, v.right_sign));
-}
+glm::dvec3 forward(const ViewCase& v) { return test::forward<glm::dvec3>(v); }
+glm::dvec3 light(const ViewCase& v) { return test::light<glm::dvec3>(v); }
 double degrees(glm::dvec3 a, glm::dvec3 b) {
   return std::acos(std::clamp(glm::dot(glm::normalize(a), glm::normalize(b)), -1.0, 1.0)) * 180.0 / std::numbers::pi;
 }

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -62,5 +63,25 @@ inline constexpr ViewCase kViews[] = {
     {"-x", 0, false, 1, -1, 2, +1}, {"+y", 1, true, 0, -1, 2, +1}, {"-y", 1, false, 0, +1, 2, +1},
 };
 inline View view_of(const ViewCase& v) { return View{v.axis, v.from_positive}; }
+
+// Directions of a view written out from the table, apart from the
+// implementation: along +-axis, the camera's forward, and the light the
+// shaded previews use (from the camera, up and to the left).
+template <typename Vec>
+Vec unit(int axis, int sign) {
+  Vec u(0);
+  u[axis] = static_cast<typename Vec::value_type>(sign);
+  return u;
+}
+template <typename Vec>
+Vec forward(const ViewCase& v) {
+  return unit<Vec>(v.axis, v.from_positive ? -1 : +1);
+}
+template <typename Vec>
+Vec light(const ViewCase& v) {
+  using T = typename Vec::value_type;
+  return glm::normalize(-forward<Vec>(v) + T(0.5) * unit<Vec>(v.up_axis, v.up_sign) -
+                        T(0.35) * unit<Vec>(v.right_axis, v.right_sign));
+}
 
 }  // namespace voxd::test

@@ -12,9 +12,6 @@
 namespace voxd::encode {
 namespace {
 
-constexpr RleValueType kAllValueTypes[] = {RleValueType::bit, RleValueType::u8, RleValueType::u16,
-                                           RleValueType::f32, RleValueType::rgba8};
-
 void append_u32le(std::vector<std::uint8_t>& out, std::uint32_t v) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
 }
@@ -63,23 +60,6 @@ Grid parse_grid(const nlohmann::json& header) {
 }
 
 }  // namespace
-
-const char* to_string(RleValueType type) noexcept {
-  switch (type) {
-    case RleValueType::bit: return "bit";
-    case RleValueType::u8: return "u8";
-    case RleValueType::u16: return "u16";
-    case RleValueType::f32: return "f32";
-    case RleValueType::rgba8: return "rgba8";
-  }
-  return "unknown";
-}
-
-std::optional<RleValueType> rle_value_type_from_string(std::string_view name) {
-  for (RleValueType t : kAllValueTypes)
-    if (name == to_string(t)) return t;
-  return std::nullopt;
-}
 
 std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value_type, const std::string& metadata_json) {
   for (int a = 0; a < 3; ++a) {
@@ -140,7 +120,7 @@ RleHeader read_rle_header(ByteCursor& in) {
   if (axis_order != "xyz")
     bad_header("axis_order must be \"xyz\" (the only order of format version 1), found " + axis_order.dump());
   const nlohmann::json& value_type = required(header, "value_type");
-  const auto type = value_type.is_string() ? rle_value_type_from_string(value_type.get<std::string>()) : std::nullopt;
+  const auto type = value_type.is_string() ? value_named(kRleValueTypeNames, value_type.get<std::string>()) : std::nullopt;
   if (!type)
     bad_header("value_type must be one of \"bit\", \"u8\", \"u16\", \"f32\", \"rgba8\", found " + value_type.dump());
   result.value_type = *type;

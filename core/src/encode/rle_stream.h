@@ -14,6 +14,7 @@
 
 #include "encode/byte_cursor.h"
 #include "voxd/grid.h"
+#include "voxd/enum_names.h"
 
 namespace voxd::encode {
 
@@ -27,8 +28,10 @@ inline constexpr std::uint32_t kMaxRleHeaderBytes = 1u << 20;
 
 enum class RleValueType { bit, u8, u16, f32, rgba8 };
 
-const char* to_string(RleValueType type) noexcept;
-std::optional<RleValueType> rle_value_type_from_string(std::string_view name);
+inline constexpr EnumNames<RleValueType, 5> kRleValueTypeNames{{
+    {RleValueType::bit, "bit"}, {RleValueType::u8, "u8"}, {RleValueType::u16, "u16"}, {RleValueType::f32, "f32"},
+    {RleValueType::rgba8, "rgba8"}}};
+inline const char* to_string(RleValueType type) noexcept { return name_of(kRleValueTypeNames, type); }
 
 struct RleHeader {
   Grid grid;

@@ -124,19 +124,25 @@ void ZipWriter::add(std::string_view name, std::span<const std::uint8_t> data, b
   header.reserve(kLocalHeaderBytes + e.name.size());
   put32(header, kLocalHeaderSignature);
   put16(header, deflate ? kVersionDeflated : kVersionStored);
-  put16(header, e.flags);
-  put16(header, e.method);
-  put16(header, kDosTime);
-  put16(header, kDosDate);
-  put32(header, e.crc);
-  put32(header, e.compressed_size);
-  put32(header, e.size);
-  put16(header, static_cast<std::uint16_t>(e.name.size()));
+  put_entry_fields(header, e);
   put16(header, 0);  // no extra field
   put_name(header, e.name);
   emit(header);
   if (!payload.empty()) emit(payload);
   entries_.push_back(std::move(e));
+}
+
+// The fields a local header and its central directory record share, in the
+// same order: flags, method, time, date, CRC-32, sizes, name length.
+void ZipWriter::put_entry_fields(std::vector<std::uint8_t>& out, const Entry& e) {
+  put16(out, e.flags);
+  put16(out, e.method);
+  put16(out, kDosTime);
+  put16(out, kDosDate);
+  put32(out, e.crc);
+  put32(out, e.compressed_size);
+  put32(out, e.size);
+  put16(out, static_cast<std::uint16_t>(e.name.size()));
 }
 
 void ZipWriter::finish() {
@@ -146,14 +152,7 @@ void ZipWriter::finish() {
     put32(directory, kCentralHeaderSignature);
     put16(directory, kVersionMadeBy);
     put16(directory, e.method == kMethodDeflated ? kVersionDeflated : kVersionStored);
-    put16(directory, e.flags);
-    put16(directory, e.method);
-    put16(directory, kDosTime);
-    put16(directory, kDosDate);
-    put32(directory, e.crc);
-    put32(directory, e.compressed_size);
-    put32(directory, e.size);
-    put16(directory, static_cast<std::uint16_t>(e.name.size()));
+    put_entry_fields(directory, e);
     put16(directory, 0);  // extra field length
     put16(directory, 0);  // comment length
     put16(directory, 0);  // disk number start

@@ -8,6 +8,7 @@
 
 #include "voxd/error.h"
 #include "voxd/parallel.h"
+#include "voxelize/coverage_runs.h"
 #include "voxelize/fixed_point_mesh.h"
 #include "voxelize/row_rays.h"
 #include "voxelize/splitmix.h"
@@ -36,7 +37,7 @@ class CoverageVoxelizer {
     DenseVolume<float> out(grid_, 0.0f);
     if (grid_.voxel_count() == 0) return out;
     const int threads = options_.threads > 0 ? options_.threads : default_thread_count();
-    using Events = std::vector<std::pair<double, float>>;
+    using Events = detail::RunEvents;
     detail::for_each_ray_row<Events>(
         fixed_, grid_, k_ * k_, threads, control,
         [&](std::int64_t k, Events&) {
@@ -72,74 +73,16 @@ class CoverageVoxelizer {
     pv = k * kFixedOne + static_cast<std::int64_t>(std::floor(((b + unit_interval(splitmix_hash(h))) / k_ - 0.5) * one));
   }
 
-  // One column: pair each ray's sorted crossings into inside runs, then
-  // integrate (exact) or sample (uniform) them into the column's voxels.
-  void fill_column(const RayCrossing* begin, const RayCrossing* end, float* row,
-                   std::vector<std::pair<double, float>>& events) const {
-    const double nx = static_cast<double>(grid_.dims.x);
-    const float w = 1.0f / static_cast<float>(k_ * k_);
-    events.clear();
-    for (const RayCrossing* r = begin; r != end;) {
-      const RayCrossing* e = r;
-      while (e != end && e->ray == r->ray) ++e;
-      // An odd count (open mesh) leaves the last crossing unpaired.
-      for (const RayCrossing* c = r; c + 1 < e; c += 2) {
-        const double x0 = std::clamp(c->x, 0.0, nx), x1 = std::clamp((c + 1)->x, 0.0, nx);
-        if (x1 > x0) {
-          events.emplace_back(x0, w);
-          events.emplace_back(x1, -w);
-        }
-      }
-      r = e;
-    }
+  // One column: its rays' inside runs, integrated (exact) or sampled
+  // (uniform) into the column's voxels.
+  void fill_column(const RayCrossing* begin, const RayCrossing* end, float* row, detail::RunEvents& events) const {
+    detail::collect_run_events(begin, end, static_cast<double>(grid_.dims.x), 1.0f / static_cast<float>(k_ * k_), events);
     if (events.empty()) return;
-    std::sort(events.begin(), events.end());
-    if (options_.sampling == CoverageSampling::uniform) {
-      sample_runs(events, row);
-    } else {
-      integrate_runs(events, row);
-    }
-    // Rounding of the float sums can step a hair outside [0, 1].
-    for (std::int64_t i = 0; i < grid_.dims.x; ++i) row[i] = std::clamp(row[i], 0.0f, 1.0f);
-  }
-
-  // Exact: the inside share f is constant between events; each voxel gets
-  // the integral of f over its extent.
-  void integrate_runs(const std::vector<std::pair<double, float>>& events, float* row) const {
-    double f = 0.0, prev = 0.0;
-    for (const auto& [x, delta] : events) {
-      if (f > 0.0 && x > prev) {
-        const auto i0 = static_cast<std::int64_t>(std::floor(prev));
-        const auto i1 = std::min(static_cast<std::int64_t>(std::floor(x)), grid_.dims.x - 1);
-        if (i0 == i1) {
-          row[i0] += static_cast<float>(f * (x - prev));
-        } else {
-          row[i0] += static_cast<float>(f * (static_cast<double>(i0 + 1) - prev));
-          for (std::int64_t i = i0 + 1; i < i1; ++i) row[i] += static_cast<float>(f);
-          row[i1] += static_cast<float>(f * (x - static_cast<double>(i1)));
-        }
-      }
-      f += delta;
-      prev = x;
-    }
-  }
-
-  // The paper's point sampling: m points per voxel at (i + (p + 1/2) / m),
-  // each counted with the number of rays inside there.
-  void sample_runs(const std::vector<std::pair<double, float>>& events, float* row) const {
-    const int m = options_.points;
-    double f = 0.0, prev = 0.0;
-    for (const auto& [x, delta] : events) {
-      if (f > 0.0 && x > prev) {
-        // Points s = i * m + p with prev <= (s + 1/2) / m < x.
-        const auto s0 = static_cast<std::int64_t>(std::ceil(prev * m - 0.5));
-        const auto s1 = static_cast<std::int64_t>(std::ceil(x * m - 0.5));  // exclusive
-        for (std::int64_t s = std::max<std::int64_t>(s0, 0); s < s1 && s < grid_.dims.x * m; ++s)
-          row[s / m] += static_cast<float>(f / m);
-      }
-      f += delta;
-      prev = x;
-    }
+    if (options_.sampling == CoverageSampling::uniform)
+      detail::sample_runs(events, row, grid_.dims.x, options_.points);
+    else
+      detail::integrate_runs(events, row, grid_.dims.x);
+    detail::clamp_coverage(row, grid_.dims.x);
   }
 
   detail::FixedMesh fixed_;

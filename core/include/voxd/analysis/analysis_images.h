@@ -17,10 +17,7 @@ namespace voxd {
 
 enum class RadiographyMeasure { min, max, total };
 inline constexpr EnumNames<RadiographyMeasure, 3> kRadiographyMeasureNames{{
-    {RadiographyMeasure::min, "min"},
-    {RadiographyMeasure::max, "max"},
-    {RadiographyMeasure::total, "total"},
-}};
+    {RadiographyMeasure::min, "min"}, {RadiographyMeasure::max, "max"}, {RadiographyMeasure::total, "total"}}};
 inline const char* to_string(RadiographyMeasure m) noexcept { return name_of(kRadiographyMeasureNames, m); }
 const std::vector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m);
 

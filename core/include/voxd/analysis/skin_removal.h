@@ -25,9 +25,7 @@ namespace voxd {
 //    so every layer is one voxel size deeper whatever the wall's direction.
 enum class PeelMetric { faces, euclidean };
 inline constexpr EnumNames<PeelMetric, 2> kPeelMetricNames{{
-    {PeelMetric::faces, "faces"},
-    {PeelMetric::euclidean, "euclidean"},
-}};
+    {PeelMetric::faces, "faces"}, {PeelMetric::euclidean, "euclidean"}}};
 inline const char* to_string(PeelMetric metric) noexcept { return name_of(kPeelMetricNames, metric); }
 
 // Peel depth of every voxel (0 where empty). Voxels outside the grid count as

@@ -34,15 +34,9 @@ namespace voxd {
 
 enum class VolumeFormat { rle, binvox, raw, nrrd, vox, png_stack, stl, glb };
 inline constexpr EnumNames<VolumeFormat, 8> kVolumeFormatNames{{
-    {VolumeFormat::rle, "rle"},
-    {VolumeFormat::binvox, "binvox"},
-    {VolumeFormat::raw, "raw"},
-    {VolumeFormat::nrrd, "nrrd"},
-    {VolumeFormat::vox, "vox"},
-    {VolumeFormat::png_stack, "png-stack"},
-    {VolumeFormat::stl, "stl"},
-    {VolumeFormat::glb, "glb"},
-}};
+    {VolumeFormat::rle, "rle"}, {VolumeFormat::binvox, "binvox"}, {VolumeFormat::raw, "raw"},
+    {VolumeFormat::nrrd, "nrrd"}, {VolumeFormat::vox, "vox"}, {VolumeFormat::png_stack, "png-stack"},
+    {VolumeFormat::stl, "stl"}, {VolumeFormat::glb, "glb"}}};
 enum class RawPacking { bytes, bits };
 enum class NrrdEncoding { raw, gzip };
 

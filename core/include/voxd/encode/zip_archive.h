@@ -56,6 +56,7 @@ class ZipWriter {
   };
 
   void emit(std::span<const std::uint8_t> bytes);
+  static void put_entry_fields(std::vector<std::uint8_t>& out, const Entry& e);
 
   ByteSink& sink_;
   std::vector<Entry> entries_;

@@ -15,13 +15,8 @@ namespace voxd {
 enum class MeshFormat { unknown, stl_binary, stl_ascii, obj, ply, draco };
 
 inline constexpr EnumNames<MeshFormat, 6> kMeshFormatNames{{
-    {MeshFormat::unknown, "unknown"},
-    {MeshFormat::stl_binary, "stl_binary"},
-    {MeshFormat::stl_ascii, "stl_ascii"},
-    {MeshFormat::obj, "obj"},
-    {MeshFormat::ply, "ply"},
-    {MeshFormat::draco, "draco"},
-}};
+    {MeshFormat::unknown, "unknown"}, {MeshFormat::stl_binary, "stl_binary"}, {MeshFormat::stl_ascii, "stl_ascii"},
+    {MeshFormat::obj, "obj"}, {MeshFormat::ply, "ply"}, {MeshFormat::draco, "draco"}}};
 inline const char* to_string(MeshFormat format) noexcept { return name_of(kMeshFormatNames, format); }
 
 struct DecodeLimits {

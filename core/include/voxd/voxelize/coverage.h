@@ -34,10 +34,8 @@ namespace voxd {
 
 enum class CoverageSampling { exact, uniform, stochastic };
 inline constexpr EnumNames<CoverageSampling, 3> kCoverageSamplingNames{{
-    {CoverageSampling::exact, "exact"},
-    {CoverageSampling::uniform, "uniform"},
-    {CoverageSampling::stochastic, "stochastic"},
-}};
+    {CoverageSampling::exact, "exact"}, {CoverageSampling::uniform, "uniform"},
+    {CoverageSampling::stochastic, "stochastic"}}};
 inline const char* to_string(CoverageSampling sampling) noexcept { return name_of(kCoverageSamplingNames, sampling); }
 
 struct CoverageOptions {

@@ -122,14 +122,8 @@ void validate(const Palette& palette);
 
 enum class PaletteMetric { nearest, outer, inner };
 inline constexpr EnumNames<PaletteMetric, 3> kPaletteMetricNames{{
-    {PaletteMetric::nearest, "nearest"},
-    {PaletteMetric::outer, "outer"},
-    {PaletteMetric::inner, "inner"},
-}};
+    {PaletteMetric::nearest, "nearest"}, {PaletteMetric::outer, "outer"}, {PaletteMetric::inner, "inner"}}};
 inline const char* to_string(PaletteMetric metric) noexcept { return name_of(kPaletteMetricNames, metric); }
-inline std::optional<PaletteMetric> palette_metric_from_string(std::string_view name) {
-  return value_named(kPaletteMetricNames, name);
-}
 
 struct PaletteOptions {
   Palette palette = builtin_palette(46);

@@ -52,9 +52,7 @@ namespace voxd {
 
 enum class SignConvention { inside_negative, inside_positive };
 inline constexpr EnumNames<SignConvention, 2> kSignConventionNames{{
-    {SignConvention::inside_negative, "inside_negative"},
-    {SignConvention::inside_positive, "inside_positive"},
-}};
+    {SignConvention::inside_negative, "inside_negative"}, {SignConvention::inside_positive, "inside_positive"}}};
 inline const char* to_string(SignConvention sign) noexcept { return name_of(kSignConventionNames, sign); }
 
 struct SdfOptions {

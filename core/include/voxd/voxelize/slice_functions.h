@@ -96,15 +96,10 @@ enum class SliceFunction { single_color, color_ramp, interpolated_colors, checke
 
 // The contract's names.
 inline constexpr EnumNames<SliceFunction, 8> kSliceFunctionNames{{
-    {SliceFunction::single_color, "single_color"},
-    {SliceFunction::color_ramp, "color_ramp"},
-    {SliceFunction::interpolated_colors, "interpolated_colors"},
-    {SliceFunction::checker, "checker"},
-    {SliceFunction::wood, "wood"},
-    {SliceFunction::marble, "marble"},
-    {SliceFunction::rock, "rock"},
-    {SliceFunction::custom, "custom"},
-}};
+    {SliceFunction::single_color, "single_color"}, {SliceFunction::color_ramp, "color_ramp"},
+    {SliceFunction::interpolated_colors, "interpolated_colors"}, {SliceFunction::checker, "checker"},
+    {SliceFunction::wood, "wood"}, {SliceFunction::marble, "marble"}, {SliceFunction::rock, "rock"},
+    {SliceFunction::custom, "custom"}}};
 inline const char* to_string(SliceFunction function) noexcept { return name_of(kSliceFunctionNames, function); }
 inline std::optional<SliceFunction> slice_function_from_string(std::string_view name) {
   return value_named(kSliceFunctionNames, name);

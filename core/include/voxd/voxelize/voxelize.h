@@ -17,15 +17,9 @@ enum class InsideTest {
 };
 
 inline constexpr EnumNames<VoxelMode, 3> kVoxelModeNames{{
-    {VoxelMode::solid, "solid"},
-    {VoxelMode::surface, "surface"},
-    {VoxelMode::solid_and_surface, "solid+surface"},
-}};
+    {VoxelMode::solid, "solid"}, {VoxelMode::surface, "surface"}, {VoxelMode::solid_and_surface, "solid+surface"}}};
 inline constexpr EnumNames<InsideTest, 3> kInsideTestNames{{
-    {InsideTest::parity, "parity"},
-    {InsideTest::vote, "vote"},
-    {InsideTest::winding, "winding"},
-}};
+    {InsideTest::parity, "parity"}, {InsideTest::vote, "vote"}, {InsideTest::winding, "winding"}}};
 inline const char* to_string(VoxelMode mode) noexcept { return name_of(kVoxelModeNames, mode); }
 inline const char* to_string(InsideTest inside) noexcept { return name_of(kInsideTestNames, inside); }
 
