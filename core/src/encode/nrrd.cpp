@@ -3,12 +3,13 @@
 // or as one gzip stream. ParaView, 3D Slicer and ITK read it directly.
 #include <string>
 
+#include "encode/nrrd_header.h"
 #include "encode/volume_checks.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/encode/volume_format.h"
 
 namespace voxd {
-namespace {
+namespace encode {
 
 std::string nrrd_header(const Grid& g, const char* type, std::string_view content, NrrdEncoding encoding) {
   const double h = g.voxel_size;
@@ -33,11 +34,14 @@ std::string nrrd_header(const Grid& g, const char* type, std::string_view conten
   return header;
 }
 
+}  // namespace encode
+namespace {
+
 template <class WriteData>
 void write_nrrd_with(const Grid& grid, const char* type, std::string_view content, NrrdEncoding encoding,
                      ByteSink& sink, const WriteData& write_data) {
   encode::require_voxels(grid, "NRRD writer");
-  const std::string header = nrrd_header(grid, type, content, encoding);
+  const std::string header = encode::nrrd_header(grid, type, content, encoding);
   sink.write(header.data(), header.size());
   if (encoding == NrrdEncoding::raw) return write_data(sink);
   GzipSink gzip(sink);

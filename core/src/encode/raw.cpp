@@ -5,6 +5,7 @@
 #include <cstring>
 #include <string>
 
+#include "encode/bit_packer.h"
 #include "encode/byte_buffer.h"
 #include "encode/volume_checks.h"
 #include "voxd/encode/volume_format.h"
@@ -48,58 +49,9 @@ void write_bytes(const BitVolume& volume, ByteSink& sink) {
   sink.write(out.bytes());
 }
 
-// Appends bit fields to a little-endian bit stream.
-class BitPacker {
- public:
-  // Appends the low n bits of `bits` (1 <= n <= 64; higher bits zero).
-  void put(std::uint64_t bits, int n) {
-    pending_ |= bits << pending_bits_;
-    if (pending_bits_ + n < 64) {
-      pending_bits_ += n;
-      return;
-    }
-    store(pending_, 8);
-    pending_ = pending_bits_ == 0 ? 0 : bits >> (64 - pending_bits_);
-    pending_bits_ = pending_bits_ + n - 64;
-  }
-  // Writes the complete bytes so far; with `last`, also the partial tail
-  // byte (zero-padded).
-  void flush(ByteSink& sink, bool last) {
-    if (last && pending_bits_ > 0) {
-      store(pending_, (pending_bits_ + 7) / 8);
-      pending_ = 0;
-      pending_bits_ = 0;
-    }
-    sink.write(out_.bytes());
-    out_.reset();
-  }
-  std::size_t buffered() const { return out_.size(); }
-
- private:
-  void store(std::uint64_t v, int bytes) {
-    std::uint8_t le[8];
-    for (int b = 0; b < 8; ++b) le[b] = static_cast<std::uint8_t>(v >> (8 * b));
-    out_.put_bytes(le, static_cast<std::size_t>(bytes));
-  }
-  ByteBuffer out_;
-  std::uint64_t pending_ = 0;
-  int pending_bits_ = 0;
-};
-
 void write_bits(const BitVolume& volume, ByteSink& sink) {
-  const std::int64_t nx = volume.grid().dims.x;
-  BitPacker packer;
-  for (std::int64_t k = 0; k < volume.grid().dims.z; ++k) {
-    for (std::int64_t j = 0; j < volume.grid().dims.y; ++j) {
-      const std::uint64_t* row = volume.row(j, k);
-      for (std::int64_t i = 0; i < nx; i += 64) {
-        const int n = static_cast<int>(std::min<std::int64_t>(64, nx - i));
-        const std::uint64_t mask = n == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1;
-        packer.put(row[i >> 6] & mask, n);
-      }
-      if (packer.buffered() >= kFlushBytes) packer.flush(sink, false);
-    }
-  }
+  encode::BitPacker packer;
+  encode::pack_raw_bits(volume, packer, sink);
   packer.flush(sink, true);
 }
 
@@ -175,6 +127,27 @@ void read_bits(std::span<const std::uint8_t> data, BitVolume& volume) {
 }
 
 }  // namespace
+
+namespace encode {
+
+void pack_raw_bits(const BitVolume& volume, BitPacker& packer, ByteSink& sink) {
+  const std::int64_t nx = volume.grid().dims.x;
+  for (std::int64_t k = 0; k < volume.grid().dims.z; ++k) {
+    for (std::int64_t j = 0; j < volume.grid().dims.y; ++j) {
+      const std::uint64_t* row = volume.row(j, k);
+      for (std::int64_t i = 0; i < nx; i += 64) {
+        const int n = static_cast<int>(std::min<std::int64_t>(64, nx - i));
+        const std::uint64_t mask = n == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1;
+        packer.put(row[i >> 6] & mask, n);
+      }
+      if (packer.buffered() >= kFlushBytes) packer.flush(sink, false);
+    }
+  }
+}
+
+void write_raw_bytes(const BitVolume& volume, ByteSink& sink) { write_bytes(volume, sink); }
+
+}  // namespace encode
 
 void write_raw(const BitVolume& volume, RawPacking packing, ByteSink& sink) {
   encode::require_voxels(volume.grid(), "raw writer");

@@ -14,6 +14,8 @@
 
 #include "encode/byte_cursor.h"
 #include "voxd/grid.h"
+#include "voxd/bit_volume.h"
+#include "voxd/byte_sink.h"
 #include "voxd/enum_names.h"
 
 namespace voxd::encode {
@@ -49,5 +51,12 @@ std::vector<std::uint8_t> encode_rle_header(const Grid& grid, RleValueType value
 // Reads and validates the preamble and JSON header, leaving `in` at the first
 // block. Throws Error(malformed_input / truncated_input).
 RleHeader read_rle_header(ByteCursor& in);
+
+// A bit volume's RLE written as its z layers arrive (streamed voxelization):
+// the header, then each slab's layers (global indices from k0), then the end
+// block after the last of the grid's nz layers. Byte for byte write_rle's.
+void write_rle_bit_header(const Grid& grid, ByteSink& sink);
+void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink);
+void write_rle_end(std::int64_t nz, ByteSink& sink);
 
 }  // namespace voxd::encode

@@ -33,10 +33,11 @@ constexpr std::size_t kInFlightInputBytes = std::size_t{2} << 20;
 // Below this, starting threads costs more than the encoding.
 constexpr std::size_t kParallelMinBytes = std::size_t{256} << 10;
 
-// Encodes slabs [0, nz) with encode_slab(k, buffer), in parallel, and writes
-// their blocks in order, then the end block.
-void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes,
-                       const std::function<void(std::int64_t, ByteBuffer&)>& encode_slab, ByteSink& sink) {
+// Encodes slabs [k_begin, k_end) with encode_slab(k, buffer), in parallel,
+// and writes their blocks in order.
+void write_slab_block_range(std::int64_t k_begin, std::int64_t k_end, std::size_t slab_input_bytes,
+                            const std::function<void(std::int64_t, ByteBuffer&)>& encode_slab, ByteSink& sink) {
+  const std::int64_t nz = k_end - k_begin;
   const bool small = slab_input_bytes * static_cast<std::size_t>(nz) < kParallelMinBytes;
   const int threads = small ? 1 : default_thread_count();
   // Slabs in flight: about kInFlightInputBytes of input, but at least two per
@@ -47,28 +48,38 @@ void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes,
   std::vector<ByteBuffer> buffers(std::min(slots, static_cast<std::size_t>(nz)));
   encode::run_ordered_pipeline(
       nz, threads, buffers.size(),
-      [&](std::int64_t k, std::size_t slot) {
+      [&](std::int64_t i, std::size_t slot) {
         ByteBuffer& buffer = buffers[slot];
         buffer.reset(kBlockHeaderRoom);
-        encode_slab(k, buffer);
+        encode_slab(k_begin + i, buffer);
       },
-      [&](std::int64_t k, std::size_t slot) {
+      [&](std::int64_t i, std::size_t slot) {
         ByteBuffer& buffer = buffers[slot];
         const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
         std::uint8_t header[kBlockHeaderRoom];
         std::uint8_t* end = header;
         *end++ = encode::kSlabTag;
-        end = encode::put_varint(end, static_cast<std::uint64_t>(k));
+        end = encode::put_varint(end, static_cast<std::uint64_t>(k_begin + i));
         end = encode::put_varint(end, payload);
         const auto header_size = static_cast<std::size_t>(end - header);
         std::uint8_t* block = buffer.data() + kBlockHeaderRoom - header_size;
         std::memcpy(block, header, header_size);
         sink.write(block, header_size + payload);
       });
+}
+
+void write_end_block(std::int64_t nz, ByteSink& sink) {
   std::uint8_t end_block[1 + encode::kMaxVarintBytes];
   end_block[0] = encode::kEndTag;
   const std::uint8_t* end = encode::put_varint(end_block + 1, static_cast<std::uint64_t>(nz));
   sink.write(end_block, static_cast<std::size_t>(end - end_block));
+}
+
+// Slabs [0, nz), then the end block.
+void write_slab_blocks(std::int64_t nz, std::size_t slab_input_bytes,
+                       const std::function<void(std::int64_t, ByteBuffer&)>& encode_slab, ByteSink& sink) {
+  write_slab_block_range(0, nz, slab_input_bytes, encode_slab, sink);
+  write_end_block(nz, sink);
 }
 
 void write_header(const Grid& grid, encode::RleValueType type, ByteSink& sink, const std::string& metadata = {}) {
@@ -209,6 +220,20 @@ void write_rle_quantized(const DenseVolume<float>& volume, Quantize levels, std:
       volume.grid().dims.z, volume.slab_size() * sizeof(float),
       [&volume, &q, bytes](std::int64_t k, ByteBuffer& out) { encode_quantized_slab(volume, k, q, bytes, out); }, sink);
 }
+
+namespace encode {
+
+void write_rle_bit_header(const Grid& grid, ByteSink& sink) { write_header(grid, RleValueType::bit, sink); }
+
+void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink) {
+  write_slab_block_range(
+      k0, k0 + slab.grid().dims.z, slab.slab_words() * sizeof(std::uint64_t),
+      [&slab, k0](std::int64_t k, ByteBuffer& out) { encode_bit_slab(slab, k - k0, out); }, sink);
+}
+
+void write_rle_end(std::int64_t nz, ByteSink& sink) { write_end_block(nz, sink); }
+
+}  // namespace encode
 
 void write_rle(const DenseVolume<float>& volume, ByteSink& sink) {
   encode::require_voxels(volume, "RLE writer");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <climits>
+#include <stdexcept>
 #include <cstdint>
 #include <vector>
 
@@ -61,18 +62,20 @@ bool small_job(const Mesh& mesh, const Grid& grid) {
 
 }  // namespace
 
-ParityVoxelizer::ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads)
+ParityVoxelizer::ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads, std::int64_t rows_per_chunk)
     : grid_(grid),
       axes_(axes_for_ray(ray_axis)),
       threads_(small_job(mesh, grid) ? 1 : threads > 0 ? threads : default_thread_count()),
       fixed_(mesh, grid) {
   const std::int64_t rows = grid.dims[axes_.v];
   // Enough chunks to balance threads, few enough that triangles rarely straddle.
-  const std::int64_t per_chunk = std::clamp<std::int64_t>(rows / (8 * threads_), 1, 16);
+  const std::int64_t per_chunk =
+      rows_per_chunk > 0 ? rows_per_chunk : std::clamp<std::int64_t>(rows / (8 * threads_), 1, 16);
   bins_ = bin_triangles(fixed_, axes_.v, rows, per_chunk, 0, threads_);
 }
 
-void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
+void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume, std::int64_t z_origin) const {
+  if (z_origin != 0 && axes_.ray == 2) throw std::logic_error("rays along z need the whole grid's z layers");
   const std::int64_t row0 = chunk * bins_.rows_per_chunk;
   const std::int64_t row1 = std::min(row0 + bins_.rows_per_chunk, grid_.dims[axes_.v]);
   const std::int64_t nx = grid_.dims.x, ny = grid_.dims.y, nz = grid_.dims.z;
@@ -102,7 +105,7 @@ void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
       for_each_triangle([&](std::int64_t j, std::int64_t k, std::int64_t c) {
         if (c >= ray_len) return;
         c = std::max<std::int64_t>(c, 0);
-        toggle((k * ny + j) * rw + (c >> 6), c & 63);
+        toggle(((k - z_origin) * ny + j) * rw + (c >> 6), c & 63);
         const auto r = static_cast<std::size_t>((k - row0) * ny + j);
         const auto w = static_cast<std::uint32_t>(c >> 6);
         first_word[r] = std::min(first_word[r], w);
@@ -113,7 +116,7 @@ void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
       for_each_triangle([&](std::int64_t i, std::int64_t k, std::int64_t c) {
         if (c >= ray_len) return;
         c = std::max<std::int64_t>(c, 0);
-        toggle((k * ny + c) * rw + (i >> 6), i & 63);
+        toggle(((k - z_origin) * ny + c) * rw + (i >> 6), i & 63);
       });
       break;
     default:
@@ -132,15 +135,16 @@ void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume) const {
       for (std::int64_t k = row0; k < row1; ++k)
         for (std::int64_t j = 0; j < ny; ++j) {
           const auto r = static_cast<std::size_t>((k - row0) * ny + j);
-          if (first_word[r] <= last_word[r]) prefix_xor_row(volume.row(j, k), first_word[r], last_word[r], rw, mask);
+          if (first_word[r] <= last_word[r])
+            prefix_xor_row(volume.row(j, k - z_origin), first_word[r], last_word[r], rw, mask);
         }
       break;
     }
     case 1:
       for (std::int64_t k = row0; k < row1; ++k)
         for (std::int64_t j = 1; j < ny; ++j) {
-          std::uint64_t* cur = volume.row(j, k);
-          const std::uint64_t* prev = volume.row(j - 1, k);
+          std::uint64_t* cur = volume.row(j, k - z_origin);
+          const std::uint64_t* prev = volume.row(j - 1, k - z_origin);
           for (std::int64_t w = 0; w < rw; ++w) cur[w] ^= prev[w];
         }
       break;

@@ -21,7 +21,9 @@ namespace voxd::detail {
 
 class ParityVoxelizer {
  public:
-  ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads);
+  // `rows_per_chunk` 0 picks enough chunks to balance the threads over the
+  // whole grid; a streamed run picks fewer rows, to balance them in a slab.
+  ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axis, int threads, std::int64_t rows_per_chunk = 0);
 
   std::int64_t chunk_count() const { return bins_.chunk_count; }
   // Rows [chunk * rows_per_chunk, ...) of the partition axis.
@@ -29,8 +31,10 @@ class ParityVoxelizer {
   int partition_axis() const { return axes_.v; }
 
   // Writes the final voxels of one chunk into `volume` (which must be zero
-  // there). Chunks may run concurrently: they touch disjoint words.
-  void fill_chunk(std::int64_t chunk, BitVolume& volume) const;
+  // there). Chunks may run concurrently: they touch disjoint words. With rays
+  // along x or y, `volume` may hold only the z layers from `z_origin` on (a
+  // slab of the grid, as streamed voxelization fills them).
+  void fill_chunk(std::int64_t chunk, BitVolume& volume, std::int64_t z_origin = 0) const;
 
   // All chunks, in parallel, honouring cancellation and reporting progress
   // in [progress_from, progress_to].

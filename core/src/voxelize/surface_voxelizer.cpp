@@ -11,6 +11,7 @@
 
 #include "voxd/parallel.h"
 #include "voxd/voxelize/voxelize.h"
+#include "voxelize/surface_voxelizer.h"
 
 namespace voxd {
 namespace {
@@ -38,7 +39,8 @@ struct ProjectedEdges {
   }
 };
 
-void voxelize_triangle(const glm::dvec3 v[3], const Grid& grid, std::int64_t z0, std::int64_t z1, BitVolume& out) {
+void voxelize_triangle(const glm::dvec3 v[3], const Grid& grid, std::int64_t z0, std::int64_t z1, BitVolume& out,
+                       std::int64_t z_origin) {
   const glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
   if (n == glm::dvec3(0.0)) return;  // zero area: covers no surface
   const glm::dvec3 an = glm::abs(n);
@@ -87,7 +89,7 @@ void voxelize_triangle(const glm::dvec3 v[3], const Grid& grid, std::int64_t z0,
         const glm::dvec3 p(idx);
         if (!other_a.overlaps(p[other_a.c0], p[other_a.c1]) || !other_b.overlaps(p[other_b.c0], p[other_b.c1]))
           continue;
-        out.row(idx.y, idx.z)[idx.x >> 6] |= std::uint64_t{1} << (idx.x & 63);
+        out.row(idx.y, idx.z - z_origin)[idx.x >> 6] |= std::uint64_t{1} << (idx.x & 63);
       }
     }
   }
@@ -95,39 +97,50 @@ void voxelize_triangle(const glm::dvec3 v[3], const Grid& grid, std::int64_t z0,
 
 }  // namespace
 
-BitVolume voxelize_surface(const Mesh& mesh, const Grid& grid, int threads, JobControl* control) {
-  BitVolume out(grid);
-  threads = threads > 0 ? threads : default_thread_count();
+namespace detail {
+
+SurfaceVoxelizer::SurfaceVoxelizer(const Mesh& mesh, const Grid& grid, int threads, std::int64_t rows_per_chunk)
+    : mesh_(&mesh), grid_(grid), threads_(threads > 0 ? threads : default_thread_count()) {
   // Vertices in voxel units: voxel (i,j,k) is the cube [i,i+1] x [j,j+1] x [k,k+1].
-  std::vector<glm::dvec3> unit(mesh.vertices.size());
-  for (std::size_t i = 0; i < unit.size(); ++i)
-    unit[i] = (glm::dvec3(mesh.vertices[i]) - grid.origin) / grid.voxel_size;
+  unit_.resize(mesh.vertices.size());
+  for (std::size_t i = 0; i < unit_.size(); ++i) unit_[i] = (glm::dvec3(mesh.vertices[i]) - grid.origin) / grid.voxel_size;
 
   // Bin triangles by z chunk so each thread writes only its own slabs.
   const std::int64_t nz = grid.dims.z;
-  const std::int64_t per_chunk = std::clamp<std::int64_t>(nz / (8 * threads), 1, 16);
-  const std::int64_t chunks = (nz + per_chunk - 1) / per_chunk;
-  std::vector<std::vector<std::uint32_t>> bins(static_cast<std::size_t>(chunks));
+  per_chunk_ = rows_per_chunk > 0 ? rows_per_chunk : std::clamp<std::int64_t>(nz / (8 * threads_), 1, 16);
+  const std::int64_t chunks = (nz + per_chunk_ - 1) / per_chunk_;
+  bins_.resize(static_cast<std::size_t>(chunks));
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto& tri = mesh.triangles[t];
-    const double zlo = std::min({unit[tri[0]].z, unit[tri[1]].z, unit[tri[2]].z});
-    const double zhi = std::max({unit[tri[0]].z, unit[tri[1]].z, unit[tri[2]].z});
+    const double zlo = std::min({unit_[tri[0]].z, unit_[tri[1]].z, unit_[tri[2]].z});
+    const double zhi = std::max({unit_[tri[0]].z, unit_[tri[1]].z, unit_[tri[2]].z});
     if (!(zhi >= 0.0) || !(zlo <= static_cast<double>(nz))) continue;
     const std::int64_t k0 = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(zlo)) - 1);
     const std::int64_t k1 = std::min<std::int64_t>(nz - 1, static_cast<std::int64_t>(std::floor(zhi)));
-    for (std::int64_t c = k0 / per_chunk; c <= k1 / per_chunk; ++c) bins[static_cast<std::size_t>(c)].push_back(static_cast<std::uint32_t>(t));
+    for (std::int64_t c = k0 / per_chunk_; c <= k1 / per_chunk_; ++c) bins_[static_cast<std::size_t>(c)].push_back(static_cast<std::uint32_t>(t));
   }
+}
 
+void SurfaceVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& out, std::int64_t z_origin) const {
+  const std::int64_t z0 = chunk * per_chunk_, z1 = std::min(grid_.dims.z, z0 + per_chunk_);
+  for (std::uint32_t t : bins_[static_cast<std::size_t>(chunk)]) {
+    const auto& tri = mesh_->triangles[t];
+    const glm::dvec3 v[3] = {unit_[tri[0]], unit_[tri[1]], unit_[tri[2]]};
+    voxelize_triangle(v, grid_, z0, z1, out, z_origin);
+  }
+}
+
+}  // namespace detail
+
+BitVolume voxelize_surface(const Mesh& mesh, const Grid& grid, int threads, JobControl* control) {
+  BitVolume out(grid);
+  const detail::SurfaceVoxelizer surface(mesh, grid, threads);
+  const std::int64_t chunks = surface.chunk_count();
   std::atomic<std::int64_t> done{0};
-  parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
+  parallel_for(0, chunks, 1, surface.threads(), [&](std::int64_t c0, std::int64_t c1) {
     for (std::int64_t c = c0; c < c1; ++c) {
       if (control) control->check_cancelled();
-      const std::int64_t z0 = c * per_chunk, z1 = std::min(nz, z0 + per_chunk);
-      for (std::uint32_t t : bins[static_cast<std::size_t>(c)]) {
-        const auto& tri = mesh.triangles[t];
-        const glm::dvec3 v[3] = {unit[tri[0]], unit[tri[1]], unit[tri[2]]};
-        voxelize_triangle(v, grid, z0, z1, out);
-      }
+      surface.fill_chunk(c, out);
       if (control) control->set_progress(static_cast<double>(done.fetch_add(1) + 1) / static_cast<double>(chunks));
     }
   });

@@ -1,0 +1,44 @@
+#pragma once
+// Slab-streamed binary voxelization (Thon et al.'s "limited only by disk
+// size"; Patil & Ravi's stack of voxel layers): the grid is voxelized z-slab
+// by z-slab, each slab handed on (to an encoder, a file, an accumulator) as
+// soon as it is final and its memory reused for the next. Peak memory is the
+// mesh, its triangle bins and one slab, O(triangles + nx * ny * slab), not
+// O(nx * ny * nz); the voxels are exactly voxelize()'s.
+#include <cstdint>
+#include <functional>
+
+#include "voxd/bit_volume.h"
+#include "voxd/mesh.h"
+#include "voxd/progress.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd {
+
+// Receives z layers [k0, k0 + slab.grid().dims.z) of the grid as a volume
+// whose grid is that part of the whole one (its origin moved up by k0
+// voxels). Called in z order, on the calling thread; the slab is reused after
+// the call returns.
+using BitSlabConsumer = std::function<void(std::int64_t k0, const BitVolume& slab)>;
+
+// Whether these options stream: the parity inside test (rays along x; the
+// vote's rays along y and z, and the winding number's whole-mesh sums, do
+// not), in every mode.
+bool can_stream(const VoxelizeOptions& options);
+
+// Z layers per slab for about `slab_bytes` of bits (at least one layer, at
+// most the grid's).
+std::int64_t streamed_slab_layers(const Grid& grid, std::uint64_t slab_bytes);
+
+// Bytes a streamed voxelization holds beyond the mesh itself, at its peak:
+// the slab, the fixed-point mesh and the triangle bins.
+std::uint64_t streamed_voxelize_memory(const Grid& grid, std::uint64_t triangles, std::int64_t slab_layers);
+
+// Voxelizes slab by slab in z order, handing each slab to `consume`. Throws
+// Error(invalid_argument) for options that do not stream (can_stream).
+// Progress runs over the slabs (the consumer's work included); cancellation
+// is honoured between slabs and between chunks of a slab.
+void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, std::int64_t slab_layers,
+                       const BitSlabConsumer& consume, JobControl* control = nullptr);
+
+}  // namespace voxd

@@ -1,0 +1,85 @@
+#include "voxd/voxelize/streamed.h"
+
+#include <algorithm>
+#include <atomic>
+#include <optional>
+
+#include "voxd/error.h"
+#include "voxd/parallel.h"
+#include "voxelize/parity_voxelizer.h"
+#include "voxelize/surface_voxelizer.h"
+
+namespace voxd {
+namespace {
+
+// The grid's z layers [k0, k0 + layers).
+Grid slab_grid(const Grid& grid, std::int64_t k0, std::int64_t layers) {
+  Grid g = grid;
+  g.origin.z += static_cast<double>(k0) * grid.voxel_size;
+  g.dims.z = layers;
+  return g;
+}
+
+std::uint64_t layer_bytes(const Grid& grid) {
+  return static_cast<std::uint64_t>((grid.dims.x + 63) / 64) * 8 * static_cast<std::uint64_t>(grid.dims.y);
+}
+
+}  // namespace
+
+bool can_stream(const VoxelizeOptions& options) {
+  return options.mode == VoxelMode::surface || options.inside == InsideTest::parity;
+}
+
+std::int64_t streamed_slab_layers(const Grid& grid, std::uint64_t slab_bytes) {
+  const std::uint64_t per_layer = std::max<std::uint64_t>(layer_bytes(grid), 1);
+  return std::clamp<std::int64_t>(static_cast<std::int64_t>(slab_bytes / per_layer), 1, std::max<std::int64_t>(grid.dims.z, 1));
+}
+
+std::uint64_t streamed_voxelize_memory(const Grid& grid, std::uint64_t triangles, std::int64_t slab_layers) {
+  // The fixed-point mesh (three 64-bit coordinates a vertex, about half a
+  // vertex a triangle, and the index triples), the bins (a few entries a
+  // triangle) and the surface pass's vertices in voxel units.
+  const std::uint64_t mesh_side = triangles * (12 + 24 + 16 + 24);
+  return layer_bytes(grid) * static_cast<std::uint64_t>(slab_layers) + mesh_side;
+}
+
+void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, std::int64_t slab_layers,
+                       const BitSlabConsumer& consume, JobControl* control) {
+  if (!can_stream(options))
+    throw Error(ErrorCode::invalid_argument, std::string("the ") + to_string(options.inside) +
+                                                 " inside test needs the whole grid; only parity streams slab by slab");
+  const std::int64_t nz = grid.dims.z;
+  if (grid.voxel_count() == 0) return;
+  const int threads = options.threads > 0 ? options.threads : default_thread_count();
+  // Chunks of a few rows, so each slab has work for every thread; a slab is
+  // a whole number of chunks.
+  const std::int64_t layers_wanted = std::clamp<std::int64_t>(slab_layers, 1, nz);
+  const std::int64_t per_chunk = std::max<std::int64_t>(1, layers_wanted / (4 * threads));
+  const std::int64_t layers = std::min(nz, (layers_wanted + per_chunk - 1) / per_chunk * per_chunk);
+
+  std::optional<detail::ParityVoxelizer> parity;
+  std::optional<detail::SurfaceVoxelizer> surface;
+  if (options.mode != VoxelMode::surface) parity.emplace(mesh, grid, 0, threads, per_chunk);
+  if (options.mode != VoxelMode::solid) surface.emplace(mesh, grid, threads, per_chunk);
+
+  const std::int64_t slabs = (nz + layers - 1) / layers;
+  for (std::int64_t s = 0; s < slabs; ++s) {
+    if (control) control->check_cancelled();
+    const std::int64_t k0 = s * layers, n = std::min(layers, nz - k0);
+    // A fresh slab comes zeroed from the OS (only the touched pages cost);
+    // the last, shorter one is a slab of its own size.
+    BitVolume slab(slab_grid(grid, k0, n));
+    const std::int64_t c0 = k0 / per_chunk, c1 = (k0 + n + per_chunk - 1) / per_chunk;
+    parallel_for(c0, c1, 1, threads, [&](std::int64_t a, std::int64_t b) {
+      for (std::int64_t c = a; c < b; ++c) {
+        if (control) control->check_cancelled();
+        if (parity) parity->fill_chunk(c, slab, k0);
+        if (surface) surface->fill_chunk(c, slab, k0);
+      }
+    });
+    consume(k0, slab);
+    if (control) control->set_progress(static_cast<double>(s + 1) / static_cast<double>(slabs));
+  }
+}
+
+}  // namespace voxd
