@@ -22,6 +22,14 @@ std::uint64_t JobMode::memory_estimate(const Grid& grid, const JobParams& params
 
 bool JobMode::needs_parity_solid(const JobParams&) const { return false; }
 
+std::optional<std::string> JobMode::streaming_refusal(const JobParams&) const {
+  return "mode " + std::string(name()) + " makes values over the whole grid, so it runs in memory; only the modes of bits stream";
+}
+
+void JobMode::run_streamed(const ModeInput&, std::int64_t, const BitSlabConsumer&) const {
+  throw std::logic_error("mode " + std::string(name()) + " does not stream");
+}
+
 bool JobMode::writes(VolumeFormat) const { return false; }
 
 void JobMode::write(VolumeFormat format, const JobParams&, const VolumeSource&, ByteSink&) const {

@@ -36,6 +36,7 @@
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
+#include "voxd/voxelize/streamed.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd::api {
@@ -124,6 +125,12 @@ class JobMode {
   // The timing stage's name.
   virtual std::string_view stage_name() const { return name(); }
   virtual ModeResult run(const ModeInput& in) const = 0;
+  // Slab-streamed runs (voxd/voxelize/streamed.h), for grids larger than
+  // memory: nullopt when this job's result can be made slab by slab, else
+  // why not, in words for the user. run_streamed hands each finished z-slab
+  // of the job's bits to `consume`.
+  virtual std::optional<std::string> streaming_refusal(const JobParams& params) const;
+  virtual void run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& consume) const;
 
   // --- What it serves ---
   // Formats the mode writes itself rather than as a volume.

@@ -65,6 +65,14 @@ std::uint64_t mesh_memory(const Mesh& mesh) {
   return mesh.vertices.capacity() * sizeof(mesh.vertices[0]) + mesh.triangles.capacity() * sizeof(mesh.triangles[0]);
 }
 
+void check_voxel_limit(const Grid& grid, std::uint64_t max_voxels, std::string_view hint) {
+  if (grid.voxel_count() <= max_voxels) return;
+  throw Error(ErrorCode::limit_exceeded,
+              "the grid has " + std::to_string(grid.voxel_count()) + " voxels (" + std::to_string(grid.dims.x) + " x " +
+                  std::to_string(grid.dims.y) + " x " + std::to_string(grid.dims.z) + "), over the limit of " +
+                  std::to_string(max_voxels) + "; use a lower resolution or a larger voxel_size" + std::string(hint));
+}
+
 PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                    const api::JobParams& params, const JobLimits& limits) {
   PreparedVoxelJob job;
@@ -93,25 +101,24 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
     box.max /= aspect;
   }
   job.grid = resolve_grid(params.grid, box);
-  if (job.grid.voxel_count() > limits.max_voxels)
-    throw Error(ErrorCode::limit_exceeded,
-                "the grid has " + std::to_string(job.grid.voxel_count()) + " voxels (" +
-                    std::to_string(job.grid.dims.x) + " x " + std::to_string(job.grid.dims.y) + " x " +
-                    std::to_string(job.grid.dims.z) + "), over the limit of " + std::to_string(limits.max_voxels) +
-                    "; use a lower resolution or a larger voxel_size");
+  check_voxel_limit(job.grid, limits.max_voxels, "");
   job.memory_estimate = estimate_job_memory(job.grid, params);
   job.timings.add("grid", clock.lap());
   return job;
 }
 
-VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads) {
+namespace {
+
+// What every run does before the voxels: the result's bookkeeping, the mesh
+// report of the mesh as uploaded, the rotation, the mode's voxel aspect, the
+// exact mass properties in the voxels' frame.
+VoxelJobResult begin_voxel_job(PreparedVoxelJob& job, bool with_report, JobControl* control, Stopwatch& clock) {
   VoxelJobResult result;
   result.format = job.format;
   result.triangles = job.triangles;
   result.rotation = job.rotation;
   result.grid = job.grid;
   result.timings = std::move(job.timings);
-  Stopwatch clock;
   if (control) control->check_cancelled();
   if (with_report) {
     result.report = make_mesh_report(job.mesh);
@@ -129,6 +136,15 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
   // Exact mass properties in the frame the voxels are in, for the analysis's
   // side-by-side comparison (cheap: one pass over the triangles).
   if (with_report) result.mesh_mass = mesh_mass_properties(job.mesh);
+  return result;
+}
+
+}  // namespace
+
+VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads) {
+  Stopwatch clock;
+  VoxelJobResult result = begin_voxel_job(job, with_report, control, clock);
+  const api::JobMode& mode = *job.params.mode;
   // A mode that makes values takes most of the time with them: a parity
   // solid of its own gets the first tenth of the progress bar, the values
   // the rest.
@@ -156,6 +172,22 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
   if (result.values) result.values_info["type"] = value_type_name(*result.values);
   result.filled = result.volume.count();
   result.timings.add("count", clock.lap());
+  return result;
+}
+
+VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
+                                          std::int64_t slab_layers, const BitSlabConsumer& consume) {
+  const api::JobMode& mode = *job.params.mode;
+  if (auto refusal = mode.streaming_refusal(job.params)) throw Error(ErrorCode::invalid_argument, *refusal);
+  Stopwatch clock;
+  VoxelJobResult result = begin_voxel_job(job, with_report, control, clock);
+  result.streamed = true;
+  mode.run_streamed({job.mesh, job.grid, job.params, threads, control, nullptr}, slab_layers,
+                    [&](std::int64_t k0, const BitVolume& slab) {
+                      result.filled += slab.count();
+                      consume(k0, slab);
+                    });
+  result.timings.add("voxelize+write", clock.lap());
   return result;
 }
 

@@ -20,6 +20,7 @@
 #include "voxd/mesh_report.h"
 #include "voxd/progress.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/voxelize/streamed.h"
 
 namespace voxd {
 
@@ -64,6 +65,9 @@ struct VoxelJobResult {
   std::optional<ValueVolume> values;
   // Volumes kept beside the values, by name (api::JobMode::stored_layers()).
   std::vector<std::pair<std::string, ValueVolume>> layers;
+  // Made slab by slab and handed on (execute_streamed_voxel_job): `volume`
+  // is then empty, `filled` counted from the slabs.
+  bool streamed = false;
   // What the values are, for the job status and the CLI summary
   // (proto-schemas/job-status.schema.json "values").
   nlohmann::json values_info;
@@ -92,6 +96,18 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
 // The expensive part: (mesh report of the mesh as uploaded,) rotation,
 // voxelization, count.
 VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads = 0);
+
+// The same, slab by slab (voxd/voxelize/streamed.h): each finished z-slab of
+// the job's bits goes to `consume` (an encoder, a file) and is gone after;
+// memory is the mesh and one slab of `slab_layers` z layers. Throws
+// Error(invalid_argument) for a job that does not stream
+// (api::JobMode::streaming_refusal).
+VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
+                                          std::int64_t slab_layers, const BitSlabConsumer& consume);
+
+// Throws Error(limit_exceeded) for a grid of more than `max_voxels` voxels;
+// `hint` completes the advice.
+void check_voxel_limit(const Grid& grid, std::uint64_t max_voxels, std::string_view hint);
 
 // Both steps, as the CLI runs them.
 VoxelJobResult run_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,

@@ -3,6 +3,7 @@
 // No options object; the three differ only in which voxels they fill.
 #include "api/job_mode.h"
 #include "api/job_params.h"
+#include "voxd/voxelize/streamed.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd::api {
@@ -24,6 +25,23 @@ class BinaryMode final : public JobMode {
     ModeResult r;
     r.volume = voxelize(in.mesh, in.grid, options, in.control);
     return r;
+  }
+
+  std::optional<std::string> streaming_refusal(const JobParams& params) const override {
+    VoxelizeOptions options;
+    options.mode = mode_;
+    options.inside = params.inside;
+    if (can_stream(options)) return std::nullopt;
+    return "the " + std::string(to_string(params.inside)) +
+           " inside test needs the whole grid; only \"inside\": \"parity\" streams slab by slab";
+  }
+
+  void run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& consume) const override {
+    VoxelizeOptions options;
+    options.mode = mode_;
+    options.inside = in.params.inside;
+    options.threads = in.threads;
+    voxelize_streamed(in.mesh, in.grid, options, slab_layers, consume, in.control);
   }
 
  private:

@@ -1,5 +1,6 @@
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <sstream>
 
@@ -14,6 +15,7 @@
 #include "server/job_pipeline.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
+#include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/encode/number_text.h"
 
@@ -31,6 +33,12 @@ api::VolumeSource result_volumes(const VoxelJobResult& result) {
 }
 
 using nlohmann::json;
+
+// Grids past 2^32 voxels (512 MiB of bits, e.g. 1625^3) stream unless told
+// otherwise, in slabs of about 128 MiB: as fast as in memory, and the peak
+// stays the mesh plus a slab (docs/benchmarks.md).
+constexpr std::uint64_t kStreamAboveVoxels = std::uint64_t{1} << 32;
+constexpr std::uint64_t kStreamSlabBytes = std::uint64_t{128} << 20;
 
 constexpr const char* kUsage = R"(usage: voxd voxelize MESH -o OUT [options]
 
@@ -55,7 +63,12 @@ volume to OUT ("-" for standard output).
   --quantize Q           none (default) | u8 | u16: float values as rle levels
                          (value = offset + scale * level, both in the header)
   --threads N            worker threads (default: all cores)
-  --max-voxels N         refuse grids with more voxels (default 2^36: 8 GiB of bits)
+  --streaming S          auto (default) | on | off: voxelize slab by slab and
+                         write each slab as it is done, in bounded memory
+                         (modes of bits with the parity inside test, to rle,
+                         raw or nrrd); auto streams grids over 2^32 voxels
+  --max-voxels N         refuse grids with more voxels (default: 2^36, 8 GiB
+                         of bits, in memory; no limit but disk when streamed)
   --report               include the mesh report (topology, area, volume)
   --json                 print the summary as JSON on standard output
 
@@ -88,7 +101,7 @@ std::string format_seconds(double s) {
 int voxelize_command(int argc, char** argv) {
   Args args(argc, argv, 2,
             {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "format",
-             "raw-packing", "nrrd-encoding", "quantize", "threads", "output", "max-voxels"},
+             "raw-packing", "nrrd-encoding", "quantize", "threads", "output", "max-voxels", "streaming"},
             {"json", "report", "help"});
   if (args.has("help")) {
     std::cout << usage();
@@ -140,42 +153,45 @@ int voxelize_command(int argc, char** argv) {
   const std::string& mesh_path = args.positional()[0];
   MappedFile file(mesh_path);
   JobLimits limits;
-  // A local run may use the machine: 2^36 voxels is a 4096^3 grid (8 GiB of bits).
-  limits.max_voxels = std::uint64_t{1} << 36;
+  // In memory a local run may use the machine: 2^36 voxels is a 4096^3 grid
+  // (8 GiB of bits). Streamed, the grid is bounded by kMaxGridDim alone.
+  std::uint64_t max_voxels = std::uint64_t{1} << 36;
+  const bool user_limit = args.value("max-voxels").has_value();
   if (auto m = args.value("max-voxels")) {
     const auto n = parse_number<std::uint64_t>(*m);
     if (!n || *n == 0) throw UsageError("--max-voxels expects a positive integer, got '" + *m + "'");
-    limits.max_voxels = *n;
+    max_voxels = *n;
   }
-  VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, args.has("report"), nullptr, threads);
-  encode_options.content = result.values ? result.values_info.value("quantity", "values") + " (" +
-                                                    result.values_info.value("unit", "") + ")"
-                                              : "voxels (1 = filled)";
-  auto encode = [&](ByteSink& sink) {
-    if (mode_writes)
-      params.mode->write(*format, params, result_volumes(result), sink);
-    else if (result.values)
-      encode_volume(*result.values, *format, sink, encode_options);
-    else
-      encode_volume(result.volume, *format, sink, encode_options);
-  };
+  const std::string streaming = args.value("streaming").value_or("auto");
+  if (streaming != "auto" && streaming != "on" && streaming != "off")
+    throw UsageError("--streaming must be auto, on or off, got '" + streaming + "'");
+  std::optional<std::string> no_stream = params.mode->streaming_refusal(params);
+  if (!no_stream) no_stream = streaming_refusal(*format);
+  if (streaming == "on" && no_stream) throw UsageError("--streaming on: " + *no_stream);
+  limits.max_voxels = user_limit || no_stream ? max_voxels : UINT64_MAX;
+  PreparedVoxelJob job = prepare_voxel_job(file.bytes(), mesh_path, params, limits);
+  const bool streamed = streaming == "on" || (streaming == "auto" && !no_stream && job.grid.voxel_count() > kStreamAboveVoxels);
+  if (!streamed)  // the in-memory limit; a job that could stream is told so
+    check_voxel_limit(job.grid, max_voxels,
+                      no_stream || user_limit ? "" : " (or --streaming on: slab by slab it needs the memory of one slab, not the grid's)");
+  encode_options.content = "voxels (1 = filled)";
 
-  // Encode to a temporary file renamed into place, so OUT is never half written.
-  const auto start = std::chrono::steady_clock::now();
-  std::uint64_t bytes_written = 0;
-  if (*out_path == "-") {
-    struct StdoutSink final : ByteSink {
-      using ByteSink::write;
-      std::uint64_t n = 0;
-      void write(std::span<const std::uint8_t> b) override {
-        if (std::fwrite(b.data(), 1, b.size(), stdout) != b.size()) throw Error(ErrorCode::io_error, "cannot write to standard output");
-        n += b.size();
-      }
-    } sink;
-    encode(sink);
-    std::fflush(stdout);
-    bytes_written = sink.n;
-  } else {
+  // Writes to a temporary file renamed into place, so OUT is never half
+  // written; the bytes written.
+  auto write_output = [&](const std::function<void(ByteSink&)>& encode) -> std::uint64_t {
+    if (*out_path == "-") {
+      struct StdoutSink final : ByteSink {
+        using ByteSink::write;
+        std::uint64_t n = 0;
+        void write(std::span<const std::uint8_t> b) override {
+          if (std::fwrite(b.data(), 1, b.size(), stdout) != b.size()) throw Error(ErrorCode::io_error, "cannot write to standard output");
+          n += b.size();
+        }
+      } sink;
+      encode(sink);
+      std::fflush(stdout);
+      return sink.n;
+    }
     const std::string tmp = *out_path + ".partial";
     try {
       FileSink sink(tmp);
@@ -187,9 +203,35 @@ int voxelize_command(int argc, char** argv) {
       std::filesystem::remove(tmp, ignored);
       throw;
     }
-    bytes_written = std::filesystem::file_size(*out_path);
+    return std::filesystem::file_size(*out_path);
+  };
+
+  VoxelJobResult result;
+  std::uint64_t bytes_written = 0;
+  if (streamed) {
+    const Grid grid = job.grid;
+    bytes_written = write_output([&](ByteSink& sink) {
+      BitSlabWriter writer(grid, *format, encode_options, sink);
+      result = execute_streamed_voxel_job(std::move(job), args.has("report"), nullptr, threads,
+                                          streamed_slab_layers(grid, kStreamSlabBytes),
+                                          [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
+      writer.finish();
+    });
+  } else {
+    result = execute_voxel_job(std::move(job), args.has("report"), nullptr, threads);
+    if (result.values)
+      encode_options.content = result.values_info.value("quantity", "values") + " (" + result.values_info.value("unit", "") + ")";
+    const auto start = std::chrono::steady_clock::now();
+    bytes_written = write_output([&](ByteSink& sink) {
+      if (mode_writes)
+        params.mode->write(*format, params, result_volumes(result), sink);
+      else if (result.values)
+        encode_volume(*result.values, *format, sink, encode_options);
+      else
+        encode_volume(result.volume, *format, sink, encode_options);
+    });
+    result.timings.add("encode", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
-  result.timings.add("encode", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 
   const Grid& g = result.grid;
   const double filled_volume = static_cast<double>(result.filled) * g.voxel_volume();
@@ -201,6 +243,7 @@ int voxelize_command(int argc, char** argv) {
         {"inside", to_string(params.inside)},
         {"filled_voxels", result.filled},
         {"filled_volume", filled_volume},
+        {"streamed", result.streamed},
         {"output", {{"path", *out_path}, {"format", to_string(*format)}, {"bytes", bytes_written}}},
     };
     if (result.report) summary["report"] = api::to_json(*result.report);
@@ -227,7 +270,8 @@ int voxelize_command(int argc, char** argv) {
     s << "timings:";
     for (const auto& [name, sec] : result.timings.stages) s << ' ' << name << ' ' << format_seconds(sec) << ',';
     s << " total " << format_seconds(result.timings.total()) << '\n';
-    s << "output:  " << *out_path << " (" << to_string(*format) << ", " << bytes_written << " bytes)\n";
+    s << "output:  " << *out_path << " (" << to_string(*format) << ", " << bytes_written << " bytes"
+      << (result.streamed ? ", written slab by slab" : "") << ")\n";
     std::cerr << s.str();
   }
   return 0;

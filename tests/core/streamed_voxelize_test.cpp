@@ -151,6 +151,48 @@ TEST(BitSlabWriter, RefusesBinvoxAndSlabsOutOfOrder) {
   EXPECT_EQ(sink.data, whole.data);
 }
 
+// Past 2^32 voxels (the seam where 32-bit counts and offsets wrap): a box
+// whose voxel centres are known, counted and checked layer by layer as the
+// slabs pass, never held whole.
+TEST(StreamedVoxelize, AGridPastTwoToThe32VoxelsCountsAndFillsExactly) {
+  const Grid grid = test::unit_grid(2048, 2048, 1100);
+  ASSERT_GT(grid.voxel_count(), std::uint64_t{1} << 32);
+  // Centres i + 1/2 inside [0.3, 2047.6] x [0.3, 2047.2] x [0.3, 1099.7]:
+  // every x, y up to 2046, every z.
+  const Mesh box = test::make_box({0.3, 0.3, 0.3}, {2047.6, 2047.2, 1099.7});
+  const std::uint64_t expected = std::uint64_t{2048} * 2047 * 1100;
+  for (VoxelMode mode : {VoxelMode::solid, VoxelMode::solid_and_surface}) {
+    SCOPED_TRACE(to_string(mode));
+    VoxelizeOptions options;
+    options.mode = mode;
+    std::uint64_t filled = 0;
+    std::int64_t checked = 0;
+    voxelize_streamed(box, grid, options, streamed_slab_layers(grid, std::uint64_t{32} << 20),
+                      [&](std::int64_t k0, const BitVolume& slab) {
+                        filled += slab.count();
+                        for (std::int64_t k : {std::int64_t{0}, std::int64_t{549}, std::int64_t{1099}}) {
+                          if (k < k0 || k >= k0 + slab.grid().dims.z) continue;
+                          ++checked;
+                          // The surface adds the voxels the box's faces touch: row 2047
+                          // (face y = 2047.2) in every layer, nothing past x = 2048.
+                          const std::int64_t last_row = mode == VoxelMode::solid ? 2046 : 2047;
+                          for (std::int64_t j = 0; j < 2048; ++j) {
+                            const std::uint64_t* row = slab.row(j, k - k0);
+                            const std::uint64_t want = j <= last_row ? ~std::uint64_t{0} : 0;
+                            for (std::int64_t w = 0; w < slab.row_words(); ++w)
+                              if (row[w] != want) {
+                                ADD_FAILURE() << "layer " << k << " row " << j << " word " << w;
+                                return;
+                              }
+                          }
+                        }
+                      });
+    EXPECT_EQ(checked, 3);
+    if (mode == VoxelMode::solid) EXPECT_EQ(filled, expected);
+    else EXPECT_EQ(filled, std::uint64_t{2048} * 2048 * 1100);  // every voxel touches the box's closed surface or is inside
+  }
+}
+
 TEST(StreamedVoxelize, SlabLayersFollowTheBudget) {
   const Grid grid = test::unit_grid(8192, 8192, 8192);  // 8 MiB a layer of bits
   EXPECT_EQ(streamed_slab_layers(grid, std::uint64_t{128} << 20), 16);

@@ -109,6 +109,58 @@ TEST_F(CliTest, AllFormatsHoldTheSameVoxels) {
   EXPECT_EQ(binvox.count(), rle.count());  // the binvox cube padding is empty
 }
 
+TEST_F(CliTest, StreamingWritesTheInMemoryBytesSlabBySlab) {
+  const std::string mesh = shared_mesh("bunny.stl");
+  for (const std::string& out : {std::string("v.rle"), std::string("v.raw"), std::string("v.nrrd")}) {
+    for (const char* extra : {"", " --raw-packing bits", " --nrrd-encoding gzip"}) {
+      if (std::string(extra).find("raw-packing") != std::string::npos && out != "v.raw") continue;
+      if (std::string(extra).find("nrrd-encoding") != std::string::npos && out != "v.nrrd") continue;
+      SCOPED_TRACE(out + extra);
+      const std::string base = kVoxd + " voxelize " + mesh + " --resolution 150 --mode solid+surface" + extra;
+      const auto on = run_process(base + " --streaming on --json -o " + path("on_" + out));
+      ASSERT_EQ(on.exit_code, 0) << on.err;
+      const auto off = run_process(base + " --streaming off --json -o " + path("off_" + out));
+      ASSERT_EQ(off.exit_code, 0) << off.err;
+      EXPECT_EQ(test::read_file(path("on_" + out)), test::read_file(path("off_" + out)));
+      const auto a = nlohmann::json::parse(on.out), b = nlohmann::json::parse(off.out);
+      EXPECT_TRUE(a.at("streamed").get<bool>());
+      EXPECT_FALSE(b.at("streamed").get<bool>());
+      EXPECT_EQ(a.at("filled_voxels"), b.at("filled_voxels"));
+      EXPECT_GT(a.at("filled_voxels").get<std::uint64_t>(), 100000u);
+    }
+  }
+}
+
+TEST_F(CliTest, StreamingOnSaysWhyAJobCannotStream) {
+  const std::string mesh = shared_mesh("torus.stl");
+  struct Case {
+    std::string flags, says;
+  };
+  for (const Case& c : {Case{"-o " + path("t.binvox"), "binvox does not stream slab by slab"},
+                        Case{"--inside vote -o " + path("t.rle"), "the vote inside test needs the whole grid"},
+                        Case{"--mode coverage -o " + path("t.rle"), "mode coverage makes values over the whole grid"},
+                        Case{"--streaming maybe -o " + path("t.rle"), "--streaming must be auto, on or off"}}) {
+    SCOPED_TRACE(c.flags);
+    const std::string streaming = c.flags.find("--streaming") == std::string::npos ? " --streaming on " : " ";
+    const auto r = run_process(kVoxd + " voxelize " + mesh + " --resolution 20" + streaming + c.flags);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+  }
+}
+
+TEST_F(CliTest, InMemoryGridsPastTheVoxelLimitPointToStreaming) {
+  const std::string mesh = shared_mesh("torus.stl");
+  // 8192 x 8192 x ~1700 voxels: past 2^36, refused before any work.
+  const auto r = run_process(kVoxd + " voxelize " + mesh + " --resolution 8192 --streaming off -o " + path("t.rle"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("over the limit of 68719476736"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--streaming on"), std::string::npos) << r.err;
+  // A limit the user set holds however the job runs.
+  const auto mine = run_process(kVoxd + " voxelize " + mesh + " --resolution 64 --streaming on --max-voxels 1000 -o " + path("t.rle"));
+  EXPECT_EQ(mine.exit_code, 2);
+  EXPECT_NE(mine.err.find("over the limit of 1000"), std::string::npos) << mine.err;
+}
+
 TEST_F(CliTest, ParamsFileAndFlagsCombineFlagsWinning) {
   const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {10, 10, 10}));
   {
