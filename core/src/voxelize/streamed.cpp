@@ -1,7 +1,6 @@
 #include "voxd/voxelize/streamed.h"
 
 #include <algorithm>
-#include <atomic>
 #include <optional>
 
 #include "voxd/error.h"
@@ -33,14 +32,6 @@ bool can_stream(const VoxelizeOptions& options) {
 std::int64_t streamed_slab_layers(const Grid& grid, std::uint64_t slab_bytes) {
   const std::uint64_t per_layer = std::max<std::uint64_t>(layer_bytes(grid), 1);
   return std::clamp<std::int64_t>(static_cast<std::int64_t>(slab_bytes / per_layer), 1, std::max<std::int64_t>(grid.dims.z, 1));
-}
-
-std::uint64_t streamed_voxelize_memory(const Grid& grid, std::uint64_t triangles, std::int64_t slab_layers) {
-  // The fixed-point mesh (three 64-bit coordinates a vertex, about half a
-  // vertex a triangle, and the index triples), the bins (a few entries a
-  // triangle) and the surface pass's vertices in voxel units.
-  const std::uint64_t mesh_side = triangles * (12 + 24 + 16 + 24);
-  return layer_bytes(grid) * static_cast<std::uint64_t>(slab_layers) + mesh_side;
 }
 
 void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, std::int64_t slab_layers,

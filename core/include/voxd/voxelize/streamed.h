@@ -30,10 +30,6 @@ bool can_stream(const VoxelizeOptions& options);
 // most the grid's).
 std::int64_t streamed_slab_layers(const Grid& grid, std::uint64_t slab_bytes);
 
-// Bytes a streamed voxelization holds beyond the mesh itself, at its peak:
-// the slab, the fixed-point mesh and the triangle bins.
-std::uint64_t streamed_voxelize_memory(const Grid& grid, std::uint64_t triangles, std::int64_t slab_layers);
-
 // Voxelizes slab by slab in z order, handing each slab to `consume`. Throws
 // Error(invalid_argument) for options that do not stream (can_stream).
 // Progress runs over the slabs (the consumer's work included); cancellation
