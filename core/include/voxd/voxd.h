@@ -2,6 +2,7 @@
 // The voxd engine in one include: every public header of voxd_core.
 // Link voxd::core (find_package(voxd)); see docs/architecture.md.
 
+#include "voxd/bit_slabs.h"
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
 #include "voxd/dense_volume.h"
@@ -22,6 +23,7 @@
 #include "voxd/voxelize/palette_render.h"
 #include "voxd/voxelize/sdf.h"
 #include "voxd/voxelize/slice_functions.h"
+#include "voxd/voxelize/streamed.h"
 #include "voxd/voxelize/voxelize.h"
 #include "voxd/voxelize/winding_number.h"
 
@@ -46,5 +48,7 @@
 #include "voxd/encode/palette_export.h"
 #include "voxd/encode/png_image.h"
 #include "voxd/encode/png_stack.h"
+#include "voxd/encode/rle_slabs.h"
+#include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/encode/zip_archive.h"

@@ -1,5 +1,6 @@
 #include "voxd/analysis/mass_properties.h"
 
+#include <cstdint>
 #include <algorithm>
 #include <bit>
 #include <mutex>
@@ -68,69 +69,121 @@ MassProperties mesh_mass_properties(const Mesh& mesh) {
   return p;
 }
 
-MassProperties voxel_mass_properties(const BitVolume& volume, int threads) {
-  const Grid& g = volume.grid();
-  const double h = g.voxel_size;
-  // Sums in voxel index units about the grid centre, converted at the end.
-  const glm::dvec3 mid = glm::dvec3(g.dims) * 0.5;
-  Moments total;
-  std::mutex total_mutex;
-  glm::i64vec3 lo(g.dims), hi(-1);
-  parallel_for(0, g.dims.z, 4, threads, [&](std::int64_t k0, std::int64_t k1) {
-    Moments s;
-    glm::i64vec3 my_lo(g.dims), my_hi(-1);
-    for (std::int64_t k = k0; k < k1; ++k) {
-      const double z = static_cast<double>(k) + 0.5 - mid.z;
-      for (std::int64_t j = 0; j < g.dims.y; ++j) {
-        const std::uint64_t* row = volume.row(j, k);
-        // Per row: count, Σx, Σx² of the filled centres; y and z are constant.
-        double n = 0, sx = 0, sxx = 0;
-        std::int64_t first = -1, last = -1;
-        for (std::int64_t w = 0; w < volume.row_words(); ++w) {
-          std::uint64_t bits = row[w];
-          if (!bits) continue;
-          if (first < 0) first = w * 64 + std::countr_zero(bits);
-          last = w * 64 + 63 - std::countl_zero(bits);
-          while (bits) {
-            const double x = static_cast<double>(w * 64 + std::countr_zero(bits)) + 0.5 - mid.x;
-            n += 1;
-            sx += x;
-            sxx += x * x;
-            bits &= bits - 1;
-          }
-        }
-        if (n == 0) continue;
-        const double y = static_cast<double>(j) + 0.5 - mid.y;
-        s.m[0] += n;
-        s.m[1] += sx;
-        s.m[2] += n * y;
-        s.m[3] += n * z;
-        s.m[4] += sxx;
-        s.m[5] += n * y * y;
-        s.m[6] += n * z * z;
-        s.m[7] += sx * y;
-        s.m[8] += n * y * z;
-        s.m[9] += sx * z;
-        my_lo = glm::min(my_lo, glm::i64vec3(first, j, k));
-        my_hi = glm::max(my_hi, glm::i64vec3(last, j, k));
+namespace {
+
+using Int128 = __int128;
+
+// Exact integer moments of filled voxel indices (i, j, k): counts and sums of
+// i, j, k and of their products, per row in closed form over runs.
+struct IndexMoments {
+  Int128 n = 0, si = 0, sj = 0, sk = 0, sii = 0, sjj = 0, skk = 0, sij = 0, sjk = 0, sik = 0;
+  glm::i64vec3 lo{INT64_MAX}, hi{-1};
+
+  IndexMoments& operator+=(const IndexMoments& o) {
+    n += o.n, si += o.si, sj += o.sj, sk += o.sk, sii += o.sii, sjj += o.sjj, skk += o.skk;
+    sij += o.sij, sjk += o.sjk, sik += o.sik;
+    lo = glm::min(lo, o.lo);
+    hi = glm::max(hi, o.hi);
+    return *this;
+  }
+};
+
+// Σ i² for i in [0, m).
+inline std::int64_t squares_below(std::int64_t m) { return (m - 1) * m * (2 * m - 1) / 6; }
+
+void add_row(const std::uint64_t* row, std::int64_t words, std::int64_t j, std::int64_t k, IndexMoments& s) {
+  std::int64_t n = 0, si = 0, sii = 0, first = -1, last = -1;
+  std::int64_t start = -1;  // the open run's first voxel
+  auto close = [&](std::int64_t end) {
+    n += end - start;
+    si += (start + end - 1) * (end - start) / 2;
+    sii += squares_below(end) - squares_below(start);
+    last = end - 1;
+    start = -1;
+  };
+  for (std::int64_t w = 0; w < words; ++w) {
+    const std::uint64_t bits = row[w];
+    int pos = 0;
+    while (pos < 64) {
+      if (start < 0) {
+        const std::uint64_t rest = bits >> pos;
+        if (!rest) break;
+        pos += std::countr_zero(rest);
+        start = w * 64 + pos;
+        if (first < 0) first = start;
+      } else {
+        const std::uint64_t rest = ~bits >> pos;
+        if (!rest) break;
+        pos += std::countr_zero(rest);
+        close(w * 64 + pos);
       }
     }
-    std::lock_guard lock(total_mutex);
-    total += s;
-    lo = glm::min(lo, my_lo);
-    hi = glm::max(hi, my_hi);
-  });
-  // Each voxel is a unit cube, not a point: its own ∫x² about its centre is 1/12.
-  for (int i = 4; i < 7; ++i) total.m[i] += total.m[0] / 12.0;
-  // Scale index units to model units: ∫1 by h³, first moments by h⁴, second by h⁵.
-  const double h3 = h * h * h;
-  for (int i = 0; i < 10; ++i) total.m[i] *= i == 0 ? h3 : i < 4 ? h3 * h : h3 * h * h;
-  MassProperties p = from_moments(total, g.origin + mid * h);
-  if (hi.x >= 0) {
-    p.bbox.min = g.origin + glm::dvec3(lo) * h;
-    p.bbox.max = g.origin + glm::dvec3(hi + glm::i64vec3(1)) * h;
   }
+  if (start >= 0) close(words * 64);  // bits past dims.x are zero: only a full last word leaves a run open
+  if (n == 0) return;
+  s.n += n;
+  s.si += si;
+  s.sj += Int128{n} * j;
+  s.sk += Int128{n} * k;
+  s.sii += sii;
+  s.sjj += Int128{n} * j * j;
+  s.skk += Int128{n} * k * k;
+  s.sij += Int128{si} * j;
+  s.sjk += Int128{n} * j * k;
+  s.sik += Int128{si} * k;
+  s.lo = glm::min(s.lo, glm::i64vec3(first, j, k));
+  s.hi = glm::max(s.hi, glm::i64vec3(last, j, k));
+}
+
+// (n Σab − Σa Σb) / n: the central second moment, exact until the division.
+double central(Int128 n, Int128 sab, Int128 sa, Int128 sb) {
+  return static_cast<double>(n * sab - sa * sb) / static_cast<double>(n);
+}
+
+}  // namespace
+
+struct VoxelMassAccumulator::Sums : IndexMoments {};
+
+VoxelMassAccumulator::VoxelMassAccumulator(const Grid& grid) : grid_(grid), sums_(std::make_unique<Sums>()) {}
+VoxelMassAccumulator::~VoxelMassAccumulator() = default;
+
+void VoxelMassAccumulator::add(std::int64_t k0, const BitVolume& slab, int threads) {
+  std::mutex total_mutex;
+  parallel_for(0, slab.grid().dims.z, 4, threads, [&](std::int64_t a, std::int64_t b) {
+    IndexMoments s;
+    for (std::int64_t k = a; k < b; ++k)
+      for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) add_row(slab.row(j, k), slab.row_words(), j, k0 + k, s);
+    std::lock_guard lock(total_mutex);
+    *sums_ += s;  // integers: the total does not depend on the order
+  });
+}
+
+MassProperties VoxelMassAccumulator::result() const {
+  const IndexMoments& s = *sums_;
+  MassProperties p;
+  if (s.n == 0) return p;
+  const double h = grid_.voxel_size, n = static_cast<double>(s.n);
+  p.volume = n * h * h * h;
+  const glm::dvec3 mean{static_cast<double>(s.si) / n, static_cast<double>(s.sj) / n, static_cast<double>(s.sk) / n};
+  p.centroid = grid_.origin + (mean + glm::dvec3(0.5)) * h;
+  // Each voxel is a unit cube, not a point: its own ∫x² about its centre is 1/12.
+  const double own = n / 12.0;
+  const double xx = central(s.n, s.sii, s.si, s.si) + own, yy = central(s.n, s.sjj, s.sj, s.sj) + own,
+               zz = central(s.n, s.skk, s.sk, s.sk) + own;
+  const double xy = central(s.n, s.sij, s.si, s.sj), yz = central(s.n, s.sjk, s.sj, s.sk), zx = central(s.n, s.sik, s.si, s.sk);
+  const double h5 = h * h * h * h * h;
+  p.inertia = h5 * glm::dmat3(yy + zz, -xy, -zx,  //
+                              -xy, xx + zz, -yz,  //
+                              -zx, -yz, xx + yy);
+  p.bbox.min = grid_.origin + glm::dvec3(s.lo) * h;
+  p.bbox.max = grid_.origin + glm::dvec3(s.hi + glm::i64vec3(1)) * h;
   return p;
+}
+
+MassProperties voxel_mass_properties(const BitVolume& volume, int threads) {
+  VoxelMassAccumulator sums(volume.grid());
+  sums.add(0, volume, threads);
+  return sums.result();
 }
 
 }  // namespace voxd

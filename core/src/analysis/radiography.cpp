@@ -13,6 +13,7 @@
 #include <array>
 #include <bit>
 #include <climits>
+#include <stdexcept>
 #include <string>
 
 #include "encode/bit_transpose.h"
@@ -185,6 +186,84 @@ ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
     rays_across_rows(volume, axis, maps, threads);
   }
   return image;
+}
+
+RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis) : grid_(grid), axis_(axis) {
+  const ImageSize size = projected_size(grid, axis);
+  image_.width = size.width;
+  image_.height = size.height;
+  const std::size_t pixels = static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height);
+  image_.min.assign(pixels, 0);
+  image_.max.assign(pixels, 0);
+  image_.total.assign(pixels, 0);
+  if (axis == 2) {
+    run_start_.assign(pixels, 0);
+    last_layer_.assign(static_cast<std::size_t>((grid.dims.x + 63) / 64 * grid.dims.y), 0);
+  }
+}
+
+void RadiographyAccumulator::add(std::int64_t k0, const BitVolume& slab, int threads) {
+  if (k0 != next_k_) throw std::logic_error("RadiographyAccumulator: slab at layer " + std::to_string(k0) +
+                                            " where layer " + std::to_string(next_k_) + " was expected");
+  const glm::i64vec3 d = slab.grid().dims;
+  next_k_ += d.z;
+  if (d.z == 0 || image_.min.empty()) return;
+  Maps maps{image_.min.data(), image_.max.data(), image_.total.data()};
+  if (axis_ == 0) {  // pixel row k: this slab's rows start k0 rows down
+    const auto shift = static_cast<std::size_t>(k0 * d.y);
+    rays_along_x(slab, {maps.min + shift, maps.max + shift, maps.total + shift}, threads);
+    return;
+  }
+  if (axis_ == 1) {
+    const auto shift = static_cast<std::size_t>(k0 * d.x);
+    rays_across_rows(slab, 1, {maps.min + shift, maps.max + shift, maps.total + shift}, threads);
+    return;
+  }
+  // Along z a run begins where a voxel is filled and the one below was not,
+  // and ends where it is empty and the one below was filled: only those
+  // transitions cost work, one word of 64 rays at a time.
+  const std::int64_t words = slab.row_words();
+  parallel_for(0, d.y, 16, threads, [&](std::int64_t j0, std::int64_t j1) {
+    for (std::int64_t kk = 0; kk < d.z; ++kk) {
+      const auto k = static_cast<std::uint32_t>(k0 + kk);
+      for (std::int64_t j = j0; j < j1; ++j) {
+        const std::uint64_t* row = slab.row(j, kk);
+        std::uint64_t* below = last_layer_.data() + j * words;
+        for (std::int64_t w = 0; w < words; ++w) {
+          const std::uint64_t now = row[w], before = below[w];
+          if (now == before) continue;
+          const std::size_t pixel0 = static_cast<std::size_t>(j * d.x + w * 64);
+          for (std::uint64_t begins = now & ~before; begins; begins &= begins - 1)
+            run_start_[pixel0 + static_cast<std::size_t>(std::countr_zero(begins))] = k;
+          for (std::uint64_t ends = before & ~now; ends; ends &= ends - 1) {
+            const std::size_t p = pixel0 + static_cast<std::size_t>(std::countr_zero(ends));
+            maps.at(p).add_run(k - run_start_[p]);
+          }
+          below[w] = now;
+        }
+      }
+    }
+  });
+}
+
+ThicknessImage RadiographyAccumulator::take() {
+  if (next_k_ != grid_.dims.z)
+    throw std::logic_error("RadiographyAccumulator: " + std::to_string(next_k_) + " of " +
+                           std::to_string(grid_.dims.z) + " layers were added");
+  if (axis_ == 2 && !image_.min.empty()) {  // runs still open reach the top of the grid
+    const Maps maps{image_.min.data(), image_.max.data(), image_.total.data()};
+    const std::int64_t words = (grid_.dims.x + 63) / 64;
+    const auto top = static_cast<std::uint32_t>(grid_.dims.z);
+    for (std::int64_t j = 0; j < grid_.dims.y; ++j)
+      for (std::int64_t w = 0; w < words; ++w)
+        for (std::uint64_t open = last_layer_[static_cast<std::size_t>(j * words + w)]; open; open &= open - 1) {
+          const std::size_t p = static_cast<std::size_t>(j * grid_.dims.x + w * 64 + std::countr_zero(open));
+          maps.at(p).add_run(top - run_start_[p]);
+        }
+  }
+  run_start_ = {};
+  last_layer_ = {};
+  return std::move(image_);
 }
 
 ThicknessStats thickness_stats(std::span<const std::uint32_t> values, int bins) {

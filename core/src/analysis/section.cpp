@@ -29,31 +29,39 @@ void row_to_bytes(const std::uint64_t* row, std::int64_t n, std::uint8_t* out) {
 
 }  // namespace
 
-GreyImage8 cross_section(const BitVolume& volume, int axis, std::int64_t index) {
+SectionGatherer::SectionGatherer(const Grid& grid, int axis, std::int64_t index) : axis_(axis), index_(index) {
   check_axis(axis);
-  const glm::i64vec3 d = volume.grid().dims;
-  if (index < 0 || index >= d[axis]) {
+  if (index < 0 || index >= grid.dims[axis]) {
     throw Error(ErrorCode::invalid_argument, std::string("section index along ") + axis_name(axis) + " is " +
-                                                 std::to_string(index) + ", outside 0.." + std::to_string(d[axis] - 1));
+                                                 std::to_string(index) + ", outside 0.." + std::to_string(grid.dims[axis] - 1));
   }
-  const ImageSize size = projected_size(volume.grid(), axis);
-  GreyImage8 image;
-  image.width = size.width;
-  image.height = size.height;
-  image.pixels.assign(static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height), 0);
-  std::uint8_t* out = image.pixels.data();
-  if (axis == 2) {  // rows are the volume's x-rows of slab `index`
-    for (std::int64_t j = 0; j < d.y; ++j) row_to_bytes(volume.row(j, index), d.x, out + j * d.x);
-  } else if (axis == 1) {  // row k of the image is x-row (index, k)
-    for (std::int64_t k = 0; k < d.z; ++k) row_to_bytes(volume.row(index, k), d.x, out + k * d.x);
+  const ImageSize size = projected_size(grid, axis);
+  image_.width = size.width;
+  image_.height = size.height;
+  image_.pixels.assign(static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height), 0);
+}
+
+void SectionGatherer::add(std::int64_t k0, const BitVolume& slab) {
+  const glm::i64vec3 d = slab.grid().dims;
+  std::uint8_t* out = image_.pixels.data();
+  if (axis_ == 2) {  // rows are the volume's x-rows of layer `index`
+    if (index_ < k0 || index_ >= k0 + d.z) return;
+    for (std::int64_t j = 0; j < d.y; ++j) row_to_bytes(slab.row(j, index_ - k0), d.x, out + j * d.x);
+  } else if (axis_ == 1) {  // row k of the image is x-row (index, k)
+    for (std::int64_t k = 0; k < d.z; ++k) row_to_bytes(slab.row(index_, k), d.x, out + (k0 + k) * d.x);
   } else {  // one bit per x-row: column j, row k
-    const std::int64_t word = index >> 6;
-    const int bit = static_cast<int>(index & 63);
+    const std::int64_t word = index_ >> 6;
+    const int bit = static_cast<int>(index_ & 63);
     for (std::int64_t k = 0; k < d.z; ++k) {
-      for (std::int64_t j = 0; j < d.y; ++j) out[k * d.y + j] = ((volume.row(j, k)[word] >> bit) & 1u) ? 255 : 0;
+      for (std::int64_t j = 0; j < d.y; ++j) out[(k0 + k) * d.y + j] = ((slab.row(j, k)[word] >> bit) & 1u) ? 255 : 0;
     }
   }
-  return image;
+}
+
+GreyImage8 cross_section(const BitVolume& volume, int axis, std::int64_t index) {
+  SectionGatherer section(volume.grid(), axis, index);
+  section.add(0, volume);
+  return section.take();
 }
 
 std::int64_t section_index(const Grid& grid, int axis, double coordinate) {

@@ -10,6 +10,7 @@
 #include "encode/byte_cursor.h"
 #include "encode/rle_stream.h"
 #include "encode/volume_checks.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
 
 namespace voxd {
@@ -22,30 +23,35 @@ std::string hex_byte(std::uint8_t b) {
   return std::string("0x") + digits[b >> 4] + digits[b & 15];
 }
 
-// Checks the framing of the slab blocks and the end block, calling
-// visit(k, payload, payload_offset) for each slab in order. Takes the cursor
-// by value so that each pass starts from the first block.
-template <class Visit>
-void walk_slab_blocks(ByteCursor in, std::int64_t nz, const Visit& visit) {
-  for (std::int64_t k = 0; k < nz; ++k) {
-    const std::size_t block_at = in.offset();
-    const std::uint8_t tag = in.u8("a slab block tag");
-    if (tag == encode::kEndTag)
-      in.fail(ErrorCode::malformed_input, "end block at byte " + std::to_string(block_at) + " after " +
-                                              std::to_string(k) + " slab blocks; the header's dims give " +
-                                              std::to_string(nz) + " slabs");
-    if (tag != encode::kSlabTag)
-      in.fail(ErrorCode::malformed_input, "byte " + std::to_string(block_at) +
-                                              ": expected a slab block (tag 0x53 'S'), found " + hex_byte(tag));
-    const std::uint64_t index = in.varint("a slab index");
-    if (index != static_cast<std::uint64_t>(k))
-      in.fail(ErrorCode::malformed_input, "slab block at byte " + std::to_string(block_at) + " has index " +
-                                              std::to_string(index) + " where slab " + std::to_string(k) +
-                                              " was expected (slabs come in order from 0)");
-    const std::uint64_t length = in.varint("a slab payload length");
-    const std::size_t payload_at = in.offset();
-    visit(k, in.bytes(length, "a slab payload"), payload_at);
-  }
+// One slab block's payload and where it starts in the stream.
+struct SlabBlock {
+  std::span<const std::uint8_t> payload;
+  std::size_t at;
+};
+
+// Checks the framing of slab block k of nz and steps over it.
+SlabBlock read_slab_block(ByteCursor& in, std::int64_t k, std::int64_t nz) {
+  const std::size_t block_at = in.offset();
+  const std::uint8_t tag = in.u8("a slab block tag");
+  if (tag == encode::kEndTag)
+    in.fail(ErrorCode::malformed_input, "end block at byte " + std::to_string(block_at) + " after " +
+                                            std::to_string(k) + " slab blocks; the header's dims give " +
+                                            std::to_string(nz) + " slabs");
+  if (tag != encode::kSlabTag)
+    in.fail(ErrorCode::malformed_input, "byte " + std::to_string(block_at) +
+                                            ": expected a slab block (tag 0x53 'S'), found " + hex_byte(tag));
+  const std::uint64_t index = in.varint("a slab index");
+  if (index != static_cast<std::uint64_t>(k))
+    in.fail(ErrorCode::malformed_input, "slab block at byte " + std::to_string(block_at) + " has index " +
+                                            std::to_string(index) + " where slab " + std::to_string(k) +
+                                            " was expected (slabs come in order from 0)");
+  const std::uint64_t length = in.varint("a slab payload length");
+  const std::size_t payload_at = in.offset();
+  return {in.bytes(length, "a slab payload"), payload_at};
+}
+
+// Checks the end block after nz slab blocks and that nothing follows it.
+void read_end_block(ByteCursor& in, std::int64_t nz) {
   const std::size_t end_at = in.offset();
   const std::uint8_t tag = in.u8("the end block");
   if (tag == encode::kSlabTag)
@@ -61,6 +67,18 @@ void walk_slab_blocks(ByteCursor in, std::int64_t nz, const Visit& visit) {
                                             std::to_string(nz));
   if (!in.at_end())
     in.fail(ErrorCode::malformed_input, std::to_string(in.remaining()) + " unexpected bytes after the end block");
+}
+
+// Checks the framing of the slab blocks and the end block, calling
+// visit(k, payload, payload_offset) for each slab in order. Takes the cursor
+// by value so that each pass starts from the first block.
+template <class Visit>
+void walk_slab_blocks(ByteCursor in, std::int64_t nz, const Visit& visit) {
+  for (std::int64_t k = 0; k < nz; ++k) {
+    const SlabBlock block = read_slab_block(in, k, nz);
+    visit(k, block.payload, block.at);
+  }
+  read_end_block(in, nz);
 }
 
 ByteCursor payload_cursor(std::span<const std::uint8_t> payload, std::size_t payload_at, std::int64_t k) {
@@ -220,6 +238,33 @@ DenseVolume<std::uint16_t> read_rle_u16(std::span<const std::uint8_t> data, cons
 
 DenseVolume<Rgba8> read_rle_rgba8(std::span<const std::uint8_t> data, const ReadLimits& limits) {
   return read_rle_values<Rgba8>(data, limits, encode::RleValueType::rgba8, "read_rle_rgba8");
+}
+
+Grid read_rle_bit_grid(std::span<const std::uint8_t> data) {
+  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
+  return read_header_of_type(in, encode::RleValueType::bit, "read_rle_bit_grid").grid;
+}
+
+void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume) {
+  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
+  const Grid grid = read_header_of_type(in, encode::RleValueType::bit, "read_rle_bit_slabs").grid;
+  const std::int64_t nz = grid.dims.z;
+  const std::uint64_t slab_voxels = slab_voxel_count(grid);
+  const std::int64_t layers = std::clamp<std::int64_t>(slab_layers, 1, std::max<std::int64_t>(nz, 1));
+  for (std::int64_t k0 = 0; k0 < nz; k0 += layers) {
+    const std::int64_t n = std::min(layers, nz - k0);
+    // A fresh slab comes zeroed from the OS, as the streamed voxelizer's do.
+    BitVolume slab(slab_grid(grid, k0, n));
+    for (std::int64_t k = k0; k < k0 + n; ++k) {
+      const SlabBlock block = read_slab_block(in, k, nz);
+      std::uint64_t* layer = slab.slab(k - k0);
+      decode_bit_payload(payload_cursor(block.payload, block.at, k), slab_voxels, [&](std::uint64_t first, std::uint64_t length) {
+        set_run(layer, slab.row_words(), grid.dims.x, first, length);
+      });
+    }
+    consume(k0, slab);
+  }
+  read_end_block(in, nz);
 }
 
 std::string read_rle_metadata(std::span<const std::uint8_t> data) {

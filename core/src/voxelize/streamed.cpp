@@ -11,14 +11,6 @@
 namespace voxd {
 namespace {
 
-// The grid's z layers [k0, k0 + layers).
-Grid slab_grid(const Grid& grid, std::int64_t k0, std::int64_t layers) {
-  Grid g = grid;
-  g.origin.z += static_cast<double>(k0) * grid.voxel_size;
-  g.dims.z = layers;
-  return g;
-}
-
 std::uint64_t layer_bytes(const Grid& grid) {
   return static_cast<std::uint64_t>((grid.dims.x + 63) / 64) * 8 * static_cast<std::uint64_t>(grid.dims.y);
 }

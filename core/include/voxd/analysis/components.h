@@ -7,6 +7,7 @@
 // 6-connected (a void leaking only through an edge or a corner is still
 // enclosed: powder cannot pass through a zero-width gap).
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -30,6 +31,31 @@ struct ComponentReport {
 // proportional to the number of runs, not voxels. Empty voxels on the grid's
 // border are connected to the outside.
 ComponentReport find_components(const BitVolume& volume);
+
+// find_components of a volume that arrives slab by slab in z order (a
+// streamed voxelization, a stored result replayed from its RLE): add() every
+// slab, then finish(). A region is final as soon as no run of the current
+// layer continues it, so memory is two layers' runs and the regions found,
+// whatever nz is; find_components is the one-slab case.
+class ComponentLabeller {
+ public:
+  explicit ComponentLabeller(const Grid& grid);
+  ~ComponentLabeller();
+  ComponentLabeller(const ComponentLabeller&) = delete;
+  ComponentLabeller& operator=(const ComponentLabeller&) = delete;
+
+  // Layers [k0, k0 + slab.grid().dims.z), right after the previous slab's.
+  // Throws std::logic_error out of order.
+  void add(std::int64_t k0, const BitVolume& slab);
+  // After the last layer. Throws std::logic_error if layers are missing.
+  ComponentReport finish();
+
+ private:
+  class Phase;
+  glm::i64vec3 dims_;
+  std::unique_ptr<Phase> parts_, voids_;
+  std::int64_t next_k_ = 0;
+};
 
 // Model-space centre of a region's centroid.
 glm::dvec3 region_centroid_model(const VoxelRegion& region, const Grid& grid);

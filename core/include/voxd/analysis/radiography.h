@@ -38,6 +38,30 @@ ImageSize projected_size(const Grid& grid, int axis);
 // axis and Error(limit_exceeded) when the image would not fit an int.
 ThicknessImage radiography(const BitVolume& volume, int axis, int threads = 0);
 
+// radiography() of a volume that arrives slab by slab in z order (a streamed
+// voxelization, a stored result replayed from its RLE): add() every slab,
+// then take(). The maps are exactly radiography()'s. Rays along z cross
+// slabs: each keeps the layer where its open run began, so memory is the
+// image's three maps, one more map and one layer of bits, whatever nz is.
+class RadiographyAccumulator {
+ public:
+  // Throws like radiography() for a bad axis or an image too large.
+  RadiographyAccumulator(const Grid& grid, int axis);
+  // Layers [k0, k0 + slab.grid().dims.z), right after the previous slab's.
+  // Throws std::logic_error out of order.
+  void add(std::int64_t k0, const BitVolume& slab, int threads = 0);
+  // After the last layer. Throws std::logic_error if layers are missing.
+  ThicknessImage take();
+
+ private:
+  Grid grid_;
+  int axis_;
+  ThicknessImage image_;
+  std::int64_t next_k_ = 0;
+  std::vector<std::uint32_t> run_start_;  // z: the layer the ray's open run began at
+  std::vector<std::uint64_t> last_layer_; // z: the previous layer's bits (rows of row words)
+};
+
 // Summary of one map over the rays that hit material (zeros are skipped).
 struct ThicknessStats {
   std::uint64_t rays = 0;  // pixels with a non-zero value

@@ -2,6 +2,7 @@
 // Cross-sections: one plane of voxels across an axis, as an 8-bit image, so a
 // client can look inside a part (walls, cavities) at a chosen height.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "voxd/bit_volume.h"
@@ -21,6 +22,23 @@ struct GreyImage8 {
 // Throws Error(invalid_argument) for a bad axis or an index outside
 // [0, dims[axis]).
 GreyImage8 cross_section(const BitVolume& volume, int axis, std::int64_t index);
+
+// cross_section of a volume that arrives slab by slab (a stored result
+// replayed from its RLE): add() the slabs, then take(). Memory is the image.
+class SectionGatherer {
+ public:
+  // Throws like cross_section for a bad axis or index.
+  SectionGatherer(const Grid& grid, int axis, std::int64_t index);
+  // Layers [k0, k0 + slab.grid().dims.z) of the grid; a slab the plane
+  // does not cross adds nothing.
+  void add(std::int64_t k0, const BitVolume& slab);
+  GreyImage8 take() { return std::move(image_); }
+
+ private:
+  int axis_;
+  std::int64_t index_;
+  GreyImage8 image_;
+};
 
 // Index along `axis` of the voxel layer containing model coordinate
 // `coordinate`: floor((coordinate - origin[axis]) / voxel_size). Throws

@@ -6,20 +6,14 @@
 // mesh, its triangle bins and one slab, O(triangles + nx * ny * slab), not
 // O(nx * ny * nz); the voxels are exactly voxelize()'s.
 #include <cstdint>
-#include <functional>
 
+#include "voxd/bit_slabs.h"
 #include "voxd/bit_volume.h"
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd {
-
-// Receives z layers [k0, k0 + slab.grid().dims.z) of the grid as a volume
-// whose grid is that part of the whole one (its origin moved up by k0
-// voxels). Called in z order, on the calling thread; the slab is reused after
-// the call returns.
-using BitSlabConsumer = std::function<void(std::int64_t k0, const BitVolume& slab)>;
 
 // Whether these options stream: the parity inside test (rays along x; the
 // vote's rays along y and z, and the winding number's whole-mesh sums, do

@@ -1,0 +1,25 @@
+#pragma once
+// A stored bit RLE stream (proto-schemas/rle-format.md) replayed z-slab by
+// z-slab, so a result larger than memory is re-encoded and analysed without
+// ever being loaded whole: memory is one slab of `slab_layers` layers.
+#include <cstdint>
+#include <span>
+
+#include "voxd/bit_slabs.h"
+#include "voxd/grid.h"
+
+namespace voxd {
+
+// The grid of a bit RLE stream, from its header. Throws like read_rle_bits.
+Grid read_rle_bit_grid(std::span<const std::uint8_t> data);
+
+// Decodes the stream's layers into slabs of `slab_layers` layers (the last
+// one shorter when nz is not a multiple), calling `consume` for each in z
+// order, as the streamed voxelizer does. Each block is checked as it is
+// reached: a malformed one throws Error(malformed_input / truncated_input)
+// after the slabs before it were handed on, so a consumer that must not act
+// on half a volume checks the stream first or stops on the throw. A consumer
+// may throw to stop early.
+void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume);
+
+}  // namespace voxd

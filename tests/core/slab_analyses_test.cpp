@@ -1,0 +1,265 @@
+// A stored RLE result replayed slab by slab (voxd/encode/rle_slabs.h) and the
+// analyses that take slabs (mass properties, radiography, parts and voids,
+// sections): on real meshes, whatever the slab size (including grids whose z
+// size is not a multiple of it), the slabs are the stored voxels and every
+// streamed analysis is exactly its in-memory counterpart.
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "support/test_meshes.h"
+#include "voxd/analysis/components.h"
+#include "voxd/analysis/mass_properties.h"
+#include "voxd/analysis/radiography.h"
+#include "voxd/analysis/section.h"
+#include "voxd/encode/rle_slabs.h"
+#include "voxd/encode/slab_writer.h"
+#include "voxd/encode/volume_format.h"
+#include "voxd/error.h"
+#include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd {
+namespace {
+
+struct Stored {
+  BitVolume volume;
+  std::vector<std::uint8_t> rle;
+};
+
+Stored stored(const std::string& name, std::int64_t resolution) {
+  const Mesh mesh = decode_mesh(test::read_file(std::string(VOXD_SHARED_MESHES) + "/" + name), name);
+  GridRequest r;
+  r.resolution = resolution;
+  r.padding = 1;
+  Stored s{voxelize(mesh, resolve_grid(r, bounds(mesh)), VoxelizeOptions{}), {}};
+  VectorSink sink;
+  write_rle(s.volume, sink);
+  s.rle = std::move(sink.data);
+  return s;
+}
+
+// Each shared mesh once, at a resolution whose nz is prime-ish against the
+// slab sizes below.
+const std::vector<Stored>& cases() {
+  static const std::vector<Stored> all = [] {
+    std::vector<Stored> v;
+    v.push_back(stored("bunny.stl", 83));
+    v.push_back(stored("M3_hex_nut.stl", 70));
+    v.push_back(stored("torus.stl", 101));
+    return v;
+  }();
+  return all;
+}
+
+std::vector<std::int64_t> slab_sizes(const Grid& g) { return {1, 2, 7, g.dims.z - 1, g.dims.z}; }
+
+bool same_words(const BitVolume& a, const BitVolume& b) {
+  return a.byte_size() == b.byte_size() && std::memcmp(a.data(), b.data(), a.byte_size()) == 0;
+}
+
+TEST(RleSlabs, ReplayedSlabsAreTheStoredVoxelsInOrder) {
+  for (const Stored& s : cases()) {
+    const Grid& g = s.volume.grid();
+    EXPECT_EQ(read_rle_bit_grid(s.rle).dims, g.dims);
+    for (std::int64_t layers : slab_sizes(g)) {
+      SCOPED_TRACE("layers " + std::to_string(layers) + " of nz " + std::to_string(g.dims.z));
+      BitVolume whole(g);
+      std::int64_t next = 0;
+      read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) {
+        EXPECT_EQ(k0, next);
+        EXPECT_LE(slab.grid().dims.z, layers);
+        EXPECT_DOUBLE_EQ(slab.grid().origin.z, g.origin.z + static_cast<double>(k0) * g.voxel_size);
+        std::memcpy(whole.slab(k0), slab.data(), slab.byte_size());
+        next = k0 + slab.grid().dims.z;
+      });
+      EXPECT_EQ(next, g.dims.z);
+      EXPECT_TRUE(same_words(whole, s.volume));
+    }
+  }
+}
+
+TEST(RleSlabs, EveryStreamedFormatReencodedFromTheRleIsTheInMemoryBytes) {
+  const Stored& s = cases()[0];
+  struct Format {
+    VolumeFormat format;
+    EncodeOptions options;
+  };
+  std::vector<Format> formats(4);
+  formats[0].format = VolumeFormat::raw;
+  formats[1].format = VolumeFormat::raw;
+  formats[1].options.raw_packing = RawPacking::bits;
+  formats[2].format = VolumeFormat::nrrd;
+  formats[3].format = VolumeFormat::nrrd;
+  formats[3].options.nrrd_encoding = NrrdEncoding::gzip;
+  for (const Format& f : formats) {
+    VectorSink expected;
+    encode_volume(s.volume, f.format, expected, f.options);
+    VectorSink streamed;
+    BitSlabWriter writer(s.volume.grid(), f.format, f.options, streamed);
+    read_rle_bit_slabs(s.rle, 5, [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
+    writer.finish();
+    EXPECT_EQ(streamed.data, expected.data) << to_string(f.format);
+  }
+}
+
+TEST(RleSlabs, ABrokenStreamStopsAtTheBadBlockWithItsOffset) {
+  const Stored& s = cases()[1];
+  std::vector<std::uint8_t> cut(s.rle.begin(), s.rle.begin() + static_cast<std::ptrdiff_t>(s.rle.size() / 2));
+  std::int64_t layers_seen = 0;
+  try {
+    read_rle_bit_slabs(cut, 1, [&](std::int64_t, const BitVolume& slab) { layers_seen += slab.grid().dims.z; });
+    FAIL() << "a stream cut in half was read to its end";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::truncated_input);
+    EXPECT_NE(std::string(e.what()).find("byte"), std::string::npos) << e.what();
+  }
+  EXPECT_GT(layers_seen, 0);
+  EXPECT_LT(layers_seen, s.volume.grid().dims.z);
+
+  std::vector<std::uint8_t> padded = s.rle;
+  padded.push_back(0);
+  EXPECT_THROW(read_rle_bit_slabs(padded, 4, [](std::int64_t, const BitVolume&) {}), Error);
+}
+
+TEST(SlabAnalyses, MassPropertiesAreExactlyTheInMemoryOnesForAnySlabsAndThreads) {
+  for (const Stored& s : cases()) {
+    const MassProperties expected = voxel_mass_properties(s.volume, 1);
+    ASSERT_GT(expected.volume, 0.0);
+    for (std::int64_t layers : slab_sizes(s.volume.grid())) {
+      for (int threads : {1, 3}) {
+        VoxelMassAccumulator sums(s.volume.grid());
+        read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { sums.add(k0, slab, threads); });
+        const MassProperties got = sums.result();
+        EXPECT_EQ(got.volume, expected.volume);
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_EQ(got.centroid[a], expected.centroid[a]);
+          EXPECT_EQ(got.bbox.min[a], expected.bbox.min[a]);
+          EXPECT_EQ(got.bbox.max[a], expected.bbox.max[a]);
+          for (int b = 0; b < 3; ++b) EXPECT_EQ(got.inertia[a][b], expected.inertia[a][b]);
+        }
+      }
+    }
+  }
+}
+
+TEST(SlabAnalyses, MassPropertiesOfABoxAreItsAnalyticOnes) {
+  // An a x b x c block of voxels: volume abc h^3, Ixx = V (b^2 + c^2) h^2 / 12.
+  Grid g;
+  g.dims = {40, 30, 50};
+  g.voxel_size = 0.5;
+  g.origin = {1.0, -2.0, 3.0};
+  BitVolume v(g);
+  const std::int64_t a = 17, b = 9, c = 23;  // from voxel (5, 7, 11)
+  for (std::int64_t k = 11; k < 11 + c; ++k)
+    for (std::int64_t j = 7; j < 7 + b; ++j)
+      for (std::int64_t i = 5; i < 5 + a; ++i) v.set(i, j, k, true);
+  const double h = g.voxel_size;
+  const double volume = static_cast<double>(a * b * c) * h * h * h;
+  const MassProperties p = voxel_mass_properties(v);
+  EXPECT_DOUBLE_EQ(p.volume, volume);
+  EXPECT_DOUBLE_EQ(p.centroid.x, 1.0 + (5 + a / 2.0) * h);
+  EXPECT_DOUBLE_EQ(p.centroid.y, -2.0 + (7 + b / 2.0) * h);
+  EXPECT_DOUBLE_EQ(p.centroid.z, 3.0 + (11 + c / 2.0) * h);
+  EXPECT_NEAR(p.inertia[0][0], volume * (b * b + c * c) * h * h / 12.0, 1e-9 * p.inertia[0][0]);
+  EXPECT_NEAR(p.inertia[1][1], volume * (a * a + c * c) * h * h / 12.0, 1e-9 * p.inertia[1][1]);
+  EXPECT_NEAR(p.inertia[2][2], volume * (a * a + b * b) * h * h / 12.0, 1e-9 * p.inertia[2][2]);
+  EXPECT_EQ(p.inertia[0][1], 0.0);
+  EXPECT_EQ(p.inertia[1][2], 0.0);
+  EXPECT_EQ(p.inertia[0][2], 0.0);
+}
+
+TEST(SlabAnalyses, RadiographyAlongEachAxisIsExactlyTheInMemoryOne) {
+  for (const Stored& s : cases()) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const ThicknessImage expected = radiography(s.volume, axis);
+      for (std::int64_t layers : slab_sizes(s.volume.grid())) {
+        SCOPED_TRACE("axis " + std::to_string(axis) + " layers " + std::to_string(layers));
+        RadiographyAccumulator image(s.volume.grid(), axis);
+        read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { image.add(k0, slab, 2); });
+        const ThicknessImage got = image.take();
+        EXPECT_EQ(got.width, expected.width);
+        EXPECT_EQ(got.height, expected.height);
+        EXPECT_EQ(got.min, expected.min);
+        EXPECT_EQ(got.max, expected.max);
+        EXPECT_EQ(got.total, expected.total);
+      }
+    }
+  }
+}
+
+TEST(SlabAnalyses, RadiographyRefusesSlabsOutOfOrderOrMissing) {
+  const Stored& s = cases()[1];
+  RadiographyAccumulator image(s.volume.grid(), 2);
+  EXPECT_THROW(image.add(3, s.volume), std::logic_error);
+  RadiographyAccumulator partial(s.volume.grid(), 2);
+  EXPECT_THROW(partial.take(), std::logic_error);
+}
+
+TEST(SlabAnalyses, PartsAndVoidsAreExactlyTheInMemoryOnes) {
+  // A shell with a cavity and a loose ball inside it: one void, two parts,
+  // found whether the slabs cut through the cavity or not.
+  Grid g;
+  g.dims = {30, 28, 33};
+  BitVolume shell(g);
+  for (std::int64_t k = 3; k < 29; ++k)
+    for (std::int64_t j = 2; j < 25; ++j)
+      for (std::int64_t i = 4; i < 27; ++i) {
+        const bool wall = k < 6 || k >= 26 || j < 5 || j >= 22 || i < 7 || i >= 24;
+        const std::int64_t di = i - 15, dj = j - 13, dk = k - 16;
+        shell.set(i, j, k, wall || di * di + dj * dj + dk * dk <= 9);
+      }
+  VectorSink shell_rle;
+  write_rle(shell, shell_rle);
+  std::vector<const Stored*> all;
+  for (const Stored& s : cases()) all.push_back(&s);
+  Stored made{std::move(shell), shell_rle.data};
+  all.push_back(&made);
+  for (const Stored* s : all) {
+    const ComponentReport expected = find_components(s->volume);
+    for (std::int64_t layers : slab_sizes(s->volume.grid())) {
+      SCOPED_TRACE("layers " + std::to_string(layers));
+      ComponentLabeller labeller(s->volume.grid());
+      read_rle_bit_slabs(s->rle, layers, [&](std::int64_t k0, const BitVolume& slab) { labeller.add(k0, slab); });
+      const ComponentReport got = labeller.finish();
+      ASSERT_EQ(got.parts.size(), expected.parts.size());
+      ASSERT_EQ(got.voids.size(), expected.voids.size());
+      auto same = [](const std::vector<VoxelRegion>& a, const std::vector<VoxelRegion>& b) {
+        for (std::size_t r = 0; r < a.size(); ++r) {
+          EXPECT_EQ(a[r].voxels, b[r].voxels);
+          EXPECT_EQ(a[r].bbox_min, b[r].bbox_min);
+          EXPECT_EQ(a[r].bbox_max, b[r].bbox_max);
+          EXPECT_EQ(a[r].centroid, b[r].centroid);
+        }
+      };
+      same(got.parts, expected.parts);
+      same(got.voids, expected.voids);
+    }
+  }
+  const ComponentReport r = find_components(made.volume);
+  ASSERT_EQ(r.parts.size(), 2u);
+  ASSERT_EQ(r.voids.size(), 1u);
+  // The cavity: 17 x 17 x 20 voxels less the ball it holds.
+  EXPECT_EQ(r.voids[0].voxels + r.parts[1].voxels, std::uint64_t{17 * 17 * 20});
+}
+
+TEST(SlabAnalyses, SectionsAlongEachAxisAreTheInMemoryOnes) {
+  const Stored& s = cases()[0];
+  const Grid& g = s.volume.grid();
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::int64_t index : {std::int64_t{0}, g.dims[axis] / 2, g.dims[axis] - 1}) {
+      const GreyImage8 expected = cross_section(s.volume, axis, index);
+      SectionGatherer section(g, axis, index);
+      read_rle_bit_slabs(s.rle, 6, [&](std::int64_t k0, const BitVolume& slab) { section.add(k0, slab); });
+      const GreyImage8 got = section.take();
+      EXPECT_EQ(got.width, expected.width);
+      EXPECT_EQ(got.pixels, expected.pixels) << "axis " << axis << " index " << index;
+    }
+  }
+  EXPECT_THROW(SectionGatherer(g, 2, g.dims.z), Error);
+}
+
+}  // namespace
+}  // namespace voxd
