@@ -74,11 +74,20 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
     mass["mesh"] = {{"available", false}, {"reason", reason}};
     mass["difference"] = nullptr;
   }
-  json layers = json::array();
-  for (std::uint64_t n : report.skin.voxels_per_layer) layers.push_back(n);
-  json hot_spots = json::array();
-  for (std::size_t i = 0; i < report.skin.innermost.size() && i < kMaxListedRegions; ++i)
-    hot_spots.push_back(region_json(report.skin.innermost[i], grid));
+  json skin = nullptr;
+  if (report.skin) {
+    json layers = json::array();
+    for (std::uint64_t n : report.skin->voxels_per_layer) layers.push_back(n);
+    json hot_spots = json::array();
+    for (std::size_t i = 0; i < report.skin->innermost.size() && i < kMaxListedRegions; ++i)
+      hot_spots.push_back(region_json(report.skin->innermost[i], grid));
+    skin = {{"metric", to_string(report.peel)},
+            {"connectivity", report.peel == PeelMetric::faces ? json(6) : json(nullptr)},
+            {"layers", layers},
+            {"max_depth_layers", report.skin->max_depth},
+            {"max_depth", static_cast<double>(report.skin->max_depth) * h},
+            {"hot_spots", hot_spots}};
+  }
   json thickness = nullptr;
   if (report.thickness) {
     const ThicknessAnalysis& t = *report.thickness;
@@ -122,12 +131,7 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
       {"mass_properties", mass},
       {"parts", regions_json(report.components.parts, grid)},
       {"voids", regions_json(report.components.voids, grid)},
-      {"skin", {{"metric", to_string(report.peel)},
-                {"connectivity", report.peel == PeelMetric::faces ? json(6) : json(nullptr)},
-                {"layers", layers},
-                {"max_depth_layers", report.skin.max_depth},
-                {"max_depth", static_cast<double>(report.skin.max_depth) * h},
-                {"hot_spots", hot_spots}}},
+      {"skin", skin},
       {"thickness", thickness},
       {"cleanup", report.cleanup ? json{{"isolated", report.cleanup->isolated},
                                         {"lines", report.cleanup->lines},

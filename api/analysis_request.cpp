@@ -111,10 +111,11 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, c
   };
   switch (kind) {
     case AnalysisKind::analysis:
-      in.allowed = {"cleanup", "thickness", "min_wall", "max_wall", "peel_metric"};
+      in.allowed = {"cleanup", "thickness", "skin", "min_wall", "max_wall", "peel_metric"};
       r.peel_metric = in.choice("peel_metric", kPeelMetricNames, PeelMetric::faces);
       r.cleanup = in.choice("cleanup", {"none", "debris", "sheets"}, "none");
       r.thickness = in.choice("thickness", {"true", "false"}, "true") == "true";
+      r.skin = in.choice("skin", {"true", "false"}, "true") == "true";
       r.min_wall = in.positive("min_wall");
       r.max_wall = in.positive("max_wall");
       if ((r.min_wall || r.max_wall) && !r.thickness)
@@ -167,6 +168,7 @@ std::string AnalysisRequest::query() const {
       if (min_wall) q += "&min_wall=" + number_text(*min_wall);
       if (max_wall) q += "&max_wall=" + number_text(*max_wall);
       if (peel_metric != PeelMetric::faces) q += std::string("&peel_metric=") + to_string(peel_metric);
+      if (!skin) q += "&skin=false";  // after the rest, so URLs of earlier releases stay the same
       return q;
     }
     case AnalysisKind::radiography:
@@ -257,6 +259,7 @@ nlohmann::json to_json(const AnalysisRequest& r) {
       j["peel_metric"] = to_string(r.peel_metric);
       j["cleanup"] = r.cleanup;
       j["thickness"] = r.thickness;
+      j["skin"] = r.skin;
       if (r.min_wall) j["min_wall"] = *r.min_wall;
       if (r.max_wall) j["max_wall"] = *r.max_wall;
       break;

@@ -29,6 +29,9 @@ struct AnalysisRequest {
   // thick-wall thresholds in model units.
   std::string cleanup = "none";  // none | debris | sheets
   bool thickness = true;
+  // analysis: skin removal layers (false: "skin" is null; with
+  // thickness=false and no clean-up the analysis streams over any grid).
+  bool skin = true;
   std::optional<double> min_wall, max_wall;
   // radiography, section: the axis (0 = x).
   int axis = 2;

@@ -108,7 +108,7 @@ JobParams parse_job_params(const json& params) {
   Validator val;
   JobParams out;
   if (!val.is_object(params, "")) throw InvalidParams(std::move(val.errors));
-  std::vector<std::string_view> keys = {"grid", "mode", "inside", "rotation", "orient", "analyses"};
+  std::vector<std::string_view> keys = {"grid", "mode", "inside", "rotation", "orient", "analyses", "streaming"};
   std::vector<std::string_view> names;
   for (const JobMode* m : job_modes()) {
     names.push_back(m->name());
@@ -133,6 +133,7 @@ JobParams parse_job_params(const json& params) {
       out.options = m->parse_options(val, &params.at(key), out);
   }
   if (auto i = val.one_of(params, "", "inside", kInsideTestNames)) out.inside = *i;
+  if (auto s = val.one_of(params, "", "streaming", kStreamingNames)) out.streaming = *s;
   out.mode->complete(val, params, out);
   if (params.contains("analyses")) {
     try {

@@ -17,6 +17,13 @@
 
 namespace voxd::api {
 
+// Whether a job's volume is made slab by slab and kept as its RLE (grids
+// past memory) or made whole in memory: auto decides from the grid.
+enum class Streaming { automatic, on, off };
+inline constexpr EnumNames<Streaming, 3> kStreamingNames{
+    {{Streaming::automatic, "auto"}, {Streaming::on, "on"}, {Streaming::off, "off"}}};
+inline const char* to_string(Streaming s) noexcept { return name_of(kStreamingNames, s); }
+
 struct JobParams {
   GridRequest grid;
   std::optional<glm::dmat3> rotation;  // applied before orient
@@ -31,6 +38,7 @@ struct JobParams {
   std::shared_ptr<ModeOptions> options;
   // Analyses the worker prepares once the volume exists (api/analysis_request.h).
   std::vector<AnalysisRequest> analyses;
+  Streaming streaming = Streaming::automatic;
 
   JobParams();
   // The job's "mode" as written (api/modes/mode_registry.cpp lists them).

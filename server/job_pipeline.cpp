@@ -38,6 +38,12 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
   return params.mode->memory_estimate(grid, params);
 }
 
+std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::uint64_t triangles) {
+  const std::uint64_t layer = bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+  const std::uint64_t slab = layer * static_cast<std::uint64_t>(streamed_slab_layers(grid, kStreamSlabBytes));
+  return slab + layer + 64 * triangles + (std::uint64_t{64} << 20);
+}
+
 std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                      const DecodeLimits& limits) {
   const std::uint64_t n = mesh_bytes.size();
@@ -101,8 +107,26 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
     box.max /= aspect;
   }
   job.grid = resolve_grid(params.grid, box);
-  check_voxel_limit(job.grid, limits.max_voxels, "");
-  job.memory_estimate = estimate_job_memory(job.grid, params);
+  // In memory or slab by slab: asked for, or from the memory it would take.
+  const std::optional<std::string> no_stream = params.mode->streaming_refusal(params);
+  const std::uint64_t in_memory = estimate_job_memory(job.grid, params);
+  if (params.streaming == api::Streaming::on) {
+    if (no_stream) throw Error(ErrorCode::invalid_argument, "\"streaming\": \"on\": " + *no_stream);
+    if (limits.stream_above_bytes == 0)
+      throw Error(ErrorCode::invalid_argument, "\"streaming\": \"on\" needs a stored result: submit the job to POST /v1/jobs");
+  }
+  job.streamed = params.streaming == api::Streaming::on ||
+                 (params.streaming == api::Streaming::automatic && !no_stream && limits.stream_above_bytes > 0 &&
+                  in_memory > limits.stream_above_bytes);
+  if (job.streamed) {
+    check_voxel_limit(job.grid, limits.max_streamed_voxels, "");
+    job.memory_estimate = estimate_streamed_job_memory(job.grid, job.triangles);
+  } else {
+    const bool could_stream = !no_stream && limits.stream_above_bytes > 0 && params.streaming == api::Streaming::off;
+    check_voxel_limit(job.grid, limits.max_voxels,
+                      could_stream ? " (or \"streaming\": \"auto\": slab by slab it needs the memory of one slab, not the grid's)" : "");
+    job.memory_estimate = in_memory;
+  }
   job.timings.add("grid", clock.lap());
   return job;
 }

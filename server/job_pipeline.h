@@ -24,9 +24,20 @@
 
 namespace voxd {
 
+// Voxels per z-slab of a streamed job: about this many bytes of bits.
+inline constexpr std::uint64_t kStreamSlabBytes = std::uint64_t{128} << 20;
+
 struct JobLimits {
   DecodeLimits decode;
-  std::uint64_t max_voxels = std::uint64_t{1} << 33;  // 8 Gi voxels = 1 GiB of bits
+  std::uint64_t max_voxels = std::uint64_t{1} << 33;  // a grid made whole in memory: 8 Gi voxels = 1 GiB of bits
+  // A grid made slab by slab: memory does not bound it (one slab at a time),
+  // so this bounds its time and disk; 2^40 voxels is past 10000^3.
+  std::uint64_t max_streamed_voxels = std::uint64_t{1} << 40;
+  // Jobs that can stream (api::JobParams::streaming auto) do when their
+  // volumes in memory would take more than this: 512 MiB is a 2^32-voxel grid
+  // of bits, past which streaming is as fast as memory and far smaller.
+  // 0: never (POST /v1/voxelize answers from memory).
+  std::uint64_t stream_above_bytes = std::uint64_t{512} << 20;
 };
 
 struct StageTimings {
@@ -46,7 +57,10 @@ struct PreparedVoxelJob {
   std::uint64_t triangles = 0;
   glm::dmat3 rotation{1.0};  // applied before voxelization (rotation, then orient)
   Grid grid;
-  std::uint64_t memory_estimate = 0;  // bytes at peak, for admission control
+  // Made slab by slab (execute_streamed_voxel_job), as decided from the
+  // job's streaming and its memory; memory_estimate is then the streamed one.
+  bool streamed = false;
+  std::uint64_t memory_estimate = 0;  // bytes at peak the way it runs, for admission control
   StageTimings timings;
 };
 
@@ -76,6 +90,11 @@ struct VoxelJobResult {
 
 // Bytes the job's volumes will take at peak, for admission control.
 std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params);
+// The same for the job made slab by slab: one slab of kStreamSlabBytes,
+// the triangles binned by slab and the encoder's buffers (the mesh apart).
+// Measured: 269 MiB peak RSS for the 1.1M-triangle bunny at 8192^3 with
+// its mesh (docs/benchmarks.md, issue #14).
+std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::uint64_t triangles);
 
 // Bytes decoding an upload takes at its peak beside the upload itself (the
 // mesh, the weld's tables), from its size and format; for Draco, the

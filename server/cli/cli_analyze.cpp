@@ -13,7 +13,7 @@
 #include "server/cli/cli.h"
 #include "server/cli/cli_args.h"
 #include "server/cli/cli_params.h"
-#include "server/cli/mapped_file.h"
+#include "server/mapped_file.h"
 #include "server/job_pipeline.h"
 #include "server/jobs/job_analyses.h"
 #include "voxd/analysis/analysis.h"
@@ -219,7 +219,7 @@ int analyze_command(int argc, char** argv) {
     // Non-owning views of this run's volumes (they outlive the loop).
     server::JobOutput output{
         std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
-        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}};
+        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}, nullptr};
     for (const auto& [name, volume] : result.layers)
       output.layers.emplace_back(name, std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume));
     std::filesystem::create_directories(*out_dir + "/analyses");
@@ -242,7 +242,7 @@ int analyze_command(int argc, char** argv) {
     }
   }
   std::cerr << "analysis: " << report.components.parts.size() << " part(s), " << report.components.voids.size()
-            << " void(s), skin " << report.skin.max_depth << " layers deep; wrote " << path << " and " << images << " images\n";
+            << " void(s), skin " << (report.skin ? report.skin->max_depth : 0) << " layers deep; wrote " << path << " and " << images << " images\n";
   return 0;
 }
 

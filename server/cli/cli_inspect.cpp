@@ -6,7 +6,7 @@
 #include "api/result_json.h"
 #include "server/cli/cli.h"
 #include "server/cli/cli_args.h"
-#include "server/cli/mapped_file.h"
+#include "server/mapped_file.h"
 #include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/mesh_report.h"
 

@@ -11,7 +11,7 @@
 #include "server/cli/cli.h"
 #include "server/cli/cli_args.h"
 #include "server/cli/cli_params.h"
-#include "server/cli/mapped_file.h"
+#include "server/mapped_file.h"
 #include "server/job_pipeline.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
@@ -38,7 +38,6 @@ using nlohmann::json;
 // otherwise, in slabs of about 128 MiB: as fast as in memory, and the peak
 // stays the mesh plus a slab (docs/benchmarks.md).
 constexpr std::uint64_t kStreamAboveVoxels = std::uint64_t{1} << 32;
-constexpr std::uint64_t kStreamSlabBytes = std::uint64_t{128} << 20;
 
 constexpr const char* kUsage = R"(usage: voxd voxelize MESH -o OUT [options]
 
@@ -113,7 +112,7 @@ int voxelize_command(int argc, char** argv) {
 
   json params_json = load_params(args);
   apply_param_flags(args, params_json);
-  const api::JobParams params = api::parse_job_params(params_json);
+  api::JobParams params = api::parse_job_params(params_json);
 
   std::optional<VolumeFormat> format;
   if (auto f = args.value("format")) {
@@ -162,13 +161,16 @@ int voxelize_command(int argc, char** argv) {
     if (!n || *n == 0) throw UsageError("--max-voxels expects a positive integer, got '" + *m + "'");
     max_voxels = *n;
   }
-  const std::string streaming = args.value("streaming").value_or("auto");
+  const std::string streaming = args.value("streaming").value_or(api::to_string(params.streaming));
   if (streaming != "auto" && streaming != "on" && streaming != "off")
     throw UsageError("--streaming must be auto, on or off, got '" + streaming + "'");
   std::optional<std::string> no_stream = params.mode->streaming_refusal(params);
   if (!no_stream) no_stream = streaming_refusal(*format);
   if (streaming == "on" && no_stream) throw UsageError("--streaming on: " + *no_stream);
   limits.max_voxels = user_limit || no_stream ? max_voxels : UINT64_MAX;
+  // The CLI decides below, once the grid is known, from the output format
+  // too: the preparation only resolves the grid.
+  params.streaming = api::Streaming::off;
   PreparedVoxelJob job = prepare_voxel_job(file.bytes(), mesh_path, params, limits);
   const bool streamed = streaming == "on" || (streaming == "auto" && !no_stream && job.grid.voxel_count() > kStreamAboveVoxels);
   if (!streamed)  // the in-memory limit; a job that could stream is told so

@@ -12,6 +12,7 @@
 #include "server/http/route_table.h"
 #include "server/jobs/job_analyses.h"
 #include "server/jobs/job_manager.h"
+#include "voxd/error.h"
 
 namespace voxd::server {
 namespace {
@@ -19,16 +20,20 @@ namespace {
 using httplib::Request;
 using httplib::Response;
 
-struct FinishedJob {
-  JobSnapshot snapshot;
+// A streamed job's request that streams reads the stored RLE slab by slab;
+// every other request reads the volumes whole, and on a streamed job only
+// while they fit the per-job memory (else the 422 says what does stream).
+JobOutput output_for(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request) {
   JobOutput output;
-};
-
-FinishedJob finished_job(JobManager& jobs, const std::string& id) {
-  JobSnapshot job = succeeded_job(jobs, id, "volume", "its analyses exist");
-  JobOutput output{jobs.volume(id), jobs.values(id), {}};
-  if (!output.solid || (job.has_value_volume() && !output.values)) throw unknown_job(id);
-  return {std::move(job), std::move(output)};
+  if (job.streamed && streams_over_slabs(request)) {
+    output.rle = jobs.volume_rle(job.id);
+    if (!output.rle) throw unknown_job(job.id);
+    return output;
+  }
+  output.solid = jobs.volume(job.id);
+  output.values = jobs.values(job.id);
+  if (!output.solid || (job.has_value_volume() && !output.values)) throw unknown_job(job.id);
+  return output;
 }
 
 ProblemError invalid_query(const std::string& detail) {
@@ -55,18 +60,25 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
     routes.get(kJobPath + "/" + to_string(kind), [&jobs, kind](const Request& req, Response& res) {
       const std::string id = req.matches[1];
       const api::AnalysisRequest request = request_of(kind, req);
-      const FinishedJob job = finished_job(jobs, id);
+      const JobSnapshot job = succeeded_job(jobs, id, "volume", "its analyses exist");
       // Computing (or even serving a kept result, read whole) takes memory
-      // beside the job's volumes: held from the budget meanwhile.
-      const MemoryBudget::Reservation memory =
-          jobs.reserve_memory(estimate_analysis_memory(request, job.snapshot.grid), "this analysis");
+      // beside the job's volumes: held from the budget meanwhile. A streamed
+      // job's volume is loaded only for this request, so it counts too.
+      const bool over_slabs = job.streamed && streams_over_slabs(request);
+      if (job.streamed && !over_slabs && whole_grid_memory(request, job.grid) > jobs.max_job_memory())
+        throw Error(ErrorCode::limit_exceeded, whole_grid_refusal(request, job.grid, jobs.max_job_memory()));
+      const MemoryBudget::Reservation memory = jobs.reserve_memory(
+          job.streamed && !over_slabs ? whole_grid_memory(request, job.grid)
+                                      : estimate_analysis_memory(request, job.grid, over_slabs),
+          "this analysis");
+      const JobOutput output = output_for(jobs, job, request);
       AnalysisResult result;
       try {
-        result = job_analysis(request, job.snapshot, job.output, artifacts_of(jobs, id));
+        result = job_analysis(request, job, output, artifacts_of(jobs, id));
       } catch (const AnalysisRejected& e) {
         throw invalid_query(e.what());
       }
-      for (const auto& [name, value] : analysis_headers(request, job.snapshot.grid)) res.set_header(name, value);
+      for (const auto& [name, value] : analysis_headers(request, job.grid)) res.set_header(name, value);
       res.set_header("X-Voxd-Cache", result.kept ? "hit" : "miss");
       res.set_content(std::move(result.bytes), request.content_type());
     });

@@ -12,6 +12,8 @@
 #include "server/http/volume_request.h"
 #include "server/jobs/job_record.h"
 #include "voxd/encode/number_text.h"
+#include "voxd/encode/slab_writer.h"
+#include "voxd/error.h"
 
 namespace voxd::server {
 namespace {
@@ -82,6 +84,16 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
       return answer_values(res, std::move(values), v, filename, metrics);
     }
     check_bits_format(v);
+    if (job.streamed && !streaming_refusal(v.format)) {
+      auto rle = jobs.volume_rle(id);
+      if (!rle) throw unknown_job(id);
+      return answer_stored_bits(res, std::move(rle), v, filename, metrics);
+    }
+    if (job.streamed && bit_volume_bytes(job.grid.dims) > jobs.max_job_memory())
+      throw Error(ErrorCode::limit_exceeded,
+                  *streaming_refusal(v.format) + "; this job's volume was made slab by slab and, at " +
+                      std::to_string(bit_volume_bytes(job.grid.dims) >> 20) + " MiB, is over the per-job memory of " +
+                      std::to_string(jobs.max_job_memory() >> 20) + " MiB: ask for format rle, raw or nrrd, which stream");
     auto volume = jobs.volume(id);
     if (!volume) throw unknown_job(id);
     answer_bits(res, std::move(volume), v, filename, metrics);

@@ -1,5 +1,12 @@
 #include "server/http/volume_request.h"
 
+#include <algorithm>
+#include <stdexcept>
+
+#include "voxd/encode/rle_slabs.h"
+#include "voxd/encode/slab_writer.h"
+#include "voxd/voxelize/streamed.h"
+
 #include "server/http/problem.h"
 #include "server/http/volume_stream.h"
 
@@ -88,6 +95,29 @@ void answer_bits(httplib::Response& res, std::shared_ptr<const BitVolume> bits, 
                  const std::string& filename, Metrics& metrics) {
   res.set_header("X-Voxd-Value-Type", "bit");
   stream_volume(res, std::move(bits), v.format, v.options, v.gzip, filename, &metrics);
+}
+
+void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const VolumeRequest& v,
+                        const std::string& filename, Metrics& metrics) {
+  if (auto refusal = streaming_refusal(v.format)) throw std::logic_error(*refusal);
+  res.set_header("X-Voxd-Value-Type", "bit");
+  stream_encoded(
+      res, media_type(v.format),
+      [rle = std::move(rle), v](ByteSink& sink) {
+        const std::span<const std::uint8_t> stored = rle->bytes();
+        if (v.format == VolumeFormat::rle) {  // the stored bytes are the answer, in 1 MiB chunks
+          constexpr std::size_t kChunk = std::size_t{1} << 20;
+          for (std::size_t at = 0; at < stored.size(); at += kChunk)
+            sink.write(stored.subspan(at, std::min(kChunk, stored.size() - at)));
+          return;
+        }
+        const Grid grid = read_rle_bit_grid(stored);
+        BitSlabWriter writer(grid, v.format, v.options, sink);
+        read_rle_bit_slabs(stored, streamed_slab_layers(grid, std::uint64_t{16} << 20),
+                           [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
+        writer.finish();
+      },
+      v.gzip, filename, &metrics);
 }
 
 void answer_mode_written(httplib::Response& res, std::shared_ptr<const api::JobParams> job, api::VolumeSource volumes,

@@ -9,6 +9,7 @@
 
 #include "api/job_params.h"
 #include "server/jobs/job_manager.h"
+#include "server/mapped_file.h"
 #include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
@@ -37,6 +38,14 @@ void answer_values(httplib::Response& res, std::shared_ptr<const ValueVolume> va
                    const std::string& filename, Metrics& metrics);
 void answer_bits(httplib::Response& res, std::shared_ptr<const BitVolume> bits, const VolumeRequest& v,
                  const std::string& filename, Metrics& metrics);
+// Streams a streamed job's stored RLE (server/jobs/job_store.h) in the
+// requested format slab by slab, never loading the grid: rle as stored, raw
+// and nrrd re-encoded as they are read (voxd/encode/slab_writer.h). A format
+// that does not stream (binvox) is refused here: the caller loads the
+// volume whole when it fits.
+void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const VolumeRequest& v,
+                        const std::string& filename, Metrics& metrics);
+
 // Streams what the job's mode writes itself in this format.
 void answer_mode_written(httplib::Response& res, std::shared_ptr<const api::JobParams> job, api::VolumeSource volumes,
                          const VolumeRequest& v, const std::string& filename, Metrics& metrics);

@@ -24,7 +24,11 @@
 #include "voxd/analysis/section.h"
 #include "voxd/analysis/skin_removal.h"
 #include "voxd/analysis/value_images.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/analysis/components.h"
+#include "voxd/analysis/mass_properties.h"
+#include "voxd/voxelize/streamed.h"
 
 namespace voxd::server {
 namespace {
@@ -70,6 +74,7 @@ std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, cons
   AnalysisOptions options;
   if (r.cleanup != "none") options.cleanup = CleanupOptions{true, true, r.cleanup == "sheets"};
   options.thickness = r.thickness;
+  options.skin = r.skin;
   options.peel = r.peel_metric;
   options.min_wall_voxels = r.min_wall.value_or(0) / job.grid.voxel_size;
   options.max_wall_voxels = r.max_wall.value_or(0) / job.grid.voxel_size;
@@ -89,10 +94,7 @@ std::optional<BitVolume> peeled_volume(const AnalysisRequest& r, const BitVolume
   return peeled(peel_depth(volume, 0, metric), static_cast<std::uint32_t>(std::min<std::int64_t>(r.peel, UINT32_MAX)));
 }
 
-std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& original) {
-  const std::optional<BitVolume> peeled_model = peeled_volume(r, original);
-  const BitVolume& volume = peeled_model ? *peeled_model : original;
-  const ThicknessImage image = radiography(volume, r.axis);
+std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job, const ThicknessImage& image) {
   const RadiographyMeasure m = r.measure;
   const PngScale scale = radiography_scale(r, job.grid);
   if (r.format == "json") {
@@ -110,6 +112,42 @@ std::string radiography_result(const AnalysisRequest& r, const JobSnapshot& job,
   std::vector<PngText> text = {{"voxd:job", job.id}};
   if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + to_string(r.peel_metric) + ")"});
   return to_bytes(radiography_png(image, r.axis, m, r.format == "png", scale, text));
+}
+
+ThicknessImage job_radiography(const AnalysisRequest& r, const BitVolume& original) {
+  const std::optional<BitVolume> peeled_model = peeled_volume(r, original);
+  return radiography(peeled_model ? *peeled_model : original, r.axis);
+}
+
+// Replays a streamed job's stored volume slab by slab (16 MiB slabs: small
+// beside the images, large enough that a slab is cheap to hand on), with
+// progress over the slabs and cancellation between them.
+void replay(const JobOutput& output, const Grid& grid, JobControl* control, const BitSlabConsumer& consume) {
+  if (!output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
+  const double slabs_total = static_cast<double>(grid.dims.z);
+  read_rle_bit_slabs(output.rle->bytes(), streamed_slab_layers(grid, std::uint64_t{16} << 20),
+                     [&](std::int64_t k0, const BitVolume& slab) {
+                       if (control) control->check_cancelled();
+                       consume(k0, slab);
+                       if (control) control->set_progress(static_cast<double>(k0 + slab.grid().dims.z) / slabs_total);
+                     });
+}
+
+// The analysis of a streamed job's volume: mass properties, parts and voids
+// from its slabs; the bytes analysis_json makes for the same request in memory.
+std::string streamed_analysis_json(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
+                                   JobControl* control) {
+  VoxelMassAccumulator mass(job.grid);
+  ComponentLabeller components(job.grid);
+  replay(output, job.grid, control, [&](std::int64_t k0, const BitVolume& slab) {
+    mass.add(k0, slab);
+    components.add(k0, slab);
+  });
+  AnalysisReport report;
+  report.voxels = mass.result();
+  report.components = components.finish();
+  report.peel = r.peel_metric;
+  return api::analysis_to_json(report, job.grid, job.mesh, job.mesh_mass).dump();
 }
 
 std::int64_t section_layer(const AnalysisRequest& r, const Grid& g) {
@@ -192,7 +230,64 @@ std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, 
 
 }  // namespace
 
-std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& grid) {
+bool streams_over_slabs(const AnalysisRequest& r) {
+  switch (r.kind) {
+    case AnalysisKind::analysis: return r.cleanup == "none" && !r.thickness && !r.skin;
+    case AnalysisKind::radiography: return r.peel == 0;
+    case AnalysisKind::section: return r.peel == 0 && r.colour == "none";
+    case AnalysisKind::preview:
+    case AnalysisKind::thickness: return false;
+  }
+  return false;
+}
+
+std::uint64_t whole_grid_memory(const AnalysisRequest& r, const Grid& grid) {
+  return bit_volume_bytes(grid.dims) + estimate_analysis_memory(r, grid);
+}
+
+std::string whole_grid_refusal(const AnalysisRequest& r, const Grid& grid, std::uint64_t max_job_memory) {
+  // The largest cube whose bits and analysis fit: per-voxel cost from two
+  // sizes (the estimate is affine in the voxel count).
+  Grid unit;
+  unit.dims = {1, 1, 1};
+  Grid two = unit;
+  two.dims = {1024, 1024, 1024};
+  const std::uint64_t fixed = whole_grid_memory(r, unit);
+  const double per_voxel = static_cast<double>(whole_grid_memory(r, two) - fixed) / static_cast<double>(two.voxel_count());
+  const double largest = max_job_memory > fixed ? static_cast<double>(max_job_memory - fixed) / per_voxel : 0.0;
+  const auto largest_voxels = static_cast<std::uint64_t>(largest);
+  const auto side = static_cast<std::uint64_t>(std::cbrt(largest));
+  std::string what;
+  switch (r.kind) {
+    case AnalysisKind::analysis:
+      what = r.thickness ? "local thickness" : r.skin ? "skin removal" : "clean-up";
+      what += " (in the analysis)";
+      break;
+    case AnalysisKind::radiography: what = "a radiography of the peeled model (peel)"; break;
+    case AnalysisKind::section: what = r.peel > 0 ? "a section of the peeled model (peel)" : "a section coloured by local thickness"; break;
+    case AnalysisKind::preview: what = "the shaded preview"; break;
+    case AnalysisKind::thickness: what = "the local thickness volume"; break;
+  }
+  return what + " needs the whole grid in memory, about " + std::to_string(whole_grid_memory(r, grid) >> 20) +
+         " MiB for this job's " + std::to_string(grid.dims.x) + " x " + std::to_string(grid.dims.y) + " x " +
+         std::to_string(grid.dims.z) + " grid; the largest grid it accepts here is " + std::to_string(largest_voxels) +
+         " voxels (about " + std::to_string(side) + "^3, per-job memory " + std::to_string(max_job_memory >> 20) +
+         " MiB). This job's volume was made slab by slab: radiography and sections (without peel or thickness "
+         "colours) and the analysis with thickness=false&skin=false stream over it at any size";
+}
+
+std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& grid, bool over_slabs) {
+  constexpr std::uint64_t kImagesAndReports = std::uint64_t{16} << 20;
+  if (over_slabs) {
+    // One replayed slab, and for a radiography its four maps of 32 bits a
+    // pixel, one layer of bits and the PNG; a section's image and PNG.
+    const std::uint64_t slab = std::uint64_t{16} << 20;
+    const std::uint64_t pixels = r.kind == AnalysisKind::analysis ? 0
+                                 : static_cast<std::uint64_t>(r.axis == 0 ? grid.dims.y : grid.dims.x) *
+                                       static_cast<std::uint64_t>(r.axis == 2 ? grid.dims.y : grid.dims.z);
+    const std::uint64_t per_pixel = r.kind == AnalysisKind::radiography ? 4 * 4 + 2 + 4 : 2;
+    return slab + per_pixel * pixels + kImagesAndReports;
+  }
   const std::uint64_t voxels = grid.voxel_count();
   const bool thickness = r.kind == AnalysisKind::thickness || (r.kind == AnalysisKind::analysis && r.thickness) ||
                          r.colour == "thickness";
@@ -201,7 +296,6 @@ std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& gri
   std::uint64_t per_voxel = thickness ? 18 : 6;
   // The map in the asked unit, the encoded volume and its kept copy.
   if (r.kind == AnalysisKind::thickness) per_voxel += 12;
-  constexpr std::uint64_t kImagesAndReports = std::uint64_t{16} << 20;
   return per_voxel * voxels + kImagesAndReports;
 }
 
@@ -227,18 +321,47 @@ DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAcce
   return map;
 }
 
+namespace {
+
+// A streamed job's request that streams, answered from its slabs with the
+// bytes the in-memory path gives.
+std::string over_slabs(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output, JobControl* control) {
+  switch (r.kind) {
+    case AnalysisKind::analysis: return streamed_analysis_json(r, job, output, control);
+    case AnalysisKind::radiography: {
+      RadiographyAccumulator image(job.grid, r.axis);
+      replay(output, job.grid, control, [&](std::int64_t k0, const BitVolume& slab) { image.add(k0, slab); });
+      return radiography_result(r, job, image.take());
+    }
+    case AnalysisKind::section: {
+      const std::int64_t layer = section_layer(r, job.grid);
+      SectionGatherer section(job.grid, r.axis, layer);
+      replay(output, job.grid, control, [&](std::int64_t k0, const BitVolume& slab) { section.add(k0, slab); });
+      return to_bytes(section_png(section.take(), job.grid, r.axis, layer, {{"voxd:job", job.id}}));
+    }
+    default: throw std::logic_error(std::string("a ") + to_string(r.kind) + " request does not stream");
+  }
+}
+
+}  // namespace
+
 AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
                             const ArtifactAccess& artifacts, JobControl* control) {
-  const BitVolume& volume = *output.solid;
   const std::string key = r.artifact_key();
   if (auto kept = artifacts.load(key)) return {std::move(*kept), true};
   const auto lock = key_lock(artifacts, key);
   std::lock_guard guard(*lock);
   if (auto kept = artifacts.load(key)) return {std::move(*kept), true};  // computed while we waited
+  if (!output.solid) {
+    std::string bytes = over_slabs(r, job, output, control);
+    artifacts.save(key, bytes);
+    return {std::move(bytes), false};
+  }
+  const BitVolume& volume = *output.solid;
   std::string bytes;
   switch (r.kind) {
     case AnalysisKind::analysis: bytes = analysis_json(r, job, volume, artifacts, control); break;
-    case AnalysisKind::radiography: bytes = radiography_result(r, job, volume); break;
+    case AnalysisKind::radiography: bytes = radiography_result(r, job, job_radiography(r, volume)); break;
     case AnalysisKind::section: {
       const std::int64_t layer = section_layer(r, job.grid);
       if (auto values = value_job_section(r, job, output, layer, {{"voxd:job", job.id}})) {

@@ -56,7 +56,24 @@ AnalysisResult job_analysis(const api::AnalysisRequest& request, const JobSnapsh
 // memory budget. Measured (docs/security.md): local thickness and the
 // analysis that uses it about 14 bytes a voxel at 256^3, the thickness
 // volume route about 23; the factors below hold a margin over those.
-std::uint64_t estimate_analysis_memory(const api::AnalysisRequest& request, const Grid& grid);
+// `over_slabs`: answered slab by slab (streams_over_slabs on a streamed
+// job): its images and one slab, whatever the grid.
+std::uint64_t estimate_analysis_memory(const api::AnalysisRequest& request, const Grid& grid, bool over_slabs = false);
+
+// Whether a request can be answered slab by slab from a stored RLE, never
+// holding the grid: radiography and sections without peel or thickness
+// colours, and the analysis without thickness, skin or clean-up. The others
+// need the whole grid in memory.
+bool streams_over_slabs(const api::AnalysisRequest& request);
+
+// Bytes a request that needs the whole grid takes on it: the grid's bits
+// and the request's own.
+std::uint64_t whole_grid_memory(const api::AnalysisRequest& request, const Grid& grid);
+
+// The refusal (HTTP 422) of a request that needs the whole grid on a grid
+// over `max_job_memory`: what needs it, the largest grid accepted, and what
+// streams instead.
+std::string whole_grid_refusal(const api::AnalysisRequest& request, const Grid& grid, std::uint64_t max_job_memory);
 
 // Extra response headers of a request (X-Voxd-Scale for images and volumes).
 std::vector<std::pair<std::string, std::string>> analysis_headers(const api::AnalysisRequest& request, const Grid& grid);

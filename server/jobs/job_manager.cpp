@@ -1,4 +1,5 @@
 #include "server/jobs/job_manager.h"
+#include "voxd/encode/slab_writer.h"
 
 #include <algorithm>
 #include <condition_variable>
@@ -110,6 +111,7 @@ struct JobManager::Impl {
   }
 
   void cache_put(const std::string& id, const JobOutput& output) {
+    if (!output.solid) return;  // streamed: kept on disk only
     if (output.values) cache.put(VolumeCache::layer_key(id, "values"), output.values, byte_size(*output.values));
     for (const auto& [name, layer] : output.layers) cache.put(VolumeCache::layer_key(id, name), layer, byte_size(*layer));
     cache.put(id, output.solid, output.solid->byte_size());
@@ -230,16 +232,30 @@ struct JobManager::Impl {
         const std::vector<api::AnalysisRequest> analyses = prepared.params.analyses;
         // With analyses to prepare, voxelizing is the first half of the bar.
         if (!analyses.empty()) job->control.set_span(0.0, 0.5);
-        VoxelJobResult r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
         JobOutput output;
-        output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
-        if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
-        for (auto& [name, layer] : r.layers)
-          output.layers.emplace_back(name, std::make_shared<const ValueVolume>(std::move(layer)));
-        if (!job->ephemeral) {
-          store->save_volume(job->snap.id, *output.solid);
-          if (output.values) store->save_layer(job->snap.id, "values", *output.values);
-          for (const auto& [name, layer] : output.layers) store->save_layer(job->snap.id, name, *layer);
+        VoxelJobResult r;
+        if (prepared.streamed) {
+          // Slab by slab straight into the stored RLE: the grid is never whole.
+          const Grid grid = prepared.grid;
+          store->write_volume(job->snap.id, [&](ByteSink& sink) {
+            BitSlabWriter writer(grid, VolumeFormat::rle, EncodeOptions{}, sink);
+            r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
+                                           streamed_slab_layers(grid, kStreamSlabBytes),
+                                           [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
+            writer.finish();
+          });
+          output.rle = store->volume_rle(job->snap.id);
+        } else {
+          r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
+          output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
+          if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
+          for (auto& [name, layer] : r.layers)
+            output.layers.emplace_back(name, std::make_shared<const ValueVolume>(std::move(layer)));
+          if (!job->ephemeral) {
+            store->save_volume(job->snap.id, *output.solid);
+            if (output.values) store->save_layer(job->snap.id, "values", *output.values);
+            for (const auto& [name, layer] : output.layers) store->save_layer(job->snap.id, name, *layer);
+          }
         }
         nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
         std::lock_guard lock(mutex);
@@ -437,7 +453,11 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   // decoded mesh is known, a bound from the bytes and the format.
   MemoryBudget::Reservation decoding =
       budget.reserve(decode_memory_estimate(mesh_bytes, name_hint, config.limits.decode), "decoding this upload");
-  PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, config.limits);
+  JobLimits limits = config.limits;
+  // A job that would not fit the per-job memory whole streams where it can;
+  // a synchronous one is never stored, so never streamed.
+  limits.stream_above_bytes = ephemeral ? 0 : std::min(limits.stream_above_bytes, config.max_job_memory);
+  PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, limits);
   if (max_voxels > 0 && prepared.grid.voxel_count() > max_voxels)
     throw Error(ErrorCode::limit_exceeded, "the grid has " + std::to_string(prepared.grid.voxel_count()) +
                                                " voxels; synchronous voxelization takes at most " +
@@ -447,8 +467,16 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
                 "the job needs about " + std::to_string(prepared.memory_estimate >> 20) + " MiB for its volumes, over the limit of " +
                     std::to_string(config.max_job_memory >> 20) + " MiB; use a lower resolution or a larger voxel_size");
   std::uint64_t analyses_peak = 0;
-  for (const api::AnalysisRequest& r : params.analyses)
-    analyses_peak = std::max(analyses_peak, estimate_analysis_memory(r, prepared.grid));
+  for (const api::AnalysisRequest& r : params.analyses) {
+    const bool over_slabs = prepared.streamed && streams_over_slabs(r);
+    if (prepared.streamed && !over_slabs) {  // loads the whole grid: only while it fits
+      if (whole_grid_memory(r, prepared.grid) > config.max_job_memory)
+        throw Error(ErrorCode::limit_exceeded, "analyses: " + whole_grid_refusal(r, prepared.grid, config.max_job_memory));
+      analyses_peak = std::max(analyses_peak, whole_grid_memory(r, prepared.grid));
+      continue;
+    }
+    analyses_peak = std::max(analyses_peak, estimate_analysis_memory(r, prepared.grid, over_slabs));
+  }
   mesh_bytes.clear();
   mesh_bytes.shrink_to_fit();
   decoding.release();
@@ -467,6 +495,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   s.mesh_format = to_string(prepared.format);
   s.triangles = prepared.triangles;
   s.grid = prepared.grid;
+  s.streamed = prepared.streamed;
   s.timings = prepared.timings.stages;
   s.content_hash = hash;
   s.analyses = analyses_status(params.analyses, s.id, "pending");
@@ -599,6 +628,17 @@ std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
   }
   return v;
 }
+
+std::shared_ptr<const MappedFile> JobManager::volume_rle(const std::string& id) {
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto it = impl_->jobs.find(id);
+    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
+  }
+  return impl_->store->volume_rle(id);
+}
+
+std::uint64_t JobManager::max_job_memory() const { return impl_->config.max_job_memory; }
 
 std::shared_ptr<const ValueVolume> JobManager::values(const std::string& id) {
   {

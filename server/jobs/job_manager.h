@@ -22,6 +22,7 @@
 
 #include "api/job_params.h"
 #include "server/job_pipeline.h"
+#include "server/mapped_file.h"
 #include "server/jobs/memory_budget.h"
 #include "voxd/bit_volume.h"
 #include "voxd/encode/volume_format.h"
@@ -65,6 +66,10 @@ struct JobSnapshot {
   std::optional<JobFailure> failure;                    // when failed
   std::string content_hash;  // SHA-256 of mesh bytes + canonical params JSON (hex)
   bool cached = false;       // answered from an identical earlier job's result
+  // The volume was made slab by slab and is kept only as its stored RLE:
+  // it is re-encoded and analysed slab by slab, never loaded whole past
+  // the per-job memory.
+  bool streamed = false;
   // The job JSON's "analyses", one entry each: {"request", "url", "state",
   // "error"}; state pending -> ready | failed, or on_request for a job
   // answered from an earlier one's result (computed when first asked).
@@ -84,6 +89,9 @@ struct JobOutput {
   std::shared_ptr<const BitVolume> solid;
   std::shared_ptr<const ValueVolume> values;
   std::vector<std::pair<std::string, std::shared_ptr<const ValueVolume>>> layers;
+  // A streamed job's volume as stored (solid is then null): what streams is
+  // answered by replaying it slab by slab (voxd/encode/rle_slabs.h).
+  std::shared_ptr<const MappedFile> rle;
 };
 
 class JobQueue;  // server/jobs/job_queue.h
@@ -167,6 +175,10 @@ class JobManager {
   // The result volume of a succeeded job (loaded from the store if not in
   // memory); nullptr if the job is unknown or not succeeded.
   std::shared_ptr<const BitVolume> volume(const std::string& id);
+  // A succeeded job's volume as stored (its RLE), to be read slab by slab:
+  // how a streamed job's volume is served and analysed. nullptr if the job
+  // is unknown or not succeeded.
+  std::shared_ptr<const MappedFile> volume_rle(const std::string& id);
   // A succeeded value job's values; nullptr for other jobs.
   std::shared_ptr<const ValueVolume> values(const std::string& id);
   // A succeeded job's volume of values by name: "values" or one of its
@@ -198,6 +210,8 @@ class JobManager {
   // when it does not fit now, voxd::Error limit_exceeded when it never can.
   MemoryBudget::Reservation reserve_memory(std::uint64_t bytes, const std::string& what);
   std::uint64_t memory_budget() const;
+  // The most memory one job's volumes (and an analysis of them) may take.
+  std::uint64_t max_job_memory() const;
   // Whether the data directory has at least min_free_disk free.
   bool storage_ok() const;
   std::uint64_t memory_in_use() const;

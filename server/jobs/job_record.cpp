@@ -94,6 +94,7 @@ json to_json(const JobSnapshot& job) {
       {"triangles", job.triangles},
       {"grid", api::to_json(job.grid)},
       {"cached", job.cached},
+      {"streamed", job.streamed},
       {"content_hash", job.content_hash},
       {"links", {{"self", "/v1/jobs/" + job.id}, {"volume", "/v1/jobs/" + job.id + "/volume"}}},
   };
@@ -159,6 +160,7 @@ JobSnapshot job_from_json(const json& r) {
   if (r.contains("analyses") && r.at("analyses").is_array()) job.analyses = r.at("analyses");
   if (r.contains("values") && r.at("values").is_object()) job.values = r.at("values");
   job.cached = r.at("cached");
+  job.streamed = r.value("streamed", false);  // records of earlier releases have none
   job.content_hash = r.at("content_hash");
   return job;
 }

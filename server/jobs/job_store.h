@@ -5,6 +5,7 @@
 // (server/jobs/local_job_store.h). A shared backend (replicas on one Redis)
 // implements the same calls.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -12,7 +13,9 @@
 #include <vector>
 
 #include "server/jobs/job_manager.h"
+#include "server/mapped_file.h"
 #include "voxd/bit_volume.h"
+#include "voxd/byte_sink.h"
 #include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
@@ -36,6 +39,13 @@ class JobStore {
   virtual void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const = 0;
   virtual void save_volume(const std::string& id, const BitVolume& volume) const = 0;
   virtual std::shared_ptr<const BitVolume> load_volume(const std::string& id) const = 0;
+  // A volume made slab by slab: `write` writes its RLE (the bytes
+  // save_volume would), never holding it whole; kept as atomically. Throws
+  // StorageFull, or what `write` throws (then nothing is kept).
+  virtual void write_volume(const std::string& id, const std::function<void(ByteSink&)>& write) const = 0;
+  // The stored RLE of the job's volume, mapped to be read front to back
+  // (voxd/encode/rle_slabs.h); nullptr when there is none.
+  virtual std::shared_ptr<const MappedFile> volume_rle(const std::string& id) const = 0;
   // A value job's volume of values by name ("values", the result, or a layer
   // its mode keeps beside it, api::JobMode::stored_layers()).
   virtual void save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const = 0;

@@ -118,8 +118,19 @@ void LocalJobStore::save_artifact(const std::string& id, const std::string& key,
 }
 
 void LocalJobStore::save_volume(const std::string& id, const BitVolume& volume) const {
+  write_volume(id, [&](ByteSink& sink) { write_rle(volume, sink); });
+}
+
+void LocalJobStore::write_volume(const std::string& id, const std::function<void(ByteSink&)>& write) const {
   make_dirs(job_dir(id));
-  write_atomically(job_dir(id) / "volume.rle", [&](ByteSink& sink) { write_rle(volume, sink); });
+  write_atomically(job_dir(id) / "volume.rle", write);
+}
+
+std::shared_ptr<const MappedFile> LocalJobStore::volume_rle(const std::string& id) const {
+  const fs::path path = job_dir(id) / "volume.rle";
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return nullptr;
+  return std::make_shared<const MappedFile>(path.string(), MapAccess::sequential);
 }
 
 void LocalJobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {

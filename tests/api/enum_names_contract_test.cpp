@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/analysis_request.h"
+#include "api/job_params.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/voxelize/coverage.h"
@@ -64,11 +65,13 @@ TEST(EnumNames, EveryTableReadsBackItsOwnNamesAndNoOther) {
   expect_round_trip(kRadiographyMeasureNames);
   expect_round_trip(kPeelMetricNames);
   expect_round_trip(api::kAnalysisKindNames);
+  expect_round_trip(api::kStreamingNames);
 }
 
 TEST(EnumNames, TheJobParametersSchemaListsTheEnginesNames) {
   const json s = schema("job-params.schema.json");
   EXPECT_EQ(contract_enum(s, "/properties/inside"), table(kInsideTestNames));
+  EXPECT_EQ(contract_enum(s, "/properties/streaming"), table(api::kStreamingNames));
   EXPECT_EQ(contract_enum(s, "/properties/coverage/properties/sampling"), table(kCoverageSamplingNames));
   EXPECT_EQ(contract_enum(s, "/properties/sdf/properties/sign_convention"), table(kSignConventionNames));
   EXPECT_EQ(contract_enum(s, "/properties/palette/properties/metric"), table(kPaletteMetricNames));

@@ -12,6 +12,14 @@
 
 namespace voxd {
 
+// Memory of a BitVolume with these dims (rows padded to 64-bit words), e.g.
+// to decide before allocating. dims are at most kMaxGridDim each, so this
+// cannot overflow.
+inline std::uint64_t bit_volume_bytes(const glm::i64vec3& dims) {
+  return static_cast<std::uint64_t>((dims.x + 63) / 64) * 8 * static_cast<std::uint64_t>(dims.y) *
+         static_cast<std::uint64_t>(dims.z);
+}
+
 class BitVolume {
  public:
   BitVolume() = default;

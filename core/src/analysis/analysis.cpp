@@ -20,7 +20,7 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
   step(0.3);
   report.components = find_components(v);
   step(0.6);
-  report.skin = summarize_peeling(peel_depth(v, options.threads, options.peel));
+  if (options.skin) report.skin = summarize_peeling(peel_depth(v, options.threads, options.peel));
   report.peel = options.peel;
   step(0.7);
   if (options.thickness) {

@@ -64,6 +64,28 @@ ColourMapOptions thickness_colours(const DenseVolume<float>& thickness, double v
 
 }  // namespace
 
+namespace {
+
+// A section's plane and pixel size, for its tEXt chunks.
+std::vector<PngText> section_text(const Grid& g, int axis, std::int64_t index) {
+  const double plane = g.origin[axis] + (static_cast<double>(index) + 0.5) * g.voxel_size;
+  return {{"voxd:axis", std::string(1, "xyz"[axis])},
+          {"voxd:index", std::to_string(index)},
+          {"voxd:plane", number_text(plane) + " model units (voxel centres)"},
+          {"voxd:voxel_size", number_text(g.voxel_size) + " model units per pixel"}};
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> section_png(const GreyImage8& section, const Grid& grid, int axis, std::int64_t index,
+                                      std::vector<PngText> text) {
+  const std::vector<PngText> plane = section_text(grid, axis, index);
+  text.insert(text.begin(), plane.begin(), plane.end());
+  VectorSink out;
+  write_png_grey8(section.width, section.height, section.pixels, text, out);
+  return std::move(out.data);
+}
+
 std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index, std::vector<PngText> text) {
   return section_png(volume, axis, index, nullptr, std::move(text));
 }
@@ -75,16 +97,10 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
     throw Error(ErrorCode::invalid_argument, "section: the thickness map's grid does not match the volume's");
   }
   const GreyImage8 image = cross_section(volume, axis, index);
-  const double plane = g.origin[axis] + (static_cast<double>(index) + 0.5) * g.voxel_size;
-  text.insert(text.begin(), {{"voxd:axis", std::string(1, "xyz"[axis])},
-                             {"voxd:index", std::to_string(index)},
-                             {"voxd:plane", number_text(plane) + " model units (voxel centres)"},
-                             {"voxd:voxel_size", number_text(g.voxel_size) + " model units per pixel"}});
+  if (!thickness) return section_png(image, g, axis, index, std::move(text));
+  const std::vector<PngText> plane = section_text(g, axis, index);
+  text.insert(text.begin(), plane.begin(), plane.end());
   VectorSink out;
-  if (!thickness) {
-    write_png_grey8(image.width, image.height, image.pixels, text, out);
-    return std::move(out.data);
-  }
   // Each filled pixel in the ramp colour of its voxel's thickness, over the
   // whole map's range so every section of a part shares one legend.
   ColourMapOptions options = thickness_colours(*thickness, g.voxel_size);

@@ -28,12 +28,7 @@ void require_voxels(const DenseVolume<T>& volume, const char* writer) {
                                                  std::to_string(volume.grid().voxel_count()) + " voxels");
 }
 
-// Memory of a BitVolume with these dims (rows padded to 64-bit words). dims
-// are at most kMaxGridDim each, so this cannot overflow.
-inline std::uint64_t bit_volume_bytes(const glm::i64vec3& dims) {
-  return static_cast<std::uint64_t>((dims.x + 63) / 64) * 8 * static_cast<std::uint64_t>(dims.y) *
-         static_cast<std::uint64_t>(dims.z);
-}
+using voxd::bit_volume_bytes;
 
 inline void check_read_limit(std::uint64_t volume_bytes, const ReadLimits& limits, const char* reader) {
   if (volume_bytes > limits.max_volume_bytes)

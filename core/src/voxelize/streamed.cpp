@@ -11,9 +11,7 @@
 namespace voxd {
 namespace {
 
-std::uint64_t layer_bytes(const Grid& grid) {
-  return static_cast<std::uint64_t>((grid.dims.x + 63) / 64) * 8 * static_cast<std::uint64_t>(grid.dims.y);
-}
+std::uint64_t layer_bytes(const Grid& grid) { return bit_volume_bytes({grid.dims.x, grid.dims.y, 1}); }
 
 }  // namespace
 

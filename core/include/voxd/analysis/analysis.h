@@ -17,6 +17,7 @@ namespace voxd {
 struct AnalysisOptions {
   std::optional<CleanupOptions> cleanup;  // none: analyse the volume as voxelized
   bool thickness = true;                  // local wall thickness (the costliest step)
+  bool skin = true;                       // skin removal layers (needs the whole grid)
   PeelMetric peel = PeelMetric::faces;    // skin removal layers
   // Thin- and thick-wall thresholds in voxels (0 = not checked), and the
   // smallest region reported (smaller ones are sampling noise).
@@ -41,7 +42,7 @@ struct AnalysisReport {
   std::optional<CleanupReport> cleanup;
   MassProperties voxels;
   ComponentReport components;
-  PeelSummary skin;
+  std::optional<PeelSummary> skin;  // when asked for
   PeelMetric peel = PeelMetric::faces;
   std::optional<ThicknessAnalysis> thickness;
 };

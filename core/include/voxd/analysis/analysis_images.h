@@ -11,6 +11,7 @@
 #include "voxd/encode/png_image.h"
 #include "voxd/analysis/preview.h"
 #include "voxd/analysis/radiography.h"
+#include "voxd/analysis/section.h"
 #include "voxd/enum_names.h"
 
 namespace voxd {
@@ -29,6 +30,10 @@ std::vector<std::uint8_t> radiography_png(const ThicknessImage& image, int axis,
 // 8-bit section through voxel layer `index` along `axis`, with its plane and
 // pixel size in tEXt.
 std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index, std::vector<PngText> text = {});
+// The same from the section already taken (cross_section or a
+// SectionGatherer over slabs) of a volume on `grid`.
+std::vector<std::uint8_t> section_png(const GreyImage8& section, const Grid& grid, int axis, std::int64_t index,
+                                      std::vector<PngText> text = {});
 // The same section coloured by local thickness (map in voxels on the same
 // grid): filled pixels in the ramp colour of round(t * 8) over the whole
 // map's range, empty ones white, legend strip below with labels in model

@@ -1,4 +1,4 @@
-#include "server/cli/mapped_file.h"
+#include "server/mapped_file.h"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -10,9 +10,9 @@
 
 #include "voxd/error.h"
 
-namespace voxd::cli {
+namespace voxd {
 
-MappedFile::MappedFile(const std::string& path) {
+MappedFile::MappedFile(const std::string& path, MapAccess access) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw Error(ErrorCode::io_error, "cannot open '" + path + "': " + std::strerror(errno));
   struct stat st {};
@@ -22,11 +22,13 @@ MappedFile::MappedFile(const std::string& path) {
   }
   size_ = static_cast<std::size_t>(st.st_size);
   if (size_ > 0) {
-    void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    const int populate = access == MapAccess::whole ? MAP_POPULATE : 0;
+    void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | populate, fd, 0);
     if (p == MAP_FAILED) {
       ::close(fd);
       throw Error(ErrorCode::io_error, "cannot map '" + path + "': " + std::strerror(errno));
     }
+    if (access == MapAccess::sequential) ::madvise(p, size_, MADV_SEQUENTIAL);
     data_ = static_cast<const std::uint8_t*>(p);
     mapped_ = true;
   }
@@ -37,4 +39,4 @@ MappedFile::~MappedFile() {
   if (mapped_) ::munmap(const_cast<std::uint8_t*>(data_), size_);
 }
 
-}  // namespace voxd::cli
+}  // namespace voxd
