@@ -38,10 +38,9 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
   return params.mode->memory_estimate(grid, params);
 }
 
-std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::uint64_t triangles) {
+std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::int64_t slab_layers, std::uint64_t triangles) {
   const std::uint64_t layer = bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
-  const std::uint64_t slab = layer * static_cast<std::uint64_t>(streamed_slab_layers(grid, kStreamSlabBytes));
-  return slab + layer + 64 * triangles + (std::uint64_t{64} << 20);
+  return layer * static_cast<std::uint64_t>(slab_layers + 1) + 64 * triangles + (std::uint64_t{16} << 20);
 }
 
 std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
@@ -120,7 +119,8 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
                   in_memory > limits.stream_above_bytes);
   if (job.streamed) {
     check_voxel_limit(job.grid, limits.max_streamed_voxels, "");
-    job.memory_estimate = estimate_streamed_job_memory(job.grid, job.triangles);
+    job.slab_layers = streamed_slab_layers(job.grid, limits.stream_slab_bytes);
+    job.memory_estimate = estimate_streamed_job_memory(job.grid, job.slab_layers, job.triangles);
   } else {
     const bool could_stream = !no_stream && limits.stream_above_bytes > 0 && params.streaming == api::Streaming::off;
     check_voxel_limit(job.grid, limits.max_voxels,

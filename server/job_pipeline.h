@@ -38,6 +38,8 @@ struct JobLimits {
   // of bits, past which streaming is as fast as memory and far smaller.
   // 0: never (POST /v1/voxelize answers from memory).
   std::uint64_t stream_above_bytes = std::uint64_t{512} << 20;
+  // About this many bytes of bits per slab of a streamed job.
+  std::uint64_t stream_slab_bytes = kStreamSlabBytes;
 };
 
 struct StageTimings {
@@ -60,6 +62,7 @@ struct PreparedVoxelJob {
   // Made slab by slab (execute_streamed_voxel_job), as decided from the
   // job's streaming and its memory; memory_estimate is then the streamed one.
   bool streamed = false;
+  std::int64_t slab_layers = 0;  // z layers per slab when streamed
   std::uint64_t memory_estimate = 0;  // bytes at peak the way it runs, for admission control
   StageTimings timings;
 };
@@ -90,11 +93,11 @@ struct VoxelJobResult {
 
 // Bytes the job's volumes will take at peak, for admission control.
 std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params);
-// The same for the job made slab by slab: one slab of kStreamSlabBytes,
-// the triangles binned by slab and the encoder's buffers (the mesh apart).
+// The same for the job made slab by slab: one slab of `slab_layers`, the
+// triangles binned by slab and the encoder's buffers (the mesh apart).
 // Measured: 269 MiB peak RSS for the 1.1M-triangle bunny at 8192^3 with
-// its mesh (docs/benchmarks.md, issue #14).
-std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::uint64_t triangles);
+// its mesh and 128 MiB slabs (docs/benchmarks.md, issue #14).
+std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::int64_t slab_layers, std::uint64_t triangles);
 
 // Bytes decoding an upload takes at its peak beside the upload itself (the
 // mesh, the weld's tables), from its size and format; for Draco, the

@@ -237,10 +237,11 @@ struct JobManager::Impl {
         if (prepared.streamed) {
           // Slab by slab straight into the stored RLE: the grid is never whole.
           const Grid grid = prepared.grid;
+          const std::int64_t slab_layers = prepared.slab_layers;
           store->write_volume(job->snap.id, [&](ByteSink& sink) {
             BitSlabWriter writer(grid, VolumeFormat::rle, EncodeOptions{}, sink);
             r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
-                                           streamed_slab_layers(grid, kStreamSlabBytes),
+                                           slab_layers,
                                            [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
             writer.finish();
           });
@@ -457,6 +458,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   // A job that would not fit the per-job memory whole streams where it can;
   // a synchronous one is never stored, so never streamed.
   limits.stream_above_bytes = ephemeral ? 0 : std::min(limits.stream_above_bytes, config.max_job_memory);
+  limits.stream_slab_bytes = std::min(limits.stream_slab_bytes, config.max_job_memory / 4);
   PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, limits);
   if (max_voxels > 0 && prepared.grid.voxel_count() > max_voxels)
     throw Error(ErrorCode::limit_exceeded, "the grid has " + std::to_string(prepared.grid.voxel_count()) +
