@@ -63,6 +63,7 @@ int serve_command(int argc, char** argv) {
   jc.limits.decode.max_bytes = config.max_upload_bytes;
   jc.limits.decode.max_triangles = config.max_triangles;
   jc.limits.max_voxels = config.max_voxels;
+  jc.limits.max_streamed_voxels = config.max_streamed_voxels;
   DracoIsolation draco;
   draco.max_triangles = config.max_triangles;
   draco.max_memory = config.max_decode_memory;

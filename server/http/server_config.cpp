@@ -61,10 +61,13 @@ const std::vector<Option>& options() {
       {"max-triangles", "largest mesh (422 above)",
        [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_triangles = to_u64(v, s, 1, std::uint64_t{1} << 32); },
        [](const ServeConfig& c) { return std::to_string(c.max_triangles); }},
-      {"max-voxels", "largest grid (422 above)",
+      {"max-voxels", "largest grid made whole in memory (422 above; a job that can stream streams instead)",
        [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_voxels = to_u64(v, s, 1, std::uint64_t{1} << 40); },
        [](const ServeConfig& c) { return std::to_string(c.max_voxels); }},
-      {"max-job-memory", "bytes of volumes one job may need (422 above)",
+      {"max-streamed-voxels", "largest grid made slab by slab into its stored RLE (422 above): disk and time bound it, not memory",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_streamed_voxels = to_u64(v, s, 1, std::uint64_t{1} << 48); },
+       [](const ServeConfig& c) { return std::to_string(c.max_streamed_voxels); }},
+      {"max-job-memory", "bytes of volumes one job, or one analysis of it, may need (422 above); jobs past it stream where they can",
        [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_job_memory = to_u64(v, s, 1, std::uint64_t{1} << 44); },
        [](const ServeConfig& c) { return std::to_string(c.max_job_memory); }},
       {"max-decode-memory", "bytes the isolated Draco decoder process may allocate (422 above)",
@@ -158,6 +161,16 @@ std::string serve_help() {
     const std::string def = o.show(defaults);
     s << left << ' ' << o.help << (def.empty() ? "" : " [default: " + def + "]") << '\n';
   }
+  s << "\nGrids past memory. A solid, surface or solid+surface job with the parity inside\n"
+       "test streams (job parameter \"streaming\": auto, on or off; auto past 512 MiB of\n"
+       "volumes or past --max-job-memory): it is voxelized slab by slab into its stored\n"
+       "RLE and takes the memory of one slab, whatever the grid.\n"
+       "  Stream over any grid: GET /volume as rle, raw or nrrd; radiography (without\n"
+       "  peel); sections (without peel or colour=thickness); analysis with\n"
+       "  thickness=false&skin=false (mass properties, parts, voids).\n"
+       "  Need the whole grid (run while it fits --max-job-memory, else 422 naming the\n"
+       "  largest grid they accept): volume as binvox, local thickness, analysis with\n"
+       "  thickness, skin or clean-up, previews, peeled models, thickness colours.\n";
   return s.str();
 }
 

@@ -17,6 +17,7 @@ struct ServeConfig {
   std::uint64_t max_upload_bytes = std::uint64_t{256} << 20;
   std::uint64_t max_triangles = 20'000'000;
   std::uint64_t max_voxels = std::uint64_t{1} << 33;
+  std::uint64_t max_streamed_voxels = std::uint64_t{1} << 40;  // a grid made slab by slab
   std::uint64_t max_job_memory = std::uint64_t{4} << 30;
   std::uint64_t max_decode_memory = std::uint64_t{2} << 30;  // the isolated Draco decoder's data segment
   std::uint64_t memory_budget = 0;  // all jobs, decodes and analyses at once; 0 = 60% of memory
