@@ -9,6 +9,7 @@
 
 #include "server/http/problem.h"
 #include "server/http/volume_stream.h"
+#include "server/jobs/job_store.h"
 
 namespace voxd::server {
 namespace {
@@ -114,7 +115,7 @@ void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile
         const Grid grid = read_rle_bit_grid(stored);
         BitSlabWriter writer(grid, v.format, v.options, sink);
         read_rle_bit_slabs(stored, streamed_slab_layers(grid, std::uint64_t{16} << 20),
-                           [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
+                           [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); }, kStoredSlabLimits);
         writer.finish();
       },
       v.gzip, filename, &metrics);

@@ -1,4 +1,5 @@
 #include "server/jobs/job_analyses.h"
+#include "server/jobs/job_store.h"
 
 #include <climits>
 #include <chrono>
@@ -130,7 +131,8 @@ void replay(const JobOutput& output, const Grid& grid, JobControl* control, cons
                        if (control) control->check_cancelled();
                        consume(k0, slab);
                        if (control) control->set_progress(static_cast<double>(k0 + slab.grid().dims.z) / slabs_total);
-                     });
+                     },
+                     kStoredSlabLimits);
 }
 
 // The analysis of a streamed job's volume: mass properties, parts and voids

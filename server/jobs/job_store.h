@@ -27,6 +27,10 @@ class StorageFull : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Slabs replayed from a stored volume (trusted: written by the service) are
+// at least one layer of a grid of up to kMaxGridDim^2 voxels a layer.
+inline constexpr ReadLimits kStoredSlabLimits{std::uint64_t{4} << 30};
+
 class JobStore {
  public:
   virtual ~JobStore() = default;

@@ -5,6 +5,7 @@
 #include <span>
 
 #include "voxd/error.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -17,5 +18,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try { (void)voxd::read_rle_f32(bytes, limits); } catch (const voxd::Error&) {}
   try { (void)voxd::read_rle_rgba8(bytes, limits); } catch (const voxd::Error&) {}
   try { (void)voxd::read_rle_metadata(bytes); } catch (const voxd::Error&) {}
+  try {
+    std::uint64_t filled = 0;
+    voxd::read_rle_bit_slabs(bytes, 3, [&](std::int64_t, const voxd::BitVolume& slab) { filled += slab.count(); }, limits);
+  } catch (const voxd::Error&) {
+  }
   return 0;
 }

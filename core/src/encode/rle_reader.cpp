@@ -245,12 +245,14 @@ Grid read_rle_bit_grid(std::span<const std::uint8_t> data) {
   return read_header_of_type(in, encode::RleValueType::bit, "read_rle_bit_grid").grid;
 }
 
-void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume) {
+void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume,
+                        const ReadLimits& limits) {
   ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
   const Grid grid = read_header_of_type(in, encode::RleValueType::bit, "read_rle_bit_slabs").grid;
   const std::int64_t nz = grid.dims.z;
   const std::uint64_t slab_voxels = slab_voxel_count(grid);
   const std::int64_t layers = std::clamp<std::int64_t>(slab_layers, 1, std::max<std::int64_t>(nz, 1));
+  encode::check_read_limit(encode::bit_volume_bytes({grid.dims.x, grid.dims.y, layers}), limits, "RLE slab reader");
   for (std::int64_t k0 = 0; k0 < nz; k0 += layers) {
     const std::int64_t n = std::min(layers, nz - k0);
     // A fresh slab comes zeroed from the OS, as the streamed voxelizer's do.

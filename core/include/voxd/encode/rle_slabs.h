@@ -6,6 +6,7 @@
 #include <span>
 
 #include "voxd/bit_slabs.h"
+#include "voxd/encode/volume_format.h"
 #include "voxd/grid.h"
 
 namespace voxd {
@@ -19,7 +20,9 @@ Grid read_rle_bit_grid(std::span<const std::uint8_t> data);
 // reached: a malformed one throws Error(malformed_input / truncated_input)
 // after the slabs before it were handed on, so a consumer that must not act
 // on half a volume checks the stream first or stops on the throw. A consumer
-// may throw to stop early.
-void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume);
+// may throw to stop early. `limits` bounds one slab's memory (the header's
+// dims are not trusted): Error(limit_exceeded) before anything is allocated.
+void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume,
+                        const ReadLimits& limits = {});
 
 }  // namespace voxd
