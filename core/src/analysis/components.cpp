@@ -9,6 +9,8 @@
 
 #include <glm/common.hpp>
 
+#include "analysis/row_runs.h"
+
 namespace voxd {
 namespace {
 
@@ -19,28 +21,7 @@ struct Run {
 // Runs of set (or, with `invert`, clear) bits of one row of `dims_x` voxels.
 void row_runs(const std::uint64_t* row, std::int64_t words, std::int64_t dims_x, bool invert, std::vector<Run>& out) {
   out.clear();
-  std::int64_t start = -1;
-  for (std::int64_t w = 0; w < words; ++w) {
-    std::uint64_t bits = invert ? ~row[w] : row[w];
-    if (w == words - 1 && (dims_x & 63)) bits &= (std::uint64_t{1} << (dims_x & 63)) - 1;
-    std::int64_t pos = 0;
-    while (pos < 64) {
-      if (start < 0) {
-        const std::uint64_t rest = bits >> pos;
-        if (!rest) break;
-        pos += std::countr_zero(rest);
-        start = w * 64 + pos;
-      } else {
-        const std::uint64_t rest = ~bits >> pos;
-        if (!rest) break;
-        pos += std::countr_zero(rest);
-        if (pos >= 64) break;
-        out.push_back({start, w * 64 + pos});
-        start = -1;
-      }
-    }
-  }
-  if (start >= 0) out.push_back({start, dims_x});
+  detail::for_each_row_run(row, words, dims_x, invert, [&](std::int64_t begin, std::int64_t end) { out.push_back({begin, end}); });
 }
 
 using Int128 = __int128;

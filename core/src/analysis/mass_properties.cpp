@@ -8,6 +8,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "analysis/row_runs.h"
 #include "voxd/parallel.h"
 
 namespace voxd {
@@ -91,35 +92,16 @@ struct IndexMoments {
 // Σ i² for i in [0, m).
 inline std::int64_t squares_below(std::int64_t m) { return (m - 1) * m * (2 * m - 1) / 6; }
 
-void add_row(const std::uint64_t* row, std::int64_t words, std::int64_t j, std::int64_t k, IndexMoments& s) {
+void add_row(const std::uint64_t* row, std::int64_t dims_x, std::int64_t words, std::int64_t j, std::int64_t k,
+             IndexMoments& s) {
   std::int64_t n = 0, si = 0, sii = 0, first = -1, last = -1;
-  std::int64_t start = -1;  // the open run's first voxel
-  auto close = [&](std::int64_t end) {
-    n += end - start;
-    si += (start + end - 1) * (end - start) / 2;
-    sii += squares_below(end) - squares_below(start);
+  detail::for_each_row_run(row, words, dims_x, false, [&](std::int64_t begin, std::int64_t end) {
+    if (first < 0) first = begin;
+    n += end - begin;
+    si += (begin + end - 1) * (end - begin) / 2;
+    sii += squares_below(end) - squares_below(begin);
     last = end - 1;
-    start = -1;
-  };
-  for (std::int64_t w = 0; w < words; ++w) {
-    const std::uint64_t bits = row[w];
-    int pos = 0;
-    while (pos < 64) {
-      if (start < 0) {
-        const std::uint64_t rest = bits >> pos;
-        if (!rest) break;
-        pos += std::countr_zero(rest);
-        start = w * 64 + pos;
-        if (first < 0) first = start;
-      } else {
-        const std::uint64_t rest = ~bits >> pos;
-        if (!rest) break;
-        pos += std::countr_zero(rest);
-        close(w * 64 + pos);
-      }
-    }
-  }
-  if (start >= 0) close(words * 64);  // bits past dims.x are zero: only a full last word leaves a run open
+  });
   if (n == 0) return;
   s.n += n;
   s.si += si;
@@ -152,7 +134,7 @@ void VoxelMassAccumulator::add(std::int64_t k0, const BitVolume& slab, int threa
   parallel_for(0, slab.grid().dims.z, 4, threads, [&](std::int64_t a, std::int64_t b) {
     IndexMoments s;
     for (std::int64_t k = a; k < b; ++k)
-      for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) add_row(slab.row(j, k), slab.row_words(), j, k0 + k, s);
+      for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) add_row(slab.row(j, k), slab.grid().dims.x, slab.row_words(), j, k0 + k, s);
     std::lock_guard lock(total_mutex);
     *sums_ += s;  // integers: the total does not depend on the order
   });

@@ -70,7 +70,11 @@ struct Maps {
   std::uint32_t* max;
   std::uint32_t* total;
   RayPixel at(std::size_t p) const { return {min + p, max + p, total + p}; }
+  // The maps from pixel p on (a slab's first image row).
+  Maps from(std::size_t p) const { return {min + p, max + p, total + p}; }
 };
+
+Maps maps_of(ThicknessImage& image) { return {image.min.data(), image.max.data(), image.total.data()}; }
 
 // Rays along x: image row k, column j.
 void rays_along_x(const BitVolume& v, const Maps& maps, int threads) {
@@ -169,8 +173,11 @@ ImageSize projected_size(const Grid& grid, int axis) {
   return {static_cast<int>(w), static_cast<int>(h)};
 }
 
-ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
-  const ImageSize size = projected_size(volume.grid(), axis);
+namespace {
+
+// All three maps zero, sized for the projection of `grid` along `axis`.
+ThicknessImage blank_image(const Grid& grid, int axis) {
+  const ImageSize size = projected_size(grid, axis);
   ThicknessImage image;
   image.width = size.width;
   image.height = size.height;
@@ -178,8 +185,15 @@ ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
   image.min.assign(pixels, 0);
   image.max.assign(pixels, 0);
   image.total.assign(pixels, 0);
-  if (pixels == 0 || volume.grid().voxel_count() == 0) return image;
-  const Maps maps{image.min.data(), image.max.data(), image.total.data()};
+  return image;
+}
+
+}  // namespace
+
+ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
+  ThicknessImage image = blank_image(volume.grid(), axis);
+  if (image.min.empty() || volume.grid().voxel_count() == 0) return image;
+  const Maps maps = maps_of(image);
   if (axis == 0) {
     rays_along_x(volume, maps, threads);
   } else {
@@ -188,16 +202,10 @@ ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
   return image;
 }
 
-RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis) : grid_(grid), axis_(axis) {
-  const ImageSize size = projected_size(grid, axis);
-  image_.width = size.width;
-  image_.height = size.height;
-  const std::size_t pixels = static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height);
-  image_.min.assign(pixels, 0);
-  image_.max.assign(pixels, 0);
-  image_.total.assign(pixels, 0);
+RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis)
+    : grid_(grid), axis_(axis), image_(blank_image(grid, axis)) {
   if (axis == 2) {
-    run_start_.assign(pixels, 0);
+    run_start_.assign(image_.min.size(), 0);
     last_layer_.assign(static_cast<std::size_t>((grid.dims.x + 63) / 64 * grid.dims.y), 0);
   }
 }
@@ -208,17 +216,10 @@ void RadiographyAccumulator::add(std::int64_t k0, const BitVolume& slab, int thr
   const glm::i64vec3 d = slab.grid().dims;
   next_k_ += d.z;
   if (d.z == 0 || image_.min.empty()) return;
-  Maps maps{image_.min.data(), image_.max.data(), image_.total.data()};
-  if (axis_ == 0) {  // pixel row k: this slab's rows start k0 rows down
-    const auto shift = static_cast<std::size_t>(k0 * d.y);
-    rays_along_x(slab, {maps.min + shift, maps.max + shift, maps.total + shift}, threads);
-    return;
-  }
-  if (axis_ == 1) {
-    const auto shift = static_cast<std::size_t>(k0 * d.x);
-    rays_across_rows(slab, 1, {maps.min + shift, maps.max + shift, maps.total + shift}, threads);
-    return;
-  }
+  const Maps maps = maps_of(image_);
+  // Along x and y image row k is layer k: this slab's rows start k0 rows down.
+  if (axis_ == 0) return rays_along_x(slab, maps.from(static_cast<std::size_t>(k0 * d.y)), threads);
+  if (axis_ == 1) return rays_across_rows(slab, 1, maps.from(static_cast<std::size_t>(k0 * d.x)), threads);
   // Along z a run begins where a voxel is filled and the one below was not,
   // and ends where it is empty and the one below was filled: only those
   // transitions cost work, one word of 64 rays at a time.
@@ -251,7 +252,7 @@ ThicknessImage RadiographyAccumulator::take() {
     throw std::logic_error("RadiographyAccumulator: " + std::to_string(next_k_) + " of " +
                            std::to_string(grid_.dims.z) + " layers were added");
   if (axis_ == 2 && !image_.min.empty()) {  // runs still open reach the top of the grid
-    const Maps maps{image_.min.data(), image_.max.data(), image_.total.data()};
+    const Maps maps = maps_of(image_);
     const std::int64_t words = (grid_.dims.x + 63) / 64;
     const auto top = static_cast<std::uint32_t>(grid_.dims.z);
     for (std::int64_t j = 0; j < grid_.dims.y; ++j)
