@@ -64,13 +64,8 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
       // Computing (or even serving a kept result, read whole) takes memory
       // beside the job's volumes: held from the budget meanwhile. A streamed
       // job's volume is loaded only for this request, so it counts too.
-      const bool over_slabs = job.streamed && streams_over_slabs(request);
-      if (job.streamed && !over_slabs && whole_grid_memory(request, job.grid) > jobs.max_job_memory())
-        throw Error(ErrorCode::limit_exceeded, whole_grid_refusal(request, job.grid, jobs.max_job_memory()));
       const MemoryBudget::Reservation memory = jobs.reserve_memory(
-          job.streamed && !over_slabs ? whole_grid_memory(request, job.grid)
-                                      : estimate_analysis_memory(request, job.grid, over_slabs),
-          "this analysis");
+          analysis_memory_on_job(request, job.grid, job.streamed, jobs.max_job_memory()), "this analysis");
       const JobOutput output = output_for(jobs, job, request);
       AnalysisResult result;
       try {

@@ -278,6 +278,15 @@ std::string whole_grid_refusal(const AnalysisRequest& r, const Grid& grid, std::
          "colours) and the analysis with thickness=false&skin=false stream over it at any size";
 }
 
+std::uint64_t analysis_memory_on_job(const AnalysisRequest& r, const Grid& grid, bool streamed_job,
+                                     std::uint64_t max_job_memory) {
+  if (!streamed_job) return estimate_analysis_memory(r, grid);
+  if (streams_over_slabs(r)) return estimate_analysis_memory(r, grid, true);
+  const std::uint64_t whole = whole_grid_memory(r, grid);
+  if (whole > max_job_memory) throw Error(ErrorCode::limit_exceeded, whole_grid_refusal(r, grid, max_job_memory));
+  return whole;
+}
+
 std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& grid, bool over_slabs) {
   constexpr std::uint64_t kImagesAndReports = std::uint64_t{16} << 20;
   if (over_slabs) {

@@ -75,6 +75,12 @@ std::uint64_t whole_grid_memory(const api::AnalysisRequest& request, const Grid&
 // streams instead.
 std::string whole_grid_refusal(const api::AnalysisRequest& request, const Grid& grid, std::uint64_t max_job_memory);
 
+// Bytes a request takes on a job, for the memory budget: on a streamed job
+// a request that does not stream loads the grid too, and one over
+// `max_job_memory` throws Error(limit_exceeded) with whole_grid_refusal.
+std::uint64_t analysis_memory_on_job(const api::AnalysisRequest& request, const Grid& grid, bool streamed_job,
+                                     std::uint64_t max_job_memory);
+
 // Extra response headers of a request (X-Voxd-Scale for images and volumes).
 std::vector<std::pair<std::string, std::string>> analysis_headers(const api::AnalysisRequest& request, const Grid& grid);
 

@@ -1,5 +1,4 @@
 #include "server/jobs/job_manager.h"
-#include "voxd/encode/slab_writer.h"
 
 #include <algorithm>
 #include <condition_variable>
@@ -14,6 +13,7 @@
 #include "api/param_error.h"
 #include "server/jobs/content_hash.h"
 #include "server/jobs/job_analyses.h"
+#include "voxd/encode/slab_writer.h"
 #include "server/jobs/expiry.h"
 #include "server/jobs/job_record.h"
 #include "server/jobs/job_events.h"
@@ -470,14 +470,11 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
                     std::to_string(config.max_job_memory >> 20) + " MiB; use a lower resolution or a larger voxel_size");
   std::uint64_t analyses_peak = 0;
   for (const api::AnalysisRequest& r : params.analyses) {
-    const bool over_slabs = prepared.streamed && streams_over_slabs(r);
-    if (prepared.streamed && !over_slabs) {  // loads the whole grid: only while it fits
-      if (whole_grid_memory(r, prepared.grid) > config.max_job_memory)
-        throw Error(ErrorCode::limit_exceeded, "analyses: " + whole_grid_refusal(r, prepared.grid, config.max_job_memory));
-      analyses_peak = std::max(analyses_peak, whole_grid_memory(r, prepared.grid));
-      continue;
+    try {
+      analyses_peak = std::max(analyses_peak, analysis_memory_on_job(r, prepared.grid, prepared.streamed, config.max_job_memory));
+    } catch (const Error& e) {
+      throw Error(e.code(), std::string("analyses: ") + e.what());
     }
-    analyses_peak = std::max(analyses_peak, estimate_analysis_memory(r, prepared.grid, over_slabs));
   }
   mesh_bytes.clear();
   mesh_bytes.shrink_to_fit();
