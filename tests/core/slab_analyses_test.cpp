@@ -1,6 +1,6 @@
 // A stored RLE result replayed slab by slab (voxd/encode/rle_slabs.h) and the
 // analyses that take slabs (mass properties, radiography, parts and voids,
-// sections): on real meshes, whatever the slab size (including grids whose z
+// sections, shaded previews): on real meshes, whatever the slab size (including grids whose z
 // size is not a multiple of it), the slabs are the stored voxels and every
 // streamed analysis is exactly its in-memory counterpart.
 #include <cstring>
@@ -10,8 +10,10 @@
 #include <gtest/gtest.h>
 
 #include "support/test_meshes.h"
+#include "voxd/analysis/analysis_images.h"
 #include "voxd/analysis/components.h"
 #include "voxd/analysis/mass_properties.h"
+#include "voxd/analysis/preview.h"
 #include "voxd/analysis/radiography.h"
 #include "voxd/analysis/section.h"
 #include "voxd/encode/rle_slabs.h"
@@ -259,6 +261,65 @@ TEST(SlabAnalyses, SectionsAlongEachAxisAreTheInMemoryOnes) {
     }
   }
   EXPECT_THROW(SectionGatherer(g, 2, g.dims.z), Error);
+}
+
+// The visible voxel of a pixel, walked voxel by voxel from the camera: the
+// independent check of the renderer's run transitions and word scans.
+std::int64_t first_filled(const BitVolume& v, View view, std::int64_t column, std::int64_t row) {
+  const ViewBasis b = view_basis(view);
+  const glm::i64vec3 d = v.grid().dims;
+  std::int64_t ijk[3];
+  ijk[b.right_axis] = b.right_positive ? column : d[b.right_axis] - 1 - column;
+  ijk[b.up_axis] = b.up_positive ? d[b.up_axis] - 1 - row : row;
+  for (std::int64_t s = 0; s < d[view.axis]; ++s) {
+    ijk[view.axis] = view.from_positive ? d[view.axis] - 1 - s : s;
+    if (v.get(ijk[0], ijk[1], ijk[2])) return ijk[0] + d.x * (ijk[1] + d.y * ijk[2]);
+  }
+  return -1;
+}
+
+TEST(SlabAnalyses, PreviewsFromEverySideAreExactlyTheInMemoryOnes) {
+  for (const Stored& s : cases()) {
+    const Grid& g = s.volume.grid();
+    for (int axis = 0; axis < 3; ++axis)
+      for (bool from_positive : {true, false}) {
+        const View view{axis, from_positive};
+        const PreviewImage expected = render_preview(s.volume, view, 1);
+        std::int64_t seen = 0;
+        for (std::int64_t r = 0; r < expected.height; ++r)
+          for (std::int64_t c = 0; c < expected.width; ++c) {
+            const std::int64_t voxel = expected.voxel[static_cast<std::size_t>(r * expected.width + c)];
+            ASSERT_EQ(voxel, first_filled(s.volume, view, c, r)) << to_string(view) << " pixel " << c << "," << r;
+            seen += voxel >= 0;
+          }
+        EXPECT_GT(seen, 0);
+        for (std::int64_t layers : slab_sizes(g)) {
+          SCOPED_TRACE(to_string(view) + " layers " + std::to_string(layers));
+          PreviewRenderer renderer(g, view, 2);
+          read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { renderer.find(k0, slab); });
+          read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { renderer.shade(k0, slab); });
+          const PreviewImage got = renderer.take();
+          EXPECT_EQ(got.voxel, expected.voxel);
+          EXPECT_EQ(got.shade, expected.shade);
+          ASSERT_EQ(got.normal.size(), expected.normal.size());
+          EXPECT_EQ(std::memcmp(got.normal.data(), expected.normal.data(), got.normal.size() * sizeof(glm::vec3)), 0);
+          if (layers == 7) {
+            EXPECT_EQ(preview_png(got, g, view, {}), preview_png(s.volume, view, nullptr, {}));
+          }
+        }
+      }
+  }
+}
+
+TEST(SlabAnalyses, PreviewRefusesSlabsOutOfOrderOrAPassMissing) {
+  const Stored& s = cases()[1];
+  const Grid& g = s.volume.grid();
+  PreviewRenderer renderer(g, View{2, true});
+  EXPECT_THROW(renderer.find(3, s.volume), std::logic_error);
+  EXPECT_THROW(renderer.shade(0, s.volume), std::logic_error);  // before find() saw every layer
+  renderer.find(0, s.volume);
+  EXPECT_THROW(renderer.take(), std::logic_error);  // shade() has not run
+  EXPECT_THROW(PreviewRenderer(g, View{3, true}), Error);
 }
 
 }  // namespace

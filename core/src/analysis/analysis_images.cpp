@@ -123,17 +123,20 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
 
 namespace {
 
-// The preview in the part's grey-blue, coloured by thickness, or in each
-// visible voxel's own colour.
-std::vector<std::uint8_t> render_preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
-                                             const DenseVolume<Rgba8>* colours, std::vector<PngText> text, int threads) {
-  const Grid& g = volume.grid();
+// Before the rendering's work: the maps must be on the volume's grid.
+void check_preview_maps(const Grid& g, const DenseVolume<float>* thickness, const DenseVolume<Rgba8>* colours) {
   if (colours && colours->grid().dims != g.dims)
     throw Error(ErrorCode::invalid_argument, "preview: the colour volume's grid does not match the volume's");
-  if (thickness && thickness->grid().dims != g.dims) {
+  if (thickness && thickness->grid().dims != g.dims)
     throw Error(ErrorCode::invalid_argument, "preview: the thickness map's grid does not match the volume's");
-  }
-  const PreviewImage preview = render_preview(volume, view, threads);
+}
+
+// The preview in the part's grey-blue, coloured by thickness, or in each
+// visible voxel's own colour.
+std::vector<std::uint8_t> render_preview_png(const PreviewImage& preview, const Grid& g, View view,
+                                             const DenseVolume<float>* thickness, const DenseVolume<Rgba8>* colours,
+                                             std::vector<PngText> text) {
+  check_preview_maps(g, thickness, colours);
   const ViewBasis basis = view_basis(view);
   std::vector<PngText> chunks = {
       {"voxd:view", to_string(view)},
@@ -188,12 +191,18 @@ std::vector<std::uint8_t> render_preview_png(const BitVolume& volume, View view,
 
 std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
                                       std::vector<PngText> text, int threads) {
-  return render_preview_png(volume, view, thickness, nullptr, std::move(text), threads);
+  check_preview_maps(volume.grid(), thickness, nullptr);
+  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, thickness, nullptr, std::move(text));
+}
+
+std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view, std::vector<PngText> text) {
+  return render_preview_png(preview, grid, view, nullptr, nullptr, std::move(text));
 }
 
 std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
                                              std::vector<PngText> text, int threads) {
-  return render_preview_png(volume, view, nullptr, &colours, std::move(text), threads);
+  check_preview_maps(volume.grid(), nullptr, &colours);
+  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, nullptr, &colours, std::move(text));
 }
 
 }  // namespace voxd

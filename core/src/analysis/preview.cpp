@@ -50,17 +50,21 @@ const std::array<Neighbour, 26>& neighbours() {
 
 // Patil & Ravi: empty neighbours (the grid's outside included) lie on the
 // outer side of the surface, so their unit offsets sum to the outward normal.
-glm::vec3 neighbour_normal(const BitVolume& v, std::int64_t i, std::int64_t j, std::int64_t k, glm::vec3 fallback) {
-  const glm::i64vec3 d = v.grid().dims;
+// filled(a, b, c) answers for a voxel inside the grid.
+template <typename Filled>
+glm::vec3 neighbour_normal(const glm::i64vec3& d, const Filled& filled, std::int64_t i, std::int64_t j, std::int64_t k,
+                           glm::vec3 fallback) {
   glm::vec3 n(0.0f);
   for (const Neighbour& e : neighbours()) {
     const std::int64_t a = i + e.di, b = j + e.dj, c = k + e.dk;
     const bool inside = a >= 0 && b >= 0 && c >= 0 && a < d.x && b < d.y && c < d.z;
-    if (!inside || !v.get(a, b, c)) n += e.unit;
+    if (!inside || !filled(a, b, c)) n += e.unit;
   }
   const float len = glm::length(n);
   return len < 1e-4f ? fallback : n / len;
 }
+
+bool bit_of(const std::uint64_t* row, std::int64_t i) { return (row[i >> 6] >> (i & 63)) & 1u; }
 
 }  // namespace
 
@@ -92,102 +96,180 @@ ViewBasis view_basis(View v) {
   }
 }
 
-PreviewImage render_preview(const BitVolume& volume, View view, int threads) {
-  check_axis(view.axis);
-  const ViewBasis basis = view_basis(view);
-  const ImageSize size = projected_size(volume.grid(), view.axis);  // same extents as the basis, with the INT_MAX check
-  const glm::i64vec3 dims = volume.grid().dims;
-  const std::int64_t nx = dims.x, ny = dims.y;
-  const std::int64_t n_right = dims[basis.right_axis], n_up = dims[basis.up_axis], n_depth = dims[view.axis];
+struct PreviewRenderer::State {
+  State(const Grid& g, View v, int t)
+      : grid(g), view(v), basis(view_basis(v)), threads(t), dims(g.dims), nx(dims.x), ny(dims.y), nz(dims.z),
+        n_right(dims[basis.right_axis]), n_up(dims[basis.up_axis]), n_depth(dims[v.axis]),
+        words((nx + 63) / 64),
+        forward(axis_vector(v.axis, !v.from_positive)),
+        right(axis_vector(basis.right_axis, basis.right_positive)),
+        up(axis_vector(basis.up_axis, basis.up_positive)) {
+    const ImageSize size = projected_size(g, v.axis);  // same extents as the basis, with the INT_MAX check
+    img.width = size.width;
+    img.height = size.height;
+    width = img.width;
+    pixels = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height);
+    img.voxel.assign(pixels, -1);
+    img.shade.assign(pixels, 0.0f);
+    img.normal.assign(pixels, glm::vec3(0.0f));
+    depth.assign(pixels, -1);
+  }
 
+  // Column <-> coordinate along the right axis, row <-> coordinate along up
+  // (row 0 at the top); each is its own inverse.
+  std::int64_t along_right(std::int64_t c) const { return basis.right_positive ? c : n_right - 1 - c; }
+  std::int64_t along_up(std::int64_t r) const { return basis.up_positive ? n_up - 1 - r : r; }
+  std::size_t layer_words() const { return static_cast<std::size_t>(words * ny); }
+
+  void see(std::size_t p, std::int64_t i, std::int64_t j, std::int64_t k, std::int64_t distance) {
+    img.voxel[p] = i + nx * (j + ny * k);
+    depth[p] = static_cast<std::int32_t>(distance);
+  }
+
+  void find_x(std::int64_t k0, const BitVolume& slab);
+  void find_y(std::int64_t k0, const BitVolume& slab);
+  void find_z(std::int64_t k0, const BitVolume& slab);
+  void sort_by_layer();
+  void light();
+
+  Grid grid;
+  View view;
+  ViewBasis basis;
+  int threads;
+  glm::i64vec3 dims;
+  std::int64_t nx, ny, nz, n_right, n_up, n_depth, words, width = 0;
+  std::size_t pixels = 0;
+  glm::vec3 forward, right, up;
   PreviewImage img;
-  img.width = size.width;
-  img.height = size.height;
-  const std::size_t pixels = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height);
-  img.voxel.assign(pixels, -1);
-  img.shade.assign(pixels, 0.0f);
-  img.normal.assign(pixels, glm::vec3(0.0f));
-  if (pixels == 0) return img;
-
-  const glm::vec3 forward = axis_vector(view.axis, !view.from_positive);
-  const glm::vec3 right = axis_vector(basis.right_axis, basis.right_positive);
-  const glm::vec3 up = axis_vector(basis.up_axis, basis.up_positive);
-  // Column <-> coordinate along the right axis, row <-> coordinate along up (row 0 at the top).
-  auto along_right = [&](std::int64_t c) { return basis.right_positive ? c : n_right - 1 - c; };
-  auto along_up = [&](std::int64_t r) { return basis.up_positive ? n_up - 1 - r : r; };
-
   // Distance of the visible voxel from the camera side, in voxels; -1 = background.
-  std::vector<std::int32_t> depth(pixels, -1);
-  std::vector<glm::vec3> raw(pixels, glm::vec3(0.0f));
-  const std::int64_t width = img.width;
-  const std::int64_t words = volume.row_words();
+  std::vector<std::int32_t> depth;
+  std::vector<glm::vec3> raw;  // the unsmoothed normals
+  std::int64_t found_to = 0, shaded_to = 0;  // layers each pass has seen
+  std::vector<std::uint64_t> last_layer;     // find along z: the layer before the slab
+  std::vector<std::uint64_t> before[2];      // shade: layers shaded_to - 2 and shaded_to - 1
+  // shade: the pixels by their visible voxel's layer (a counting sort).
+  std::vector<std::int64_t> layer_start;
+  std::vector<std::uint32_t> by_layer;
+};
 
-  parallel_for(0, img.height, 8, threads, [&](std::int64_t r0, std::int64_t r1) {
-    std::vector<std::uint64_t> found(static_cast<std::size_t>(words));
-    for (std::int64_t r = r0; r < r1; ++r) {
-      const std::int64_t u = along_up(r);
-      std::int64_t* voxel = img.voxel.data() + r * width;
-      std::int32_t* dist = depth.data() + r * width;
-      if (view.axis == 0) {
-        // Rays run along the x rows: the visible voxel is the row's highest
-        // (+x) or lowest (-x) set bit, found a word at a time.
-        for (std::int64_t c = 0; c < width; ++c) {
-          const std::int64_t j = along_right(c);
-          const std::uint64_t* row = volume.row(j, u);
-          std::int64_t i = -1;
-          if (view.from_positive) {
-            for (std::int64_t w = words - 1; w >= 0 && i < 0; --w) {
-              if (row[w]) i = w * 64 + 63 - std::countl_zero(row[w]);
-            }
-          } else {
-            for (std::int64_t w = 0; w < words && i < 0; ++w) {
-              if (row[w]) i = w * 64 + std::countr_zero(row[w]);
-            }
-          }
-          if (i < 0) continue;
-          voxel[c] = i + nx * (j + ny * u);
-          dist[c] = static_cast<std::int32_t>(view.from_positive ? n_depth - 1 - i : i);
-        }
-      } else {
-        // Rays cross the x rows: walk the rows of this image row from the
-        // camera side, taking the bits not yet found, until every column has
-        // its voxel or the volume ends.
-        std::fill(found.begin(), found.end(), 0);
-        std::int64_t remaining = nx;
-        for (std::int64_t s = 0; s < n_depth && remaining > 0; ++s) {
-          const std::int64_t d = view.from_positive ? n_depth - 1 - s : s;
-          const std::int64_t j = view.axis == 2 ? u : d, k = view.axis == 2 ? d : u;
-          const std::uint64_t* row = volume.row(j, k);
-          for (std::int64_t w = 0; w < words; ++w) {
-            std::uint64_t fresh = row[w] & ~found[static_cast<std::size_t>(w)];
-            if (!fresh) continue;
-            found[static_cast<std::size_t>(w)] |= fresh;
-            remaining -= std::popcount(fresh);
-            for (; fresh; fresh &= fresh - 1) {
-              const std::int64_t i = w * 64 + std::countr_zero(fresh);
-              const std::int64_t c = along_right(i);
-              voxel[c] = i + nx * (j + ny * k);
-              dist[c] = static_cast<std::int32_t>(s);
-            }
-          }
-        }
-      }
+// Rays along the x rows: the visible voxel is the row's highest (+x) or
+// lowest (-x) set bit, found a word at a time.
+void PreviewRenderer::State::find_x(std::int64_t k0, const BitVolume& slab) {
+  parallel_for(k0, k0 + slab.grid().dims.z, 1, threads, [&](std::int64_t a, std::int64_t b) {
+    for (std::int64_t k = a; k < b; ++k) {
+      const std::int64_t r = along_up(k);
       for (std::int64_t c = 0; c < width; ++c) {
-        if (voxel[c] < 0) continue;
-        const std::int64_t v = voxel[c];
-        raw[static_cast<std::size_t>(r * width + c)] =
-            neighbour_normal(volume, v % nx, (v / nx) % ny, v / (nx * ny), -forward);
+        const std::int64_t j = along_right(c);
+        const std::uint64_t* row = slab.row(j, k - k0);
+        std::int64_t i = -1;
+        if (view.from_positive) {
+          for (std::int64_t w = words - 1; w >= 0 && i < 0; --w) {
+            if (row[w]) i = w * 64 + 63 - std::countl_zero(row[w]);
+          }
+        } else {
+          for (std::int64_t w = 0; w < words && i < 0; ++w) {
+            if (row[w]) i = w * 64 + std::countr_zero(row[w]);
+          }
+        }
+        if (i >= 0) see(static_cast<std::size_t>(r * width + c), i, j, k, view.from_positive ? n_depth - 1 - i : i);
       }
     }
   });
+}
 
+// Rays along y cross the x rows of one layer: walk them from the camera
+// side, taking the bits not yet found, until every column has its voxel or
+// the layer ends.
+void PreviewRenderer::State::find_y(std::int64_t k0, const BitVolume& slab) {
+  parallel_for(k0, k0 + slab.grid().dims.z, 1, threads, [&](std::int64_t a, std::int64_t b) {
+    std::vector<std::uint64_t> found(static_cast<std::size_t>(words));
+    for (std::int64_t k = a; k < b; ++k) {
+      const std::int64_t r = along_up(k);
+      std::fill(found.begin(), found.end(), 0);
+      std::int64_t remaining = nx;
+      for (std::int64_t s = 0; s < n_depth && remaining > 0; ++s) {
+        const std::int64_t j = view.from_positive ? n_depth - 1 - s : s;
+        const std::uint64_t* row = slab.row(j, k - k0);
+        for (std::int64_t w = 0; w < words; ++w) {
+          std::uint64_t fresh = row[w] & ~found[static_cast<std::size_t>(w)];
+          if (!fresh) continue;
+          found[static_cast<std::size_t>(w)] |= fresh;
+          remaining -= std::popcount(fresh);
+          for (; fresh; fresh &= fresh - 1) {
+            const std::int64_t i = w * 64 + std::countr_zero(fresh);
+            see(static_cast<std::size_t>(r * width + along_right(i)), i, j, k, s);
+          }
+        }
+      }
+    }
+  });
+}
+
+// Rays along z cross the slabs: a run of a ray begins at a layer whose bit is
+// set where the layer before's is clear, and ends where it is clear after a
+// set one. From -z the visible voxel is the first run's first; from +z the
+// last run's last (the layer before its end, or the top layer).
+void PreviewRenderer::State::find_z(std::int64_t k0, const BitVolume& slab) {
+  const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
+  const bool from_top = view.from_positive;
+  parallel_for(0, ny, 8, threads, [&](std::int64_t j0, std::int64_t j1) {
+    const std::vector<std::uint64_t> none(static_cast<std::size_t>(words), 0);
+    for (std::int64_t j = j0; j < j1; ++j) {
+      const std::int64_t r = along_up(j);
+      for (std::int64_t k = k0; k < k1; ++k) {
+        const std::uint64_t* cur = slab.row(j, k - k0);
+        const std::uint64_t* prev = k > k0    ? slab.row(j, k - 1 - k0)
+                                    : k0 > 0 ? last_layer.data() + j * words
+                                             : none.data();
+        for (std::int64_t w = 0; w < words; ++w) {
+          for (std::uint64_t changed = cur[w] ^ prev[w]; changed; changed &= changed - 1) {
+            const int b = std::countr_zero(changed);
+            const std::int64_t i = w * 64 + b;
+            const std::size_t p = static_cast<std::size_t>(r * width + along_right(i));
+            const bool begins = (cur[w] >> b) & 1u;
+            if (begins && !from_top && depth[p] < 0) see(p, i, j, k, k);
+            if (!begins && from_top) see(p, i, j, k - 1, n_depth - k);
+          }
+        }
+        if (k == nz - 1 && from_top) {
+          for (std::int64_t w = 0; w < words; ++w)
+            for (std::uint64_t open = cur[w]; open; open &= open - 1) {
+              const std::int64_t i = w * 64 + std::countr_zero(open);
+              see(static_cast<std::size_t>(r * width + along_right(i)), i, j, k, 0);
+            }
+        }
+      }
+    }
+  });
+  if (k1 < nz) {
+    const std::uint64_t* top = slab.slab(n - 1);
+    last_layer.assign(top, top + layer_words());
+  }
+}
+
+void PreviewRenderer::State::sort_by_layer() {
+  layer_start.assign(static_cast<std::size_t>(nz + 1), 0);
+  const std::int64_t per_layer = nx * ny;
+  for (const std::int64_t v : img.voxel)
+    if (v >= 0) ++layer_start[static_cast<std::size_t>(v / per_layer + 1)];
+  for (std::size_t k = 1; k < layer_start.size(); ++k) layer_start[k] += layer_start[k - 1];
+  by_layer.resize(static_cast<std::size_t>(layer_start.back()));
+  std::vector<std::int64_t> next(layer_start.begin(), layer_start.end() - 1);
+  for (std::size_t p = 0; p < pixels; ++p)
+    if (img.voxel[p] >= 0) by_layer[static_cast<std::size_t>(next[static_cast<std::size_t>(img.voxel[p] / per_layer)]++)] =
+        static_cast<std::uint32_t>(p);
+  raw.assign(pixels, glm::vec3(0.0f));
+}
+
+// Screen-space smoothing of the normals, then the lighting.
+void PreviewRenderer::State::light() {
   std::int32_t nearest = std::numeric_limits<std::int32_t>::max(), farthest = -1;
   for (const std::int32_t d : depth) {
     if (d < 0) continue;
     nearest = std::min(nearest, d);
     farthest = std::max(farthest, d);
   }
-  if (farthest < 0) return img;  // nothing visible
+  if (farthest < 0) return;  // nothing visible
   const float depth_span = static_cast<float>(farthest - nearest);
 
   const glm::vec3 light = glm::normalize(-forward + 0.5f * up - 0.35f * right);
@@ -215,7 +297,87 @@ PreviewImage render_preview(const BitVolume& volume, View view, int threads) {
       }
     }
   });
-  return img;
+}
+
+PreviewRenderer::PreviewRenderer(const Grid& grid, View view, int threads) {
+  check_axis(view.axis);
+  state_ = std::make_unique<State>(grid, view, threads);
+}
+
+PreviewRenderer::~PreviewRenderer() = default;
+
+namespace {
+
+void check_slab(const Grid& grid, std::int64_t expected_k0, std::int64_t k0, const BitVolume& slab, const char* pass) {
+  const glm::i64vec3 d = slab.grid().dims;
+  if (k0 != expected_k0 || d.x != grid.dims.x || d.y != grid.dims.y || k0 + d.z > grid.dims.z)
+    throw std::logic_error(std::string("PreviewRenderer::") + pass + ": slabs must come in z order, whole layers of the grid");
+}
+
+}  // namespace
+
+void PreviewRenderer::find(std::int64_t k0, const BitVolume& slab) {
+  State& s = *state_;
+  check_slab(s.grid, s.found_to, k0, slab, "find");
+  if (s.pixels > 0) {
+    if (s.view.axis == 0) s.find_x(k0, slab);
+    else if (s.view.axis == 1) s.find_y(k0, slab);
+    else s.find_z(k0, slab);
+  }
+  s.found_to = k0 + slab.grid().dims.z;
+}
+
+void PreviewRenderer::shade(std::int64_t k0, const BitVolume& slab) {
+  State& s = *state_;
+  if (s.found_to != s.nz) throw std::logic_error("PreviewRenderer::shade before find() has seen every layer");
+  check_slab(s.grid, s.shaded_to, k0, slab, "shade");
+  const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
+  s.shaded_to = k1;
+  if (s.pixels == 0) return;
+  if (k0 == 0) s.sort_by_layer();
+  // The pixels seeing layers lo..hi: the layer left from the slab before
+  // (it needed this slab's first), and this slab's but its last (it needs
+  // the next slab's first), all of them at the top.
+  const std::int64_t lo = k0 > 0 ? k0 - 1 : 0, hi = k1 == s.nz ? k1 - 1 : k1 - 2;
+  if (hi >= lo) {
+    const std::uint64_t* layer_before[2] = {s.before[0].data(), s.before[1].data()};
+    const auto filled = [&](std::int64_t a, std::int64_t b, std::int64_t c) {
+      if (c >= k0) return slab.get(a, b, c - k0);
+      return bit_of(layer_before[c - (k0 - 2)] + b * s.words, a);
+    };
+    const std::int64_t p0 = s.layer_start[static_cast<std::size_t>(lo)], p1 = s.layer_start[static_cast<std::size_t>(hi + 1)];
+    parallel_for(p0, p1, 1024, s.threads, [&](std::int64_t a, std::int64_t b) {
+      for (std::int64_t q = a; q < b; ++q) {
+        const std::size_t p = s.by_layer[static_cast<std::size_t>(q)];
+        const std::int64_t v = s.img.voxel[p];
+        s.raw[p] = neighbour_normal(s.dims, filled, v % s.nx, (v / s.nx) % s.ny, v / (s.nx * s.ny), -s.forward);
+      }
+    });
+  }
+  if (k1 < s.nz) {
+    // The two layers the next slab's seam needs.
+    if (n >= 2) s.before[0].assign(slab.slab(n - 2), slab.slab(n - 2) + s.layer_words());
+    else s.before[0] = std::move(s.before[1]);
+    s.before[1].assign(slab.slab(n - 1), slab.slab(n - 1) + s.layer_words());
+  } else {
+    s.light();
+  }
+}
+
+PreviewImage PreviewRenderer::take() {
+  State& s = *state_;
+  if (s.pixels > 0 && (s.found_to != s.nz || s.shaded_to != s.nz))
+    throw std::logic_error("PreviewRenderer::take before both passes have seen every layer");
+  return std::move(s.img);
+}
+
+PreviewImage render_preview(const BitVolume& volume, View view, int threads) {
+  PreviewRenderer renderer(volume.grid(), view, threads);
+  if (volume.grid().dims.z > 0) {
+    renderer.find(0, volume);
+    renderer.shade(0, volume);
+  }
+  return renderer.take();
 }
 
 }  // namespace voxd

@@ -56,6 +56,10 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
 inline constexpr Rgb kPreviewPartColour{176, 190, 210};  // steel blue-grey
 std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
                                       std::vector<PngText> text = {}, int threads = 0);
+// The same from a rendered preview (a PreviewRenderer's over slabs) of a
+// volume on `grid`, without a thickness map: the bytes preview_png gives.
+std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view,
+                                      std::vector<PngText> text = {});
 // The same view with each visible voxel in its own colour (a slice job's
 // colours; alpha ignored), shaded alike. Throws as preview_png, and when the
 // colours' dims differ from the volume's.

@@ -5,6 +5,7 @@
 // Ravi: the empty voxels among the 26 neighbours point away from the solid,
 // so the sum of their unit offsets approximates the outward normal).
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -60,5 +61,35 @@ struct PreviewImage {
 // Error(invalid_argument) for an axis outside 0..2 and Error(limit_exceeded)
 // for an image over INT_MAX pixels.
 PreviewImage render_preview(const BitVolume& volume, View view, int threads = 0);
+
+// render_preview() of a volume that arrives slab by slab in z order (a stored
+// result replayed from its RLE), in two passes over the slabs: find() every
+// slab (the visible voxel of each pixel: along z from the layers where runs
+// begin and end, so the cost is the boundaries, not the voxels), then shade()
+// every slab again (the normals of the pixels whose visible voxel lies in it,
+// with the last two layers of the slab before kept for the neighbours across
+// the seam), then take(). The image is exactly render_preview()'s, which is
+// the one-slab case. Memory is the image's per-pixel arrays, one layer of
+// bits and two more in the second pass.
+class PreviewRenderer {
+ public:
+  // Throws like render_preview() for a bad axis or an image too large.
+  PreviewRenderer(const Grid& grid, View view, int threads = 0);
+  ~PreviewRenderer();
+  PreviewRenderer(const PreviewRenderer&) = delete;
+  PreviewRenderer& operator=(const PreviewRenderer&) = delete;
+
+  // Layers [k0, k0 + slab.grid().dims.z), right after the previous slab's:
+  // first every slab to find(), then every slab to shade(). Throw
+  // std::logic_error out of order.
+  void find(std::int64_t k0, const BitVolume& slab);
+  void shade(std::int64_t k0, const BitVolume& slab);
+  // After both passes. Throws std::logic_error if layers are missing.
+  PreviewImage take();
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 }  // namespace voxd
