@@ -166,11 +166,12 @@ std::string serve_help() {
        "volumes or past --max-job-memory): it is voxelized slab by slab into its stored\n"
        "RLE and takes the memory of one slab, whatever the grid.\n"
        "  Stream over any grid: GET /volume as rle, raw or nrrd; radiography (without\n"
-       "  peel); sections (without peel or colour=thickness); analysis with\n"
-       "  thickness=false&skin=false (mass properties, parts, voids).\n"
+       "  peel); sections (without peel or colour=thickness); shaded previews (without\n"
+       "  colour=thickness); analysis with thickness=false&skin=false (mass properties,\n"
+       "  parts, voids).\n"
        "  Need the whole grid (run while it fits --max-job-memory, else 422 naming the\n"
        "  largest grid they accept): volume as binvox, local thickness, analysis with\n"
-       "  thickness, skin or clean-up, previews, peeled models, thickness colours.\n";
+       "  thickness, skin or clean-up, peeled models, thickness colours.\n";
   return s.str();
 }
 

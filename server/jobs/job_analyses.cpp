@@ -123,14 +123,17 @@ ThicknessImage job_radiography(const AnalysisRequest& r, const BitVolume& origin
 // Replays a streamed job's stored volume slab by slab (16 MiB slabs: small
 // beside the images, large enough that a slab is cheap to hand on), with
 // progress over the slabs and cancellation between them.
-void replay(const JobOutput& output, const Grid& grid, JobControl* control, const BitSlabConsumer& consume) {
+// The progress runs over [from, to] (a request of two passes takes half each).
+void replay(const JobOutput& output, const Grid& grid, JobControl* control, const BitSlabConsumer& consume,
+            double from = 0.0, double to = 1.0) {
   if (!output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
   const double slabs_total = static_cast<double>(grid.dims.z);
   read_rle_bit_slabs(output.rle->bytes(), streamed_slab_layers(grid, std::uint64_t{16} << 20),
                      [&](std::int64_t k0, const BitVolume& slab) {
                        if (control) control->check_cancelled();
                        consume(k0, slab);
-                       if (control) control->set_progress(static_cast<double>(k0 + slab.grid().dims.z) / slabs_total);
+                       const double done = static_cast<double>(k0 + slab.grid().dims.z) / slabs_total;
+                       if (control) control->set_progress(from + (to - from) * done);
                      },
                      kStoredSlabLimits);
 }
@@ -237,7 +240,7 @@ bool streams_over_slabs(const AnalysisRequest& r) {
     case AnalysisKind::analysis: return r.cleanup == "none" && !r.thickness && !r.skin;
     case AnalysisKind::radiography: return r.peel == 0;
     case AnalysisKind::section: return r.peel == 0 && r.colour == "none";
-    case AnalysisKind::preview:
+    case AnalysisKind::preview: return r.colour == "none";
     case AnalysisKind::thickness: return false;
   }
   return false;
@@ -267,15 +270,15 @@ std::string whole_grid_refusal(const AnalysisRequest& r, const Grid& grid, std::
       break;
     case AnalysisKind::radiography: what = "a radiography of the peeled model (peel)"; break;
     case AnalysisKind::section: what = r.peel > 0 ? "a section of the peeled model (peel)" : "a section coloured by local thickness"; break;
-    case AnalysisKind::preview: what = "the shaded preview"; break;
+    case AnalysisKind::preview: what = "a preview coloured by local thickness"; break;
     case AnalysisKind::thickness: what = "the local thickness volume"; break;
   }
   return what + " needs the whole grid in memory, about " + std::to_string(whole_grid_memory(r, grid) >> 20) +
          " MiB for this job's " + std::to_string(grid.dims.x) + " x " + std::to_string(grid.dims.y) + " x " +
          std::to_string(grid.dims.z) + " grid; the largest grid it accepts here is " + std::to_string(largest_voxels) +
          " voxels (about " + std::to_string(side) + "^3, per-job memory " + std::to_string(max_job_memory >> 20) +
-         " MiB). This job's volume was made slab by slab: radiography and sections (without peel or thickness "
-         "colours) and the analysis with thickness=false&skin=false stream over it at any size";
+         " MiB). This job's volume was made slab by slab: radiography, sections and shaded previews (without peel "
+         "or thickness colours) and the analysis with thickness=false&skin=false stream over it at any size";
 }
 
 std::uint64_t analysis_memory_on_job(const AnalysisRequest& r, const Grid& grid, bool streamed_job,
@@ -291,13 +294,20 @@ std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& gri
   constexpr std::uint64_t kImagesAndReports = std::uint64_t{16} << 20;
   if (over_slabs) {
     // One replayed slab, and for a radiography its four maps of 32 bits a
-    // pixel, one layer of bits and the PNG; a section's image and PNG.
+    // pixel, one layer of bits and the PNG; a section's image and PNG; a
+    // preview's visible voxels, depths, normals (raw and smoothed), shades,
+    // pixels sorted by layer, the RGB image and its PNG, and three layers.
     const std::uint64_t slab = std::uint64_t{16} << 20;
+    const int axis = r.kind == AnalysisKind::preview ? parse_view(r.view)->axis : r.axis;
     const std::uint64_t pixels = r.kind == AnalysisKind::analysis ? 0
-                                 : static_cast<std::uint64_t>(r.axis == 0 ? grid.dims.y : grid.dims.x) *
-                                       static_cast<std::uint64_t>(r.axis == 2 ? grid.dims.y : grid.dims.z);
-    const std::uint64_t per_pixel = r.kind == AnalysisKind::radiography ? 4 * 4 + 2 + 4 : 2;
-    return slab + per_pixel * pixels + kImagesAndReports;
+                                 : static_cast<std::uint64_t>(axis == 0 ? grid.dims.y : grid.dims.x) *
+                                       static_cast<std::uint64_t>(axis == 2 ? grid.dims.y : grid.dims.z);
+    const std::uint64_t layer = bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+    switch (r.kind) {
+      case AnalysisKind::radiography: return slab + (4 * 4 + 2 + 4) * pixels + layer + kImagesAndReports;
+      case AnalysisKind::preview: return slab + (8 + 4 + 12 + 12 + 4 + 4 + 3 + 3) * pixels + 3 * layer + kImagesAndReports;
+      default: return slab + 2 * pixels + kImagesAndReports;
+    }
   }
   const std::uint64_t voxels = grid.voxel_count();
   const bool thickness = r.kind == AnalysisKind::thickness || (r.kind == AnalysisKind::analysis && r.thickness) ||
@@ -349,6 +359,14 @@ std::string over_slabs(const AnalysisRequest& r, const JobSnapshot& job, const J
       SectionGatherer section(job.grid, r.axis, layer);
       replay(output, job.grid, control, [&](std::int64_t k0, const BitVolume& slab) { section.add(k0, slab); });
       return to_bytes(section_png(section.take(), job.grid, r.axis, layer, {{"voxd:job", job.id}}));
+    }
+    case AnalysisKind::preview: {
+      // Two passes: the visible voxels, then their normals.
+      const View view = *parse_view(r.view);
+      PreviewRenderer preview(job.grid, view);
+      replay(output, job.grid, control, [&](std::int64_t k0, const BitVolume& slab) { preview.find(k0, slab); }, 0.0, 0.5);
+      replay(output, job.grid, control, [&](std::int64_t k0, const BitVolume& slab) { preview.shade(k0, slab); }, 0.5, 1.0);
+      return to_bytes(preview_png(preview.take(), job.grid, view, {{"voxd:job", job.id}}));
     }
     default: throw std::logic_error(std::string("a ") + to_string(r.kind) + " request does not stream");
   }

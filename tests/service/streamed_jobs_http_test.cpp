@@ -68,9 +68,9 @@ TEST_F(StreamedJobsHttpTest, AStreamedJobAnswersWithTheInMemoryJobsBytes) {
   }
   EXPECT_EQ(volume(b), cli_volume(mesh, "bunny.stl", R"({"grid":{"resolution":91,"padding":1}})"));
 
-  // What streams: every radiography, sections along each axis, the analysis
-  // without thickness and skin. What needs the whole grid fits here and
-  // loads it: the same bytes either way.
+  // What streams: every radiography, sections along each axis, shaded
+  // previews from every side, the analysis without thickness and skin. What
+  // needs the whole grid fits here and loads it: the same bytes either way.
   std::vector<std::string> json_routes = {"analysis?thickness=false&skin=false", "analysis"};
   std::vector<std::string> png_routes;
   for (const char* axis : {"x", "y", "z"}) {
@@ -79,7 +79,7 @@ TEST_F(StreamedJobsHttpTest, AStreamedJobAnswersWithTheInMemoryJobsBytes) {
     png_routes.push_back(std::string("radiography?axis=") + axis);
     png_routes.push_back(std::string("section?axis=") + axis + "&index=40");
   }
-  png_routes.push_back("preview?view=-y");
+  for (const char* view : {"%2Bx", "-x", "%2By", "-y", "%2Bz", "-z"}) png_routes.push_back(std::string("preview?view=") + view);
   png_routes.push_back("section?axis=z&index=30&colour=thickness");
   for (const std::string& route : json_routes) {
     const std::string expected = get_ok("/v1/jobs/" + a + "/" + route);
@@ -124,11 +124,15 @@ TEST_F(StreamedJobsHttpTest, PastThePerJobMemoryAJobStreamsAndWholeGridAnalysesA
   const double h = wait_for_job(http(), id).at("grid").at("voxel_size");
   EXPECT_DOUBLE_EQ(analysis.at("mass_properties").at("voxels").at("volume").get<double>(),
                    wait_for_job(http(), id).at("filled_voxels").get<double>() * h * h * h);
-  // Sections along every axis.
+  // Sections along every axis; previews from above and from the side.
   for (const char* axis : {"x", "y", "z"}) get_ok(std::string("/v1/jobs/") + id + "/section?axis=" + axis + "&index=300");
+  for (const std::string view : {"+z", "-x"}) {
+    const std::string png = get_ok("/v1/jobs/" + id + "/preview?view=" + (view[0] == '+' ? "%2B" + view.substr(1) : view));
+    EXPECT_NE(png.find(std::string("voxd:view") + '\0' + view), std::string::npos) << view;
+  }
 
-  // Local thickness, skin removal and previews need the whole grid.
-  for (const char* route : {"thickness", "analysis", "analysis?thickness=false", "preview",
+  // Local thickness, skin removal and thickness colours need the whole grid.
+  for (const char* route : {"thickness", "analysis", "analysis?thickness=false", "preview?colour=thickness",
                             "radiography?peel=2"}) {
     const json p = expect_problem(http().Get(("/v1/jobs/" + id + "/" + route).c_str()), 422, "limit-exceeded");
     const std::string detail = p.at("detail");
