@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Issue #14 in the service: the 1.1M-triangle mesh as a solid job over HTTP
 # at N^3 (default 8192), streamed into its stored RLE, then its /volume, a
-# radiography along z and its mass properties (analysis with
-# thickness=false&skin=false), each timed, and local thickness, which must
+# radiography along z, its mass properties (analysis with
+# thickness=false&skin=false) and shaded previews, each timed, and local thickness, which must
 # answer 422. Prints the seconds of each step and the server's peak RSS
 # (VmHWM) after each.
 #   bench/stream_service_bench.sh [BUILD_DIR] [RESOLUTION]
@@ -52,6 +52,8 @@ t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=z&measure=max" -o "$work/
 t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=x&measure=total&format=json" -o /dev/null; step "radiography x (json)" "$t0"
 t0=$(now); curl -sf "$url/v1/jobs/$id/analysis?thickness=false&skin=false" -o "$work/analysis.json"; step "mass properties, parts, voids" "$t0"
 python3 -c 'import json,sys; a=json.load(open(sys.argv[1])); print("  volume", a["mass_properties"]["voxels"]["volume"], "parts", a["parts"]["count"], "voids", a["voids"]["count"])' "$work/analysis.json"
+t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=%2Bz" -o "$work/top.png"; step "preview +z (two passes)" "$t0"
+t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=-x" -o "$work/side.png"; step "preview -x (two passes)" "$t0"
 code=$(curl -s -o "$work/problem.json" -w '%{http_code}' "$url/v1/jobs/$id/thickness")
 echo "local thickness: HTTP $code: $(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["detail"])' "$work/problem.json")"
 [[ $code == 422 ]]

@@ -16,6 +16,7 @@
 #include "voxd/grid.h"
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
+#include "voxd/encode/volume_format.h"
 #include "voxd/enum_names.h"
 
 namespace voxd::encode {
@@ -58,5 +59,8 @@ RleHeader read_rle_header(ByteCursor& in);
 void write_rle_bit_header(const Grid& grid, ByteSink& sink);
 void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink);
 void write_rle_end(std::int64_t nz, ByteSink& sink);
+// The same for a volume of values (u8, f32 or rgba8: `slab`'s type).
+void write_rle_value_header(const ValueVolume& type, const Grid& grid, ByteSink& sink);
+void write_rle_value_layers(const ValueVolume& slab, std::int64_t k0, ByteSink& sink);
 
 }  // namespace voxd::encode

@@ -6,6 +6,8 @@
 #include <bit>
 #include <cstring>
 #include <functional>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -232,6 +234,26 @@ void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink
 }
 
 void write_rle_end(std::int64_t nz, ByteSink& sink) { write_end_block(nz, sink); }
+
+void write_rle_value_header(const ValueVolume& type, const Grid& grid, ByteSink& sink) {
+  write_header(grid, *value_named(kRleValueTypeNames, std::string_view(value_type_name(type))), sink);
+}
+
+void write_rle_value_layers(const ValueVolume& slab, std::int64_t k0, ByteSink& sink) {
+  std::visit(
+      [&](const auto& v) {
+        using T = std::decay_t<decltype(v.values()[0])>;
+        write_slab_block_range(
+            k0, k0 + v.grid().dims.z, v.slab_size() * sizeof(T),
+            [&v, k0](std::int64_t k, ByteBuffer& out) {
+              if constexpr (std::is_same_v<T, float>) encode_f32_slab(v, k - k0, out);
+              else if constexpr (std::is_same_v<T, Rgba8>) encode_rgba8_slab(v, k - k0, out);
+              else encode_u8_slab(v, k - k0, out);
+            },
+            sink);
+      },
+      slab);
+}
 
 }  // namespace encode
 

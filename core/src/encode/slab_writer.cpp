@@ -1,6 +1,7 @@
 #include "voxd/encode/slab_writer.h"
 
 #include <stdexcept>
+#include <variant>
 
 #include "encode/bit_packer.h"
 #include "encode/rle_stream.h"
@@ -23,33 +24,59 @@ std::optional<std::string> streaming_refusal(VolumeFormat format) {
   return std::string(to_string(format)) + " is not a format of bits";
 }
 
-struct BitSlabWriter::State {
-  State(const Grid& g, VolumeFormat f, const EncodeOptions& o, ByteSink& s) : grid(g), format(f), options(o), sink(&s) {}
+namespace {
+
+// What every slab writer keeps: the format, where the bytes go, which layer
+// comes next.
+struct SlabStream {
+  SlabStream(const Grid& g, VolumeFormat f, const EncodeOptions& o, ByteSink& s, const char* w)
+      : grid(g), format(f), options(o), sink(&s), writer(w) {}
   Grid grid;
   VolumeFormat format;
   EncodeOptions options;
   ByteSink* sink;
+  const char* writer;            // for messages
   std::optional<GzipSink> gzip;  // nrrd with gzip encoding
-  encode::BitPacker packer;      // raw bits
   std::int64_t next_layer = 0;
   bool finished = false;
 
   // Where the voxels go: the gzip stream of a compressed NRRD, else the sink.
   ByteSink& data() { return gzip ? static_cast<ByteSink&>(*gzip) : *sink; }
+
+  void nrrd_header(const char* type) {
+    const std::string header = encode::nrrd_header(grid, type, options.content, options.nrrd_encoding);
+    sink->write(header.data(), header.size());
+    if (options.nrrd_encoding == NrrdEncoding::gzip) gzip.emplace(*sink);
+  }
+  void check(std::int64_t k0, const Grid& slab) const {
+    if (finished || k0 != next_layer || slab.dims.x != grid.dims.x || slab.dims.y != grid.dims.y ||
+        k0 + slab.dims.z > grid.dims.z)
+      throw std::logic_error(std::string(writer) + ": slab of layers " + std::to_string(k0) + ".. out of order or off the grid");
+  }
+  // False when already finished; throws when layers are missing.
+  bool begin_finish() const {
+    if (finished) return false;
+    if (next_layer != grid.dims.z)
+      throw std::logic_error(std::string(writer) + ": finished after " + std::to_string(next_layer) + " of " +
+                             std::to_string(grid.dims.z) + " layers");
+    return true;
+  }
+};
+
+}  // namespace
+
+struct BitSlabWriter::State : SlabStream {
+  using SlabStream::SlabStream;
+  encode::BitPacker packer;  // raw bits
 };
 
 BitSlabWriter::BitSlabWriter(const Grid& grid, VolumeFormat format, const EncodeOptions& options, ByteSink& sink)
-    : state_(std::make_unique<State>(grid, format, options, sink)) {
+    : state_(std::make_unique<State>(grid, format, options, sink, "BitSlabWriter")) {
   if (auto refusal = streaming_refusal(format)) throw Error(ErrorCode::invalid_argument, *refusal);
   encode::require_voxels(grid, "streamed writer");
   switch (format) {
     case VolumeFormat::rle: encode::write_rle_bit_header(grid, sink); break;
-    case VolumeFormat::nrrd: {
-      const std::string header = encode::nrrd_header(grid, "uchar", options.content, options.nrrd_encoding);
-      sink.write(header.data(), header.size());
-      if (options.nrrd_encoding == NrrdEncoding::gzip) state_->gzip.emplace(sink);
-      break;
-    }
+    case VolumeFormat::nrrd: state_->nrrd_header("uchar"); break;
     default: break;  // raw has no header
   }
 }
@@ -58,9 +85,7 @@ BitSlabWriter::~BitSlabWriter() = default;
 
 void BitSlabWriter::write(std::int64_t k0, const BitVolume& slab) {
   State& s = *state_;
-  if (s.finished || k0 != s.next_layer || slab.grid().dims.x != s.grid.dims.x || slab.grid().dims.y != s.grid.dims.y ||
-      k0 + slab.grid().dims.z > s.grid.dims.z)
-    throw std::logic_error("BitSlabWriter: slab of layers " + std::to_string(k0) + ".. out of order or off the grid");
+  s.check(k0, slab.grid());
   switch (s.format) {
     case VolumeFormat::rle: encode::write_rle_bit_layers(slab, k0, *s.sink); break;
     case VolumeFormat::raw:
@@ -77,10 +102,7 @@ void BitSlabWriter::write(std::int64_t k0, const BitVolume& slab) {
 
 void BitSlabWriter::finish() {
   State& s = *state_;
-  if (s.finished) return;
-  if (s.next_layer != s.grid.dims.z)
-    throw std::logic_error("BitSlabWriter: finished after " + std::to_string(s.next_layer) + " of " +
-                           std::to_string(s.grid.dims.z) + " layers");
+  if (!s.begin_finish()) return;
   switch (s.format) {
     case VolumeFormat::rle: encode::write_rle_end(s.grid.dims.z, *s.sink); break;
     case VolumeFormat::raw:
@@ -91,6 +113,60 @@ void BitSlabWriter::finish() {
       break;
     default: break;
   }
+  s.finished = true;
+}
+
+std::optional<std::string> streaming_refusal(const ValueVolume& type, VolumeFormat format, const EncodeOptions& options) {
+  if (auto refusal = format_refusal(type, format, options)) return refusal;
+  if (format != VolumeFormat::rle && format != VolumeFormat::raw && format != VolumeFormat::nrrd)
+    return std::string(to_string(format)) + " does not stream slab by slab; write rle, raw or nrrd, or run in memory";
+  if (options.quantize != Quantize::none)
+    return "quantized RLE does not stream slab by slab: its levels span the whole volume's range; write f32 rle, "
+           "raw or nrrd, or run in memory";
+  return std::nullopt;
+}
+
+struct ValueSlabWriter::State : SlabStream {
+  State(const Grid& g, const ValueVolume& t, VolumeFormat f, const EncodeOptions& o, ByteSink& s)
+      : SlabStream(g, f, o, s, "ValueSlabWriter"), type_index(t.index()) {}
+  std::size_t type_index;
+};
+
+ValueSlabWriter::ValueSlabWriter(const Grid& grid, const ValueVolume& type, VolumeFormat format,
+                                 const EncodeOptions& options, ByteSink& sink)
+    : state_(std::make_unique<State>(grid, type, format, options, sink)) {
+  if (auto refusal = streaming_refusal(type, format, options)) throw Error(ErrorCode::invalid_argument, *refusal);
+  encode::require_voxels(grid, "streamed writer");
+  switch (format) {
+    case VolumeFormat::rle: encode::write_rle_value_header(type, grid, sink); break;
+    case VolumeFormat::nrrd:
+      state_->nrrd_header(std::holds_alternative<DenseVolume<float>>(type) ? "float" : "uchar");
+      break;
+    default: break;  // raw has no header
+  }
+}
+
+ValueSlabWriter::~ValueSlabWriter() = default;
+
+void ValueSlabWriter::write(std::int64_t k0, const ValueVolume& slab) {
+  State& s = *state_;
+  s.check(k0, grid_of(slab));
+  if (slab.index() != s.type_index)
+    throw std::logic_error(std::string("ValueSlabWriter: a slab of ") + value_type_name(slab) + " values");
+  switch (s.format) {
+    case VolumeFormat::rle: encode::write_rle_value_layers(slab, k0, *s.sink); break;
+    case VolumeFormat::raw: std::visit([&](const auto& v) { write_raw(v, *s.sink); }, slab); break;
+    case VolumeFormat::nrrd: std::visit([&](const auto& v) { write_raw(v, s.data()); }, slab); break;
+    default: break;
+  }
+  s.next_layer = k0 + grid_of(slab).dims.z;
+}
+
+void ValueSlabWriter::finish() {
+  State& s = *state_;
+  if (!s.begin_finish()) return;
+  if (s.format == VolumeFormat::rle) encode::write_rle_end(s.grid.dims.z, *s.sink);
+  if (s.gzip) s.gzip->finish();
   s.finished = true;
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "voxd/bit_slabs.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 #include "voxelize/coverage_runs.h"
@@ -33,13 +34,14 @@ class CoverageVoxelizer {
     }
   }
 
-  DenseVolume<float> run(JobControl* control) {
-    DenseVolume<float> out(grid_, 0.0f);
-    if (grid_.voxel_count() == 0) return out;
-    const int threads = options_.threads > 0 ? options_.threads : default_thread_count();
+  const detail::FixedMesh& fixed() const { return fixed_; }
+
+  // Rows [k0, k1) of the grid into `out`, whose first layer is k0.
+  void fill(const detail::RayRows& rows, std::int64_t k0, std::int64_t k1, DenseVolume<float>& out,
+            JobControl* control) const {
     using Events = detail::RunEvents;
-    detail::for_each_ray_row<Events>(
-        fixed_, grid_, k_ * k_, threads, control,
+    rows.run<Events>(
+        k0, k1, control,
         [&](std::int64_t k, Events&) {
           return [this, k](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
             ray_position(j, k, r / k_, r % k_, pu, pv);
@@ -49,12 +51,11 @@ class CoverageVoxelizer {
           for (std::size_t c = 0; c < crossings.size();) {
             std::size_t e = c;
             while (e < crossings.size() && crossings[e].column == crossings[c].column) ++e;
-            float* row = out.slab(k) + static_cast<std::int64_t>(crossings[c].column) * grid_.dims.x;
+            float* row = out.slab(k - k0) + static_cast<std::int64_t>(crossings[c].column) * grid_.dims.x;
             fill_column(crossings.data() + c, crossings.data() + e, row, events);
             c = e;
           }
         });
-    return out;
   }
 
  private:
@@ -92,16 +93,55 @@ class CoverageVoxelizer {
   std::vector<std::int64_t> regular_;
 };
 
-}  // namespace
 
-DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
-                                     JobControl* control) {
+void check_options(const CoverageOptions& options) {
   if (options.rays < 1 || options.rays > 64)
     throw Error(ErrorCode::invalid_argument, "coverage rays must be 1 to 64 per column side, got " + std::to_string(options.rays));
   if (options.points < 1 || options.points > 256)
     throw Error(ErrorCode::invalid_argument, "coverage points must be 1 to 256 per voxel, got " + std::to_string(options.points));
-  CoverageVoxelizer v(mesh, grid, options);
-  return v.run(control);
+}
+
+int thread_count(const CoverageOptions& options) { return options.threads > 0 ? options.threads : default_thread_count(); }
+
+}  // namespace
+
+DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
+                                     JobControl* control) {
+  check_options(options);
+  DenseVolume<float> out(grid, 0.0f);
+  if (grid.voxel_count() == 0) return out;
+  const CoverageVoxelizer v(mesh, grid, options);
+  const detail::RayRows rows(v.fixed(), grid, options.rays * options.rays, thread_count(options));
+  v.fill(rows, 0, grid.dims.z, out, control);
+  return out;
+}
+
+std::int64_t coverage_slab_layers(const Grid& grid, std::uint64_t slab_bytes) {
+  const std::uint64_t per_layer = std::max<std::uint64_t>(
+      static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) * sizeof(float), 1);
+  return std::clamp<std::int64_t>(static_cast<std::int64_t>(slab_bytes / per_layer), 1, std::max<std::int64_t>(grid.dims.z, 1));
+}
+
+void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
+                                std::int64_t slab_layers, const CoverageSlabConsumer& consume, JobControl* control) {
+  check_options(options);
+  if (grid.voxel_count() == 0) return;
+  const std::int64_t nz = grid.dims.z;
+  const int threads = thread_count(options);
+  // Chunks of a few rows, so each slab has work for every thread; a slab is
+  // a whole number of chunks (as in voxelize_streamed).
+  const std::int64_t layers_wanted = std::clamp<std::int64_t>(slab_layers, 1, nz);
+  const std::int64_t per_chunk = std::max<std::int64_t>(1, layers_wanted / (4 * threads));
+  const std::int64_t layers = std::min(nz, (layers_wanted + per_chunk - 1) / per_chunk * per_chunk);
+  const CoverageVoxelizer v(mesh, grid, options);
+  const detail::RayRows rows(v.fixed(), grid, options.rays * options.rays, threads, per_chunk);
+  for (std::int64_t k0 = 0; k0 < nz; k0 += layers) {
+    if (control) control->check_cancelled();
+    const std::int64_t n = std::min(layers, nz - k0);
+    DenseVolume<float> slab(slab_grid(grid, k0, n), 0.0f);
+    v.fill(rows, k0, k0 + n, slab, control);
+    consume(k0, slab);
+  }
 }
 
 DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int threads) {
@@ -120,21 +160,26 @@ DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int
   return out;
 }
 
-double covered_voxels(const DenseVolume<float>& coverage, int threads) {
-  // A sum per slab, added in slab order: the same total on any thread count.
-  std::vector<double> slab_sums(static_cast<std::size_t>(coverage.grid().dims.z), 0.0);
-  const std::size_t slab = coverage.slab_size();
-  parallel_for(0, coverage.grid().dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+void CoveredVoxels::add(const DenseVolume<float>& slab, int threads) {
+  // A sum per layer, added in layer order: the same total on any thread
+  // count and any slabs.
+  std::vector<double> layer_sums(static_cast<std::size_t>(slab.grid().dims.z), 0.0);
+  const std::size_t layer = slab.slab_size();
+  parallel_for(0, slab.grid().dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k) {
-      const float* v = coverage.slab(k);
+      const float* v = slab.slab(k);
       double sum = 0.0;
-      for (std::size_t i = 0; i < slab; ++i) sum += v[i];
-      slab_sums[static_cast<std::size_t>(k)] = sum;
+      for (std::size_t i = 0; i < layer; ++i) sum += v[i];
+      layer_sums[static_cast<std::size_t>(k)] = sum;
     }
   });
-  double total = 0.0;
-  for (double s : slab_sums) total += s;
-  return total;
+  for (double s : layer_sums) total_ += s;
+}
+
+double covered_voxels(const DenseVolume<float>& coverage, int threads) {
+  CoveredVoxels sum;
+  sum.add(coverage, threads);
+  return sum.total();
 }
 
 BitVolume coverage_threshold(const DenseVolume<float>& coverage, float threshold) {

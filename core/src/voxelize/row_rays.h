@@ -89,36 +89,62 @@ void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std
     }
 }
 
-// Row by row along z, on `threads` threads that each own a chunk of rows:
-// the sorted crossings of row k's rays (`rays` per column) with the mesh.
-// prepare(k, scratch) returns row k's ray positions (as cross_row_rays
-// wants them); consume(k, crossings, scratch) uses the crossings. Scratch is
-// per thread. Reports progress by rows and honours cancellation when
-// `control` is given.
+// Rows of rays along z, their triangles binned once by chunks of rows, run
+// over any range of whole chunks: the whole grid at once, or slab by slab
+// (streamed coverage). Each row's crossings are the same whatever the range
+// or the chunking: the triangles of its chunk that reach it, sorted.
+class RayRows {
+ public:
+  // `rows_per_chunk` 0: enough chunks to balance `threads` over the grid.
+  RayRows(const FixedMesh& fixed, const Grid& grid, int rays, int threads, std::int64_t rows_per_chunk = 0)
+      : fixed_(fixed), grid_(grid), rays_(rays), threads_(threads),
+        per_chunk_(rows_per_chunk > 0 ? rows_per_chunk : std::max<std::int64_t>(1, grid.dims.z / (threads * 8))),
+        // Rays of row k sit within half a voxel of its centre: margin 1.
+        bins_(bin_triangles(fixed, 2, grid.dims.z, per_chunk_, 1, threads)) {}
+
+  std::int64_t rows_per_chunk() const { return per_chunk_; }
+
+  // Rows [k0, k1) (k0 a multiple of rows_per_chunk()), on the threads that
+  // each own a chunk: the sorted crossings of row k's rays (`rays` per
+  // column) with the mesh. prepare(k, scratch) returns row k's ray positions
+  // (as cross_row_rays wants them); consume(k, crossings, scratch) uses the
+  // crossings. Scratch is per thread. Reports progress by rows of the grid
+  // and honours cancellation when `control` is given.
+  template <typename Scratch, typename Prepare, typename Consume>
+  void run(std::int64_t k0, std::int64_t k1, JobControl* control, const Prepare& prepare, const Consume& consume) const {
+    parallel_for(k0, k1, per_chunk_, threads_, [&](std::int64_t a, std::int64_t b) {
+      const auto chunk = static_cast<std::size_t>(a / per_chunk_);
+      Scratch scratch;
+      std::vector<RayCrossing> crossings;
+      for (std::int64_t k = a; k < b; ++k) {
+        if (control) control->check_cancelled();
+        const auto position = prepare(k, scratch);
+        crossings.clear();
+        for (std::uint32_t t = bins_.offsets[chunk]; t < bins_.offsets[chunk + 1]; ++t)
+          cross_row_rays(fixed_, bins_.triangles[t], k, grid_.dims.y, rays_, position, crossings);
+        sort_crossings(crossings);
+        consume(k, crossings, scratch);
+        const std::int64_t done = ++rows_done_;
+        if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(grid_.dims.z));
+      }
+    });
+  }
+
+ private:
+  const FixedMesh& fixed_;
+  Grid grid_;
+  int rays_;
+  int threads_;
+  std::int64_t per_chunk_;
+  TriangleBins bins_;
+  mutable std::atomic<std::int64_t> rows_done_{0};
+};
+
+// Every row of the grid: RayRows::run over [0, nz).
 template <typename Scratch, typename Prepare, typename Consume>
 void for_each_ray_row(const FixedMesh& fixed, const Grid& grid, int rays, int threads, JobControl* control,
                       const Prepare& prepare, const Consume& consume) {
-  const std::int64_t nz = grid.dims.z;
-  const std::int64_t per_chunk = std::max<std::int64_t>(1, nz / (threads * 8));
-  // Rays of row k sit within half a voxel of its centre: margin 1.
-  const TriangleBins bins = bin_triangles(fixed, 2, nz, per_chunk, 1, threads);
-  std::atomic<std::int64_t> rows_done{0};
-  parallel_for(0, nz, per_chunk, threads, [&](std::int64_t k0, std::int64_t k1) {
-    const auto chunk = static_cast<std::size_t>(k0 / per_chunk);
-    Scratch scratch;
-    std::vector<RayCrossing> crossings;
-    for (std::int64_t k = k0; k < k1; ++k) {
-      if (control) control->check_cancelled();
-      const auto position = prepare(k, scratch);
-      crossings.clear();
-      for (std::uint32_t t = bins.offsets[chunk]; t < bins.offsets[chunk + 1]; ++t)
-        cross_row_rays(fixed, bins.triangles[t], k, grid.dims.y, rays, position, crossings);
-      sort_crossings(crossings);
-      consume(k, crossings, scratch);
-      const std::int64_t done = ++rows_done;
-      if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(nz));
-    }
-  });
+  RayRows(fixed, grid, rays, threads).run<Scratch>(0, grid.dims.z, control, prepare, consume);
 }
 
 }  // namespace voxd::detail

@@ -40,4 +40,31 @@ class BitSlabWriter {
   std::unique_ptr<State> state_;
 };
 
+// The same for a volume of values (coverage bytes or fractions; u8, f32 or
+// rgba8) that arrives slab by slab: exactly encode_volume()'s bytes, in the
+// formats of z-slab order that hold the type (rle, raw, nrrd), the quantized
+// RLE apart (its levels span the whole volume's range, known only at the end).
+// nullopt when `format` with `options` streams values of `type`'s type.
+std::optional<std::string> streaming_refusal(const ValueVolume& type, VolumeFormat format, const EncodeOptions& options);
+
+class ValueSlabWriter {
+ public:
+  // Writes the header. `type` is any volume of the values' type (an empty
+  // one will do). Throws Error(invalid_argument) for a format that does not
+  // stream them (streaming_refusal) or an empty grid.
+  ValueSlabWriter(const Grid& grid, const ValueVolume& type, VolumeFormat format, const EncodeOptions& options,
+                  ByteSink& sink);
+  ~ValueSlabWriter();
+  ValueSlabWriter(const ValueSlabWriter&) = delete;
+  ValueSlabWriter& operator=(const ValueSlabWriter&) = delete;
+
+  // As BitSlabWriter's; a slab of another type is a std::logic_error.
+  void write(std::int64_t k0, const ValueVolume& slab);
+  void finish();
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
 }  // namespace voxd

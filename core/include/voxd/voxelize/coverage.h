@@ -22,6 +22,7 @@
 // per column once, whatever k: the work is the crossings plus the voxels
 // inside.
 #include <cstdint>
+#include <functional>
 
 #include "voxd/bit_volume.h"
 #include "voxd/dense_volume.h"
@@ -51,6 +52,21 @@ struct CoverageOptions {
 DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
                                      JobControl* control = nullptr);
 
+// voxelize_coverage() slab by slab in z order (Thon et al.'s "limited only by
+// disk size"): each slab of `slab_layers` z layers (the last one shorter) is
+// handed to `consume` as soon as it is final, its values exactly
+// voxelize_coverage()'s for those layers, and its memory reused after. Peak
+// memory is the mesh, its triangle bins and one slab of floats. Throws as
+// voxelize_coverage(); progress runs over the rows, cancellation between them.
+using CoverageSlabConsumer = std::function<void(std::int64_t k0, const DenseVolume<float>& slab)>;
+void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
+                                std::int64_t slab_layers, const CoverageSlabConsumer& consume,
+                                JobControl* control = nullptr);
+
+// Z layers per slab for about `slab_bytes` of floats (at least one layer, at
+// most the grid's).
+std::int64_t coverage_slab_layers(const Grid& grid, std::uint64_t slab_bytes);
+
 // Thon's byte: round(255 * coverage). `threads` 0 = all cores.
 DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int threads = 0);
 
@@ -58,6 +74,16 @@ DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int
 // the grey levels measure). Summed per slab in double, the slabs added in
 // order, so the total does not depend on `threads` (0 = all cores).
 double covered_voxels(const DenseVolume<float>& coverage, int threads = 0);
+// The same sum over slabs that arrive in z order: add() each, then total();
+// exactly covered_voxels() of the whole (it adds layer sums in layer order).
+class CoveredVoxels {
+ public:
+  void add(const DenseVolume<float>& slab, int threads = 0);
+  double total() const { return total_; }
+
+ private:
+  double total_ = 0.0;
+};
 
 // The binary volume of the voxels with coverage >= threshold (Thon: keeps
 // features thinner than a voxel that centre sampling loses, with a threshold

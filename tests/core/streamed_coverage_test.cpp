@@ -1,0 +1,160 @@
+// Slab-streamed coverage (voxelize_coverage_streamed) and the writer that
+// takes slabs of values (ValueSlabWriter): every slab's floats are bit for
+// bit voxelize_coverage()'s, for each sampling, on real meshes, whatever the
+// slab size (including grids whose z size is not a multiple of it), and the
+// files are byte for byte encode_volume()'s in every format that streams.
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "support/test_meshes.h"
+#include "voxd/encode/slab_writer.h"
+#include "voxd/encode/volume_format.h"
+#include "voxd/error.h"
+#include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/voxelize/coverage.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd {
+namespace {
+
+Mesh shared_mesh(const std::string& name) {
+  return decode_mesh(test::read_file(std::string(VOXD_SHARED_MESHES) + "/" + name), name);
+}
+
+Grid grid_for(const Mesh& mesh, std::int64_t resolution) {
+  GridRequest r;
+  r.resolution = resolution;
+  r.padding = 1;
+  return resolve_grid(r, bounds(mesh));
+}
+
+bool same_floats(const DenseVolume<float>& a, const DenseVolume<float>& b) {
+  return a.values().size() == b.values().size() &&
+         std::memcmp(a.values().data(), b.values().data(), a.values().size() * sizeof(float)) == 0;
+}
+
+// The streamed slabs put back together, checking their order and grids.
+DenseVolume<float> assembled(const Mesh& mesh, const Grid& grid, const CoverageOptions& options, std::int64_t layers) {
+  DenseVolume<float> whole(grid, -1.0f);
+  std::int64_t next = 0;
+  voxelize_coverage_streamed(mesh, grid, options, layers, [&](std::int64_t k0, const DenseVolume<float>& slab) {
+    EXPECT_EQ(k0, next);
+    EXPECT_EQ(slab.grid().dims.x, grid.dims.x);
+    EXPECT_EQ(slab.grid().dims.y, grid.dims.y);
+    EXPECT_DOUBLE_EQ(slab.grid().origin.z, grid.origin.z + static_cast<double>(k0) * grid.voxel_size);
+    std::memcpy(whole.slab(k0), slab.values().data(), slab.values().size() * sizeof(float));
+    next = k0 + slab.grid().dims.z;
+  });
+  EXPECT_EQ(next, grid.dims.z);
+  return whole;
+}
+
+TEST(StreamedCoverage, EverySlabSizeGivesTheInMemoryValuesForEachSampling) {
+  struct Case {
+    const char* mesh;
+    std::int64_t resolution;
+  };
+  for (const Case c : {Case{"bunny.stl", 61}, Case{"torus.stl", 47}}) {
+    const Mesh mesh = shared_mesh(c.mesh);
+    const Grid grid = grid_for(mesh, c.resolution);
+    for (CoverageSampling sampling : {CoverageSampling::exact, CoverageSampling::uniform, CoverageSampling::stochastic}) {
+      CoverageOptions options;
+      options.sampling = sampling;
+      options.rays = 3;
+      const DenseVolume<float> expected = voxelize_coverage(mesh, grid, options);
+      ASSERT_GT(covered_voxels(expected), 100.0);
+      for (std::int64_t layers : {std::int64_t{1}, std::int64_t{4}, std::int64_t{9}, grid.dims.z}) {
+        for (int threads : {1, 3}) {
+          SCOPED_TRACE(std::string(c.mesh) + " " + to_string(sampling) + " layers " + std::to_string(layers) +
+                       " of nz " + std::to_string(grid.dims.z) + ", threads " + std::to_string(threads));
+          options.threads = threads;
+          EXPECT_TRUE(same_floats(assembled(mesh, grid, options, layers), expected));
+        }
+      }
+    }
+  }
+}
+
+TEST(StreamedCoverage, CoveredVoxelsOverSlabsIsTheWholeVolumesSum) {
+  const Mesh mesh = shared_mesh("bunny.stl");
+  const Grid grid = grid_for(mesh, 53);
+  const DenseVolume<float> whole = voxelize_coverage(mesh, grid, CoverageOptions{});
+  for (std::int64_t layers : {1, 6, 100}) {
+    CoveredVoxels sum;
+    voxelize_coverage_streamed(mesh, grid, CoverageOptions{}, layers,
+                               [&](std::int64_t, const DenseVolume<float>& slab) { sum.add(slab, 2); });
+    EXPECT_EQ(sum.total(), covered_voxels(whole, 1)) << layers;
+  }
+}
+
+TEST(ValueSlabWriter, StreamedFilesAreByteForByteTheInMemoryOnes) {
+  const Mesh mesh = shared_mesh("M3_hex_nut.stl");
+  const Grid grid = grid_for(mesh, 45);
+  const DenseVolume<float> fractions = voxelize_coverage(mesh, grid, CoverageOptions{});
+  const DenseVolume<std::uint8_t> bytes = coverage_bytes(fractions);
+  EncodeOptions gzip;
+  gzip.nrrd_encoding = NrrdEncoding::gzip;
+  gzip.content = "coverage";
+  struct Out {
+    VolumeFormat format;
+    EncodeOptions encode;
+  };
+  for (bool as_bytes : {true, false}) {
+    for (const Out& out : {Out{VolumeFormat::rle, {}}, Out{VolumeFormat::raw, {}}, Out{VolumeFormat::nrrd, {}},
+                           Out{VolumeFormat::nrrd, gzip}}) {
+      const ValueVolume whole = as_bytes ? ValueVolume(bytes) : ValueVolume(fractions);
+      VectorSink expected;
+      encode_volume(whole, out.format, expected, out.encode);
+      for (std::int64_t layers : {1, 4, 7}) {
+        SCOPED_TRACE(std::string(as_bytes ? "u8 " : "f32 ") + to_string(out.format) + ", layers " + std::to_string(layers));
+        VectorSink got;
+        ValueSlabWriter writer(grid, whole, out.format, out.encode, got);
+        voxelize_coverage_streamed(mesh, grid, CoverageOptions{}, layers,
+                                   [&](std::int64_t k0, const DenseVolume<float>& slab) {
+                                     if (as_bytes)
+                                       writer.write(k0, ValueVolume(coverage_bytes(slab)));
+                                     else
+                                       writer.write(k0, ValueVolume(slab));
+                                   });
+        writer.finish();
+        EXPECT_EQ(got.data, expected.data);
+      }
+    }
+  }
+}
+
+TEST(ValueSlabWriter, RefusesWhatCannotStreamAndSlabsOutOfOrderOrOfAnotherType) {
+  const Grid grid = test::unit_grid(4, 4, 4);
+  const ValueVolume floats = DenseVolume<float>(grid, 0.5f);
+  const ValueVolume bytes = DenseVolume<std::uint8_t>(grid, 7);
+  EncodeOptions quantized;
+  quantized.quantize = Quantize::u8;
+  VectorSink sink;
+  const auto refusal = [&](const ValueVolume& type, VolumeFormat format, const EncodeOptions& options) {
+    try {
+      ValueSlabWriter writer(grid, type, format, options, sink);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refusal(floats, VolumeFormat::rle, quantized).find("quantized RLE does not stream"), std::string::npos);
+  EXPECT_NE(refusal(bytes, VolumeFormat::binvox, {}).find("binvox does not stream"), std::string::npos);
+  EXPECT_NE(refusal(floats, VolumeFormat::binvox, {}).find("binvox holds bits or bytes"), std::string::npos);
+  EXPECT_FALSE(streaming_refusal(bytes, VolumeFormat::nrrd, {}).has_value());
+
+  ValueSlabWriter writer(grid, floats, VolumeFormat::raw, {}, sink);
+  EXPECT_THROW(writer.write(1, floats), std::logic_error);  // not the first layer
+  EXPECT_THROW(writer.write(0, bytes), std::logic_error);   // not floats
+  EXPECT_THROW(writer.finish(), std::logic_error);          // layers missing
+  writer.write(0, floats);
+  writer.finish();
+  EXPECT_EQ(sink.data.size(), 64 * sizeof(float));
+}
+
+}  // namespace
+}  // namespace voxd
