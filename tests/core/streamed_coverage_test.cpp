@@ -2,7 +2,9 @@
 // takes slabs of values (ValueSlabWriter): every slab's floats are bit for
 // bit voxelize_coverage()'s, for each sampling, on real meshes, whatever the
 // slab size (including grids whose z size is not a multiple of it), and the
-// files are byte for byte encode_volume()'s in every format that streams.
+// files are byte for byte encode_volume()'s in every format that streams;
+// a stored values RLE replays as those slabs, and its sections gathered over
+// them are the whole volume's.
 #include <cstring>
 #include <string>
 #include <vector>
@@ -10,6 +12,8 @@
 #include <gtest/gtest.h>
 
 #include "support/test_meshes.h"
+#include "voxd/analysis/value_images.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/error.h"
@@ -154,6 +158,58 @@ TEST(ValueSlabWriter, RefusesWhatCannotStreamAndSlabsOutOfOrderOrOfAnotherType) 
   writer.write(0, floats);
   writer.finish();
   EXPECT_EQ(sink.data.size(), 64 * sizeof(float));
+}
+
+TEST(ValueSlabs, AStoredRleReplaysAsItsSlabsAndItsSectionsAreTheWholeVolumes) {
+  const Mesh mesh = shared_mesh("bunny.stl");
+  const Grid grid = grid_for(mesh, 57);
+  const DenseVolume<float> fractions = voxelize_coverage(mesh, grid, CoverageOptions{});
+  const DenseVolume<std::uint8_t> bytes = coverage_bytes(fractions);
+  for (bool as_bytes : {true, false}) {
+    const ValueVolume whole = as_bytes ? ValueVolume(bytes) : ValueVolume(fractions);
+    VectorSink rle;
+    encode_volume(whole, VolumeFormat::rle, rle);
+    for (std::int64_t layers : {std::int64_t{1}, std::int64_t{5}, grid.dims.z}) {
+      SCOPED_TRACE(std::string(as_bytes ? "u8" : "f32") + " layers " + std::to_string(layers));
+      // Re-encoded from the replayed slabs: the same stream.
+      VectorSink again;
+      ValueSlabWriter writer(grid, whole, VolumeFormat::rle, {}, again);
+      std::vector<CoverageSectionGatherer> sections;
+      for (int axis = 0; axis < 3; ++axis) sections.emplace_back(grid, axis, grid.dims[axis] / 2);
+      read_rle_value_slabs(rle.data, layers, [&](std::int64_t k0, const ValueVolume& slab) {
+        EXPECT_LE(grid_of(slab).dims.z, layers);
+        writer.write(k0, slab);
+        for (CoverageSectionGatherer& s : sections) std::visit([&](const auto& v) {
+          if constexpr (!std::is_same_v<std::decay_t<decltype(v)>, DenseVolume<Rgba8>>) s.add(k0, v);
+        }, slab);
+      });
+      writer.finish();
+      EXPECT_EQ(again.data, rle.data);
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::vector<std::uint8_t> expected =
+            as_bytes ? coverage_section_png(bytes, axis, grid.dims[axis] / 2, {{"voxd:job", "j"}})
+                     : coverage_section_png(fractions, axis, grid.dims[axis] / 2, {{"voxd:job", "j"}});
+        EXPECT_EQ(sections[static_cast<std::size_t>(axis)].png({{"voxd:job", "j"}}), expected) << "axis " << axis;
+      }
+    }
+  }
+  // A bit stream is not values; a stream cut short says where.
+  VectorSink bits;
+  write_rle(BitVolume(grid), bits);
+  EXPECT_THROW(read_rle_value_slabs(bits.data, 4, [](std::int64_t, const ValueVolume&) {}), Error);
+  VectorSink u8;
+  write_rle(bytes, u8);
+  u8.data.resize(u8.data.size() / 2);
+  try {
+    read_rle_value_slabs(u8.data, 4, [](std::int64_t, const ValueVolume&) {});
+    FAIL() << "a truncated stream was read";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::truncated_input) << e.what();
+  }
+  // One slab past the reader's limit is refused before it is allocated.
+  ReadLimits tight;
+  tight.max_volume_bytes = 100;
+  EXPECT_THROW(read_rle_value_slabs(u8.data, 4, [](std::int64_t, const ValueVolume&) {}, tight), Error);
 }
 
 }  // namespace

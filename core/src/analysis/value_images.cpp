@@ -15,14 +15,21 @@ namespace {
 
 const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
 
-template <class T>
-ValueSection<T> extract(const DenseVolume<T>& volume, int axis, std::int64_t index) {
-  const ImageSize size = projected_size(volume.grid(), axis);  // checks the axis and the size
-  const glm::i64vec3 d = volume.grid().dims;
+// The section's size; throws for a bad axis, index or size.
+ImageSize section_size(const Grid& grid, int axis, std::int64_t index) {
+  const ImageSize size = projected_size(grid, axis);  // checks the axis and the size
+  const glm::i64vec3 d = grid.dims;
   if (index < 0 || index >= d[axis]) {
     throw Error(ErrorCode::invalid_argument, std::string("section index along ") + axis_name(axis) + " is " +
                                                  std::to_string(index) + ", outside 0.." + std::to_string(d[axis] - 1));
   }
+  return size;
+}
+
+template <class T>
+ValueSection<T> extract(const DenseVolume<T>& volume, int axis, std::int64_t index) {
+  const ImageSize size = section_size(volume.grid(), axis, index);
+  const glm::i64vec3 d = volume.grid().dims;
   if (volume.values().size() != volume.grid().voxel_count()) {
     throw Error(ErrorCode::invalid_argument, "section: the volume holds " + std::to_string(volume.values().size()) +
                                                  " values for " + std::to_string(volume.grid().voxel_count()) + " voxels");
@@ -89,14 +96,54 @@ std::vector<std::uint8_t> coverage_section_png(const DenseVolume<std::uint8_t>& 
   return grey_png(s, plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
 }
 
-std::vector<std::uint8_t> coverage_section_png(const DenseVolume<float>& coverage, int axis, std::int64_t index,
-                                               std::vector<PngText> text) {
-  const ValueSection<float> f = extract(coverage, axis, index);
+namespace {
+
+ValueSection<std::uint8_t> as_bytes(const ValueSection<float>& f) {
   ValueSection<std::uint8_t> s{f.width, f.height, std::vector<std::uint8_t>(f.values.size())};
   for (std::size_t p = 0; p < f.values.size(); ++p) {  // as coverage_bytes()
     s.values[p] = static_cast<std::uint8_t>(std::lround(std::clamp(f.values[p], 0.0f, 1.0f) * 255.0f));
   }
-  return grey_png(s, plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> coverage_section_png(const DenseVolume<float>& coverage, int axis, std::int64_t index,
+                                               std::vector<PngText> text) {
+  return grey_png(as_bytes(extract(coverage, axis, index)), plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
+}
+
+CoverageSectionGatherer::CoverageSectionGatherer(const Grid& grid, int axis, std::int64_t index)
+    : grid_(grid), axis_(axis), index_(index) {
+  const ImageSize size = section_size(grid, axis, index);
+  section_.width = size.width;
+  section_.height = size.height;
+  section_.values.assign(static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height), 0);
+}
+
+void CoverageSectionGatherer::add(std::int64_t k0, const DenseVolume<std::uint8_t>& slab) {
+  const std::int64_t n = slab.grid().dims.z;
+  if (axis_ == 2) {
+    if (index_ >= k0 && index_ < k0 + n) section_.values = extract(slab, 2, index_ - k0).values;
+    return;
+  }
+  // Rows are z layers: the slab's rows go to rows k0.. of the section.
+  const ValueSection<std::uint8_t> rows = extract(slab, axis_, index_);
+  std::copy(rows.values.begin(), rows.values.end(), section_.values.begin() + k0 * section_.width);
+}
+
+void CoverageSectionGatherer::add(std::int64_t k0, const DenseVolume<float>& slab) {
+  const std::int64_t n = slab.grid().dims.z;
+  if (axis_ == 2) {
+    if (index_ >= k0 && index_ < k0 + n) section_.values = as_bytes(extract(slab, 2, index_ - k0)).values;
+    return;
+  }
+  const ValueSection<std::uint8_t> rows = as_bytes(extract(slab, axis_, index_));
+  std::copy(rows.values.begin(), rows.values.end(), section_.values.begin() + k0 * section_.width);
+}
+
+std::vector<std::uint8_t> CoverageSectionGatherer::png(std::vector<PngText> text) const {
+  return grey_png(section_, plane_text(grid_, axis_, index_, {kCoverageText}, text));
 }
 
 std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, int axis, std::int64_t index,

@@ -269,6 +269,46 @@ void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_la
   read_end_block(in, nz);
 }
 
+namespace {
+
+template <class T>
+void read_value_slabs(ByteCursor& in, const Grid& grid, std::int64_t slab_layers, const ValueSlabConsumer& consume,
+                      const ReadLimits& limits) {
+  const std::int64_t nz = grid.dims.z;
+  const std::uint64_t slab_voxels = slab_voxel_count(grid);
+  const std::int64_t layers = std::clamp<std::int64_t>(slab_layers, 1, std::max<std::int64_t>(nz, 1));
+  encode::check_read_limit(slab_voxels * static_cast<std::uint64_t>(layers) * sizeof(T), limits, "RLE slab reader");
+  for (std::int64_t k0 = 0; k0 < nz; k0 += layers) {
+    const std::int64_t n = std::min(layers, nz - k0);
+    ValueVolume slab{std::in_place_type<DenseVolume<T>>, slab_grid(grid, k0, n), T{}};
+    DenseVolume<T>& values = std::get<DenseVolume<T>>(slab);
+    for (std::int64_t k = k0; k < k0 + n; ++k) {
+      const SlabBlock block = read_slab_block(in, k, nz);
+      T* layer = values.slab(k - k0);
+      decode_value_payload<T>(payload_cursor(block.payload, block.at, k), slab_voxels,
+                              [&](std::uint64_t first, std::uint64_t length, T value) { std::fill_n(layer + first, length, value); });
+    }
+    consume(k0, slab);
+  }
+  read_end_block(in, nz);
+}
+
+}  // namespace
+
+void read_rle_value_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const ValueSlabConsumer& consume,
+                          const ReadLimits& limits) {
+  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
+  const encode::RleHeader header = encode::read_rle_header(in);
+  switch (header.value_type) {
+    case encode::RleValueType::u8: return read_value_slabs<std::uint8_t>(in, header.grid, slab_layers, consume, limits);
+    case encode::RleValueType::f32: return read_value_slabs<float>(in, header.grid, slab_layers, consume, limits);
+    case encode::RleValueType::rgba8: return read_value_slabs<Rgba8>(in, header.grid, slab_layers, consume, limits);
+    default: break;
+  }
+  in.fail(ErrorCode::malformed_input, std::string("the stream holds ") + to_string(header.value_type) +
+                                          " values; read_rle_value_slabs reads u8, f32 and rgba8 streams");
+}
+
 std::string read_rle_metadata(std::span<const std::uint8_t> data) {
   ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
   return encode::read_rle_header(in).metadata_json;

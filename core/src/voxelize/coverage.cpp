@@ -116,12 +116,6 @@ DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const C
   return out;
 }
 
-std::int64_t coverage_slab_layers(const Grid& grid, std::uint64_t slab_bytes) {
-  const std::uint64_t per_layer = std::max<std::uint64_t>(
-      static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) * sizeof(float), 1);
-  return std::clamp<std::int64_t>(static_cast<std::int64_t>(slab_bytes / per_layer), 1, std::max<std::int64_t>(grid.dims.z, 1));
-}
-
 void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
                                 std::int64_t slab_layers, const CoverageSlabConsumer& consume, JobControl* control) {
   check_options(options);

@@ -39,6 +39,25 @@ std::vector<std::uint8_t> coverage_section_png(const DenseVolume<std::uint8_t>& 
 std::vector<std::uint8_t> coverage_section_png(const DenseVolume<float>& coverage, int axis, std::int64_t index,
                                                std::vector<PngText> text = {});
 
+// coverage_section_png() of a coverage that arrives slab by slab in z order
+// (a streamed job's stored values): add() every slab, then png(); the bytes
+// coverage_section_png() gives for the whole volume. Memory is the section.
+// Throws as value_section() for a bad axis or index.
+class CoverageSectionGatherer {
+ public:
+  CoverageSectionGatherer(const Grid& grid, int axis, std::int64_t index);
+  // Layers [k0, k0 + slab.grid().dims.z) of the grid.
+  void add(std::int64_t k0, const DenseVolume<std::uint8_t>& slab);
+  void add(std::int64_t k0, const DenseVolume<float>& slab);
+  std::vector<std::uint8_t> png(std::vector<PngText> text = {}) const;
+
+ private:
+  Grid grid_;
+  int axis_;
+  std::int64_t index_;
+  ValueSection<std::uint8_t> section_;
+};
+
 // A slice job's colours in a section, 8-bit RGB: each voxel's colour over a
 // white background (alpha blended: c * a / 255 + 255 * (1 - a / 255),
 // rounded), so empty voxels are white. Same layout as the other sections.

@@ -6,6 +6,7 @@
 #include <span>
 
 #include "voxd/bit_slabs.h"
+#include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/grid.h"
 
@@ -24,5 +25,10 @@ Grid read_rle_bit_grid(std::span<const std::uint8_t> data);
 // dims are not trusted): Error(limit_exceeded) before anything is allocated.
 void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume,
                         const ReadLimits& limits = {});
+
+// The same for a stream of values (u8, f32 or rgba8), each slab a
+// ValueVolume of the stream's type (ValueSlabWriter's input).
+void read_rle_value_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const ValueSlabConsumer& consume,
+                          const ReadLimits& limits = {});
 
 }  // namespace voxd

@@ -6,6 +6,7 @@
 // nrrd (raw and gzip). binvox does not: its outer axis is x (each x-slab
 // needs every z layer), so it needs the whole volume.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -46,6 +47,10 @@ class BitSlabWriter {
 // RLE apart (its levels span the whole volume's range, known only at the end).
 // nullopt when `format` with `options` streams values of `type`'s type.
 std::optional<std::string> streaming_refusal(const ValueVolume& type, VolumeFormat format, const EncodeOptions& options);
+
+// Receives z layers [k0, k0 + n) of a volume of values, as BitSlabConsumer
+// does bits (voxd/bit_slabs.h).
+using ValueSlabConsumer = std::function<void(std::int64_t k0, const ValueVolume& slab)>;
 
 class ValueSlabWriter {
  public:

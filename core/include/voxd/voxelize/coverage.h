@@ -63,10 +63,6 @@ void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const Covera
                                 std::int64_t slab_layers, const CoverageSlabConsumer& consume,
                                 JobControl* control = nullptr);
 
-// Z layers per slab for about `slab_bytes` of floats (at least one layer, at
-// most the grid's).
-std::int64_t coverage_slab_layers(const Grid& grid, std::uint64_t slab_bytes);
-
 // Thon's byte: round(255 * coverage). `threads` 0 = all cores.
 DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int threads = 0);
 
