@@ -23,12 +23,18 @@ std::uint64_t JobMode::memory_estimate(const Grid& grid, const JobParams& params
 bool JobMode::needs_parity_solid(const JobParams&) const { return false; }
 
 std::optional<std::string> JobMode::streaming_refusal(const JobParams&) const {
-  return "mode " + std::string(name()) + " makes values over the whole grid, so it runs in memory; only the modes of bits stream";
+  return "mode " + std::string(name()) + " makes values over the whole grid, so it runs in memory; only the modes of bits and coverage stream";
 }
 
-void JobMode::run_streamed(const ModeInput&, std::int64_t, const BitSlabConsumer&) const {
+nlohmann::json JobMode::run_streamed(const ModeInput&, std::int64_t, const BitSlabConsumer&, const ValueSlabConsumer&) const {
   throw std::logic_error("mode " + std::string(name()) + " does not stream");
 }
+
+std::uint64_t JobMode::streamed_layer_bytes(const Grid& grid, const JobParams&) const {
+  return bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+}
+
+std::string JobMode::values_content(const JobParams&) const { return "values"; }
 
 bool JobMode::writes(VolumeFormat) const { return false; }
 

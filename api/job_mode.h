@@ -32,6 +32,7 @@
 #include "voxd/analysis/sdf_render.h"
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
+#include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
@@ -128,9 +129,18 @@ class JobMode {
   // Slab-streamed runs (voxd/voxelize/streamed.h), for grids larger than
   // memory: nullopt when this job's result can be made slab by slab, else
   // why not, in words for the user. run_streamed hands each finished z-slab
-  // of the job's bits to `consume`.
+  // of the job's bits to `bits` (unless the pipeline makes the parity solid
+  // first: needs_parity_solid) and of its values to `values`, and returns
+  // what run() says in ModeResult::values_info.
   virtual std::optional<std::string> streaming_refusal(const JobParams& params) const;
-  virtual void run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& consume) const;
+  virtual nlohmann::json run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& bits,
+                                      const ValueSlabConsumer& values) const;
+  // Bytes one z layer takes in a streamed run (what it holds per layer of a
+  // slab at once), to size slabs and admit the job.
+  virtual std::uint64_t streamed_layer_bytes(const Grid& grid, const JobParams& params) const;
+  // What the values are in words, for a format's header ("content:" in
+  // NRRD) written before a streamed run says it in values_info.
+  virtual std::string values_content(const JobParams& params) const;
 
   // --- What it serves ---
   // Formats the mode writes itself rather than as a volume.

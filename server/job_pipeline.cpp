@@ -38,9 +38,15 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
   return params.mode->memory_estimate(grid, params);
 }
 
-std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::int64_t slab_layers, std::uint64_t triangles) {
-  const std::uint64_t layer = bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::int64_t slab_layers, std::uint64_t triangles,
+                                           std::uint64_t layer_bytes) {
+  const std::uint64_t layer = layer_bytes > 0 ? layer_bytes : bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
   return layer * static_cast<std::uint64_t>(slab_layers + 1) + 64 * triangles + (std::uint64_t{16} << 20);
+}
+
+std::int64_t streamed_job_slab_layers(const Grid& grid, const api::JobParams& params, std::uint64_t slab_bytes) {
+  const std::uint64_t per_layer = std::max<std::uint64_t>(params.mode->streamed_layer_bytes(grid, params), 1);
+  return std::clamp<std::int64_t>(static_cast<std::int64_t>(slab_bytes / per_layer), 1, std::max<std::int64_t>(grid.dims.z, 1));
 }
 
 std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
@@ -119,8 +125,9 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
                   in_memory > limits.stream_above_bytes);
   if (job.streamed) {
     check_voxel_limit(job.grid, limits.max_streamed_voxels, "");
-    job.slab_layers = streamed_slab_layers(job.grid, limits.stream_slab_bytes);
-    job.memory_estimate = estimate_streamed_job_memory(job.grid, job.slab_layers, job.triangles);
+    job.slab_layers = streamed_job_slab_layers(job.grid, params, limits.stream_slab_bytes);
+    job.memory_estimate = estimate_streamed_job_memory(job.grid, job.slab_layers, job.triangles,
+                                                       params.mode->streamed_layer_bytes(job.grid, params));
   } else {
     const bool could_stream = !no_stream && limits.stream_above_bytes > 0 && params.streaming == api::Streaming::off;
     check_voxel_limit(job.grid, limits.max_voxels,
@@ -200,18 +207,37 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
 }
 
 VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
-                                          std::int64_t slab_layers, const BitSlabConsumer& consume) {
+                                          std::int64_t slab_layers, const BitSlabConsumer& consume,
+                                          const ValueSlabConsumer& values) {
   const api::JobMode& mode = *job.params.mode;
   if (auto refusal = mode.streaming_refusal(job.params)) throw Error(ErrorCode::invalid_argument, *refusal);
+  if (job.params.has_values() && !values) throw std::logic_error("a streamed job of values without a consumer for them");
   Stopwatch clock;
   VoxelJobResult result = begin_voxel_job(job, with_report, control, clock);
   result.streamed = true;
-  mode.run_streamed({job.mesh, job.grid, job.params, threads, control, nullptr}, slab_layers,
-                    [&](std::int64_t k0, const BitVolume& slab) {
-                      result.filled += slab.count();
-                      consume(k0, slab);
-                    });
-  result.timings.add("voxelize+write", clock.lap());
+  const BitSlabConsumer bits = [&](std::int64_t k0, const BitVolume& slab) {
+    result.filled += slab.count();
+    consume(k0, slab);
+  };
+  // As in memory: a mode of values whose bits are the parity solid gets it
+  // made first, in a tenth of the progress bar.
+  const double begin = control ? control->span_begin() : 0.0, end = control ? control->span_end() : 1.0;
+  const bool parity_solid = mode.needs_parity_solid(job.params);
+  if (parity_solid) {
+    if (control) control->set_span(begin, begin + 0.1 * (end - begin));
+    VoxelizeOptions options;
+    options.inside = InsideTest::parity;
+    options.threads = threads;
+    voxelize_streamed(job.mesh, job.grid, options, slab_layers, bits, control);
+    result.timings.add("voxelize+write", clock.lap());
+    if (control) control->set_span(begin + 0.1 * (end - begin), end);
+  }
+  result.values_info = mode.run_streamed({job.mesh, job.grid, job.params, threads, control, nullptr}, slab_layers,
+                                         parity_solid ? BitSlabConsumer([](std::int64_t, const BitVolume&) {}) : bits,
+                                         values);
+  if (control) control->set_span(begin, end);
+  if (auto type = job.params.value_type()) result.values_info["type"] = value_type_name(*type);
+  result.timings.add(parity_solid ? std::string(mode.stage_name()) + "+write" : "voxelize+write", clock.lap());
   return result;
 }
 

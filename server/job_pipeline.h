@@ -97,7 +97,12 @@ std::uint64_t estimate_job_memory(const Grid& grid, const api::JobParams& params
 // triangles binned by slab and the encoder's buffers (the mesh apart).
 // Measured: 269 MiB peak RSS for the 1.1M-triangle bunny at 8192^3 with
 // its mesh and 128 MiB slabs (docs/benchmarks.md, issue #14).
-std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::int64_t slab_layers, std::uint64_t triangles);
+// `layer_bytes`: what one layer of a slab takes (api::JobMode::
+// streamed_layer_bytes), 0 for a layer of bits.
+std::uint64_t estimate_streamed_job_memory(const Grid& grid, std::int64_t slab_layers, std::uint64_t triangles,
+                                           std::uint64_t layer_bytes = 0);
+// Z layers per slab of a streamed job for about `slab_bytes` at once.
+std::int64_t streamed_job_slab_layers(const Grid& grid, const api::JobParams& params, std::uint64_t slab_bytes);
 
 // Bytes decoding an upload takes at its peak beside the upload itself (the
 // mesh, the weld's tables), from its size and format; for Draco, the
@@ -121,11 +126,13 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
 
 // The same, slab by slab (voxd/voxelize/streamed.h): each finished z-slab of
 // the job's bits goes to `consume` (an encoder, a file) and is gone after;
-// memory is the mesh and one slab of `slab_layers` z layers. Throws
-// Error(invalid_argument) for a job that does not stream
-// (api::JobMode::streaming_refusal).
+// memory is the mesh and one slab of `slab_layers` z layers. A job of
+// values hands its values' slabs to `values` as well (its bits, the solid,
+// still go to `consume`). Throws Error(invalid_argument) for a job that does
+// not stream (api::JobMode::streaming_refusal).
 VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
-                                          std::int64_t slab_layers, const BitSlabConsumer& consume);
+                                          std::int64_t slab_layers, const BitSlabConsumer& consume,
+                                          const ValueSlabConsumer& values = {});
 
 // Throws Error(limit_exceeded) for a grid of more than `max_voxels` voxels;
 // `hint` completes the advice.

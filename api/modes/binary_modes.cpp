@@ -36,12 +36,14 @@ class BinaryMode final : public JobMode {
            " inside test needs the whole grid; only \"inside\": \"parity\" streams slab by slab";
   }
 
-  void run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& consume) const override {
+  nlohmann::json run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& bits,
+                              const ValueSlabConsumer&) const override {
     VoxelizeOptions options;
     options.mode = mode_;
     options.inside = in.params.inside;
     options.threads = in.threads;
-    voxelize_streamed(in.mesh, in.grid, options, slab_layers, consume, in.control);
+    voxelize_streamed(in.mesh, in.grid, options, slab_layers, bits, in.control);
+    return nullptr;
   }
 
  private:

@@ -73,24 +73,72 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
 
   ModeResult run(const ModeInput& in) const override {
     const CoverageParams& c = options(in.params);
-    CoverageOptions o = c.options;
-    o.threads = in.threads;
-    DenseVolume<float> coverage = voxelize_coverage(in.mesh, in.grid, o, in.control);
+    DenseVolume<float> coverage = voxelize_coverage(in.mesh, in.grid, engine_options(in), in.control);
     ModeResult result;
-    result.values_info = {{"quantity", "coverage"},
-                          {"sampling", to_string(o.sampling)},
-                          {"covered_volume", covered_voxels(coverage, in.threads) * in.grid.voxel_volume()}};
-    if (c.threshold) {
+    result.values_info = values_info(c, covered_voxels(coverage, in.threads), in.grid);
+    if (c.threshold)
       result.volume = coverage_threshold(coverage, *c.threshold);
-      result.values_info["threshold"] = *c.threshold;
-    } else if (c.float_values) {
+    else if (c.float_values)
       result.values = std::move(coverage);
-      result.values_info["unit"] = "fraction of the voxel";
-    } else {
+    else
       result.values = coverage_bytes(coverage, in.threads);
-      result.values_info["unit"] = "fraction of the voxel x 255";
-    }
     return result;
+  }
+
+  // Slab by slab (voxelize_coverage_streamed): the same values, bytes, bits
+  // and covered volume as run(), one slab of floats at a time.
+  std::optional<std::string> streaming_refusal(const JobParams&) const override { return std::nullopt; }
+
+  nlohmann::json run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& bits,
+                              const ValueSlabConsumer& values) const override {
+    const CoverageParams& c = options(in.params);
+    CoveredVoxels covered;
+    voxelize_coverage_streamed(in.mesh, in.grid, engine_options(in), slab_layers,
+                               [&](std::int64_t k0, const DenseVolume<float>& slab) {
+                                 covered.add(slab, in.threads);
+                                 if (c.threshold)
+                                   bits(k0, coverage_threshold(slab, *c.threshold));
+                                 else if (c.float_values)
+                                   values(k0, ValueVolume(slab));
+                                 else
+                                   values(k0, ValueVolume(coverage_bytes(slab, in.threads)));
+                               },
+                               in.control);
+    return values_info(c, covered.total(), in.grid);
+  }
+
+  // A slab's floats, and beside them its bytes or bits, or the floats' copy
+  // handed on as values.
+  std::uint64_t streamed_layer_bytes(const Grid& grid, const JobParams& params) const override {
+    const std::uint64_t voxels = static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y);
+    const CoverageParams& c = options(params);
+    return 4 * voxels + (c.threshold ? bit_volume_bytes({grid.dims.x, grid.dims.y, 1}) : c.float_values ? 4 * voxels : voxels);
+  }
+
+  std::string values_content(const JobParams& params) const override {
+    return std::string("coverage (") + unit(options(params)) + ")";
+  }
+
+ private:
+  static const char* unit(const CoverageParams& c) {
+    return c.float_values ? "fraction of the voxel" : "fraction of the voxel x 255";
+  }
+
+  static CoverageOptions engine_options(const ModeInput& in) {
+    CoverageOptions o = options(in.params).options;
+    o.threads = in.threads;
+    return o;
+  }
+
+  static nlohmann::json values_info(const CoverageParams& c, double covered, const Grid& grid) {
+    json info = {{"quantity", "coverage"},
+                 {"sampling", to_string(c.options.sampling)},
+                 {"covered_volume", covered * grid.voxel_volume()}};
+    if (c.threshold)
+      info["threshold"] = *c.threshold;
+    else
+      info["unit"] = unit(c);
+    return info;
   }
 };
 

@@ -219,7 +219,7 @@ int analyze_command(int argc, char** argv) {
     // Non-owning views of this run's volumes (they outlive the loop).
     server::JobOutput output{
         std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
-        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}, nullptr};
+        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}, nullptr, nullptr};
     for (const auto& [name, volume] : result.layers)
       output.layers.emplace_back(name, std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume));
     std::filesystem::create_directories(*out_dir + "/analyses");

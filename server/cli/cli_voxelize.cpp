@@ -64,8 +64,9 @@ volume to OUT ("-" for standard output).
   --threads N            worker threads (default: all cores)
   --streaming S          auto (default) | on | off: voxelize slab by slab and
                          write each slab as it is done, in bounded memory
-                         (modes of bits with the parity inside test, to rle,
-                         raw or nrrd); auto streams grids over 2^32 voxels
+                         (modes of bits with the parity inside test, and
+                         coverage, to rle, raw or nrrd; not quantized);
+                         auto streams grids over 2^32 voxels
   --max-voxels N         refuse grids with more voxels (default: 2^36, 8 GiB
                          of bits, in memory; no limit but disk when streamed)
   --report               include the mesh report (topology, area, volume)
@@ -165,7 +166,11 @@ int voxelize_command(int argc, char** argv) {
   if (streaming != "auto" && streaming != "on" && streaming != "off")
     throw UsageError("--streaming must be auto, on or off, got '" + streaming + "'");
   std::optional<std::string> no_stream = params.mode->streaming_refusal(params);
-  if (!no_stream) no_stream = streaming_refusal(*format);
+  if (!no_stream && mode_writes) no_stream = "the mode writes " + std::string(to_string(*format)) + " itself, from the whole result";
+  if (!no_stream) {
+    const std::optional<ValueVolume> probe = params.value_type();
+    no_stream = probe ? streaming_refusal(*probe, *format, encode_options) : streaming_refusal(*format);
+  }
   if (streaming == "on" && no_stream) throw UsageError("--streaming on: " + *no_stream);
   limits.max_voxels = user_limit || no_stream ? max_voxels : UINT64_MAX;
   // The CLI decides below, once the grid is known, from the output format
@@ -212,10 +217,20 @@ int voxelize_command(int argc, char** argv) {
   std::uint64_t bytes_written = 0;
   if (streamed) {
     const Grid grid = job.grid;
+    const std::int64_t slab_layers = streamed_job_slab_layers(grid, params, kStreamSlabBytes);
     bytes_written = write_output([&](ByteSink& sink) {
+      if (const std::optional<ValueVolume> probe = params.value_type()) {
+        // The values are the output; the bits (the solid) are only counted.
+        encode_options.content = params.mode->values_content(params);
+        ValueSlabWriter writer(grid, *probe, *format, encode_options, sink);
+        result = execute_streamed_voxel_job(
+            std::move(job), args.has("report"), nullptr, threads, slab_layers, [](std::int64_t, const BitVolume&) {},
+            [&](std::int64_t k0, const ValueVolume& slab) { writer.write(k0, slab); });
+        writer.finish();
+        return;
+      }
       BitSlabWriter writer(grid, *format, encode_options, sink);
-      result = execute_streamed_voxel_job(std::move(job), args.has("report"), nullptr, threads,
-                                          streamed_slab_layers(grid, kStreamSlabBytes),
+      result = execute_streamed_voxel_job(std::move(job), args.has("report"), nullptr, threads, slab_layers,
                                           [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
       writer.finish();
     });

@@ -27,7 +27,8 @@ JobOutput output_for(JobManager& jobs, const JobSnapshot& job, const api::Analys
   JobOutput output;
   if (job.streamed && streams_over_slabs(request)) {
     output.rle = jobs.volume_rle(job.id);
-    if (!output.rle) throw unknown_job(job.id);
+    if (job.has_value_volume()) output.values_rle = jobs.values_rle(job.id);
+    if (!output.rle || (job.has_value_volume() && !output.values_rle)) throw unknown_job(job.id);
     return output;
   }
   output.solid = jobs.volume(job.id);

@@ -78,6 +78,23 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
     const std::string filename = id + file_extension(v.format);
     if (job.job->mode->writes(v.format)) return answer_mode_written(res, job.job, volumes_of(jobs, job), v, filename, metrics);
     if (req.has_param("layer")) return answer_values(res, job_layer(jobs, job, req.get_param_value("layer")), v, filename, metrics);
+    if (job.has_value_volume() && job.streamed) {
+      // Made slab by slab: served slab by slab from the stored values in
+      // the formats that stream, else loaded whole while they fit.
+      check_format_holds(*job.job, v);
+      const ValueVolume type = *job.job->value_type();
+      if (!streaming_refusal(type, v.format, v.options)) {
+        auto rle = jobs.values_rle(id);
+        if (!rle) throw unknown_job(id);
+        return answer_stored_values(res, std::move(rle), job.grid, type, v, filename, metrics);
+      }
+      const std::uint64_t bytes = job.grid.voxel_count() * (std::holds_alternative<DenseVolume<float>>(type) ? 4 : 1);
+      if (bytes > jobs.max_job_memory())
+        throw Error(ErrorCode::limit_exceeded,
+                    *streaming_refusal(type, v.format, v.options) + "; this job's values were made slab by slab and, at " +
+                        std::to_string(bytes >> 20) + " MiB, are over the per-job memory of " +
+                        std::to_string(jobs.max_job_memory() >> 20) + " MiB: ask for format rle, raw or nrrd, which stream");
+    }
     if (job.has_value_volume()) {
       auto values = jobs.values(id);
       if (!values) throw unknown_job(id);

@@ -162,9 +162,9 @@ std::string serve_help() {
     s << left << ' ' << o.help << (def.empty() ? "" : " [default: " + def + "]") << '\n';
   }
   s << "\nGrids past memory. A solid, surface or solid+surface job with the parity inside\n"
-       "test streams (job parameter \"streaming\": auto, on or off; auto past 512 MiB of\n"
-       "volumes or past --max-job-memory): it is voxelized slab by slab into its stored\n"
-       "RLE and takes the memory of one slab, whatever the grid.\n"
+       "test, and a coverage job, stream (job parameter \"streaming\": auto, on or off;\n"
+       "auto past 512 MiB of volumes or past --max-job-memory): they are voxelized slab\n"
+       "by slab into their stored RLE and take the memory of one slab, whatever the grid.\n"
        "  Stream over any grid: GET /volume as rle, raw or nrrd; radiography (without\n"
        "  peel); sections (without peel or colour=thickness); shaded previews (without\n"
        "  colour=thickness); analysis with thickness=false&skin=false (mass properties,\n"

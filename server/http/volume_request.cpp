@@ -98,6 +98,16 @@ void answer_bits(httplib::Response& res, std::shared_ptr<const BitVolume> bits, 
   stream_volume(res, std::move(bits), v.format, v.options, v.gzip, filename, &metrics);
 }
 
+namespace {
+
+// The stored RLE as it is, in 1 MiB chunks.
+void send_stored(std::span<const std::uint8_t> stored, ByteSink& sink) {
+  constexpr std::size_t kChunk = std::size_t{1} << 20;
+  for (std::size_t at = 0; at < stored.size(); at += kChunk) sink.write(stored.subspan(at, std::min(kChunk, stored.size() - at)));
+}
+
+}  // namespace
+
 void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const VolumeRequest& v,
                         const std::string& filename, Metrics& metrics) {
   if (auto refusal = streaming_refusal(v.format)) throw std::logic_error(*refusal);
@@ -106,16 +116,29 @@ void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile
       res, media_type(v.format),
       [rle = std::move(rle), v](ByteSink& sink) {
         const std::span<const std::uint8_t> stored = rle->bytes();
-        if (v.format == VolumeFormat::rle) {  // the stored bytes are the answer, in 1 MiB chunks
-          constexpr std::size_t kChunk = std::size_t{1} << 20;
-          for (std::size_t at = 0; at < stored.size(); at += kChunk)
-            sink.write(stored.subspan(at, std::min(kChunk, stored.size() - at)));
-          return;
-        }
+        if (v.format == VolumeFormat::rle) return send_stored(stored, sink);
         const Grid grid = read_rle_bit_grid(stored);
         BitSlabWriter writer(grid, v.format, v.options, sink);
         read_rle_bit_slabs(stored, streamed_slab_layers(grid, std::uint64_t{16} << 20),
                            [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); }, kStoredSlabLimits);
+        writer.finish();
+      },
+      v.gzip, filename, &metrics);
+}
+
+void answer_stored_values(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const Grid& grid,
+                          const ValueVolume& type, const VolumeRequest& v, const std::string& filename, Metrics& metrics) {
+  if (auto refusal = streaming_refusal(type, v.format, v.options)) throw std::logic_error(*refusal);
+  res.set_header("X-Voxd-Value-Type", value_type_name(type));
+  stream_encoded(
+      res, media_type(v.format),
+      [rle = std::move(rle), grid, type, v](ByteSink& sink) {
+        const std::span<const std::uint8_t> stored = rle->bytes();
+        if (v.format == VolumeFormat::rle) return send_stored(stored, sink);
+        ValueSlabWriter writer(grid, type, v.format, v.options, sink);
+        const std::uint64_t layer = static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) * 4;
+        read_rle_value_slabs(stored, static_cast<std::int64_t>((std::uint64_t{16} << 20) / std::max<std::uint64_t>(layer, 1)),
+                             [&](std::int64_t k0, const ValueVolume& slab) { writer.write(k0, slab); }, kStoredSlabLimits);
         writer.finish();
       },
       v.gzip, filename, &metrics);

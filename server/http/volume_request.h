@@ -46,6 +46,10 @@ void answer_bits(httplib::Response& res, std::shared_ptr<const BitVolume> bits, 
 void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const VolumeRequest& v,
                         const std::string& filename, Metrics& metrics);
 
+// The same for a streamed job's stored values on `grid`, of `type`'s type.
+void answer_stored_values(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const Grid& grid,
+                          const ValueVolume& type, const VolumeRequest& v, const std::string& filename, Metrics& metrics);
+
 // Streams what the job's mode writes itself in this format.
 void answer_mode_written(httplib::Response& res, std::shared_ptr<const api::JobParams> job, api::VolumeSource volumes,
                          const VolumeRequest& v, const std::string& filename, Metrics& metrics);

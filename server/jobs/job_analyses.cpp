@@ -138,6 +138,20 @@ void replay(const JobOutput& output, const Grid& grid, JobControl* control, cons
                      kStoredSlabLimits);
 }
 
+// The same for a streamed job's stored values.
+void replay_values(const JobOutput& output, const Grid& grid, JobControl* control, const ValueSlabConsumer& consume) {
+  if (!output.values_rle) throw std::logic_error("a streamed job's section of values without its stored values");
+  const std::uint64_t layer = static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) * 4;
+  const double slabs_total = static_cast<double>(grid.dims.z);
+  read_rle_value_slabs(output.values_rle->bytes(), static_cast<std::int64_t>((std::uint64_t{16} << 20) / std::max<std::uint64_t>(layer, 1)),
+                       [&](std::int64_t k0, const ValueVolume& slab) {
+                         if (control) control->check_cancelled();
+                         consume(k0, slab);
+                         if (control) control->set_progress(static_cast<double>(k0 + grid_of(slab).dims.z) / slabs_total);
+                       },
+                       kStoredSlabLimits);
+}
+
 // The analysis of a streamed job's volume: mass properties, parts and voids
 // from its slabs; the bytes analysis_json makes for the same request in memory.
 std::string streamed_analysis_json(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
@@ -356,6 +370,21 @@ std::string over_slabs(const AnalysisRequest& r, const JobSnapshot& job, const J
     }
     case AnalysisKind::section: {
       const std::int64_t layer = section_layer(r, job.grid);
+      if (output.values_rle && job.job->mode->values_are_image()) {
+        // A coverage's grey levels, from its stored values, as value_job_section shows them.
+        CoverageSectionGatherer section(job.grid, r.axis, layer);
+        replay_values(output, job.grid, control, [&](std::int64_t k0, const ValueVolume& slab) {
+          std::visit(
+              [&](const auto& v) {
+                if constexpr (std::is_same_v<std::decay_t<decltype(v)>, DenseVolume<Rgba8>>)
+                  throw std::logic_error("a streamed job of colours");
+                else
+                  section.add(k0, v);
+              },
+              slab);
+        });
+        return to_bytes(section.png({{"voxd:job", job.id}}));
+      }
       SectionGatherer section(job.grid, r.axis, layer);
       replay(output, job.grid, control, [&](std::int64_t k0, const BitVolume& slab) { section.add(k0, slab); });
       return to_bytes(section_png(section.take(), job.grid, r.axis, layer, {{"voxd:job", job.id}}));

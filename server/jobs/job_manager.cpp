@@ -238,14 +238,27 @@ struct JobManager::Impl {
           // Slab by slab straight into the stored RLE: the grid is never whole.
           const Grid grid = prepared.grid;
           const std::int64_t slab_layers = prepared.slab_layers;
-          store->write_volume(job->snap.id, [&](ByteSink& sink) {
-            BitSlabWriter writer(grid, VolumeFormat::rle, EncodeOptions{}, sink);
-            r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
-                                           slab_layers,
-                                           [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); });
-            writer.finish();
+          // A job of values writes them beside its bits, both at once.
+          const std::optional<ValueVolume> type = prepared.params.value_type();
+          store->write_volume(job->snap.id, [&](ByteSink& bits_sink) {
+            BitSlabWriter bits(grid, VolumeFormat::rle, EncodeOptions{}, bits_sink);
+            const BitSlabConsumer to_bits = [&](std::int64_t k0, const BitVolume& slab) { bits.write(k0, slab); };
+            if (!type) {
+              r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
+                                             slab_layers, to_bits);
+            } else {
+              store->write_layer(job->snap.id, "values", *type, [&](ByteSink& values_sink) {
+                ValueSlabWriter values(grid, *type, VolumeFormat::rle, EncodeOptions{}, values_sink);
+                r = execute_streamed_voxel_job(
+                    std::move(prepared), /*with_report=*/true, &job->control, engine_threads, slab_layers, to_bits,
+                    [&](std::int64_t k0, const ValueVolume& slab) { values.write(k0, slab); });
+                values.finish();
+              });
+            }
+            bits.finish();
           });
           output.rle = store->volume_rle(job->snap.id);
+          if (type) output.values_rle = store->layer_rle(job->snap.id, "values");
         } else {
           r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
           output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
@@ -635,6 +648,16 @@ std::shared_ptr<const MappedFile> JobManager::volume_rle(const std::string& id) 
     if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
   }
   return impl_->store->volume_rle(id);
+}
+
+std::shared_ptr<const MappedFile> JobManager::values_rle(const std::string& id) {
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto it = impl_->jobs.find(id);
+    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded || !it->second->snap.has_value_volume())
+      return nullptr;
+  }
+  return impl_->store->layer_rle(id, "values");
 }
 
 std::uint64_t JobManager::max_job_memory() const { return impl_->config.max_job_memory; }

@@ -90,8 +90,10 @@ struct JobOutput {
   std::shared_ptr<const ValueVolume> values;
   std::vector<std::pair<std::string, std::shared_ptr<const ValueVolume>>> layers;
   // A streamed job's volume as stored (solid is then null): what streams is
-  // answered by replaying it slab by slab (voxd/encode/rle_slabs.h).
+  // answered by replaying it slab by slab (voxd/encode/rle_slabs.h); and a
+  // streamed job's values as stored (values is then null).
   std::shared_ptr<const MappedFile> rle;
+  std::shared_ptr<const MappedFile> values_rle;
 };
 
 class JobQueue;  // server/jobs/job_queue.h
@@ -179,6 +181,8 @@ class JobManager {
   // how a streamed job's volume is served and analysed. nullptr if the job
   // is unknown or not succeeded.
   std::shared_ptr<const MappedFile> volume_rle(const std::string& id);
+  // The same for a streamed job's values (nullptr for a job without values).
+  std::shared_ptr<const MappedFile> values_rle(const std::string& id);
   // A succeeded value job's values; nullptr for other jobs.
   std::shared_ptr<const ValueVolume> values(const std::string& id);
   // A succeeded job's volume of values by name: "values" or one of its

@@ -54,6 +54,13 @@ class JobStore {
   // its mode keeps beside it, api::JobMode::stored_layers()).
   virtual void save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const = 0;
   virtual std::shared_ptr<const ValueVolume> load_layer(const std::string& id, const std::string& name) const = 0;
+  // A volume of values made slab by slab (a streamed job's "values", of
+  // `type`'s type): `write` writes its RLE (the bytes save_layer would), kept
+  // as atomically; and that stored RLE, mapped to be read front to back
+  // (nullptr when there is none).
+  virtual void write_layer(const std::string& id, const std::string& name, const ValueVolume& type,
+                           const std::function<void(ByteSink&)>& write) const = 0;
+  virtual std::shared_ptr<const MappedFile> layer_rle(const std::string& id, const std::string& name) const = 0;
   // Shares a finished result (volume and layers) with a job created from an
   // identical submission, so that deleting either leaves the other's intact.
   // Throws when the original's result is gone.

@@ -134,9 +134,22 @@ std::shared_ptr<const MappedFile> LocalJobStore::volume_rle(const std::string& i
 }
 
 void LocalJobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {
+  write_layer(id, name, values, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
+}
+
+void LocalJobStore::write_layer(const std::string& id, const std::string& name, const ValueVolume& type,
+                                const std::function<void(ByteSink&)>& write) const {
   make_dirs(job_dir(id));
-  const std::string file = name + "." + value_type_name(values) + ".rle";
-  write_atomically(job_dir(id) / file, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
+  write_atomically(job_dir(id) / (name + "." + value_type_name(type) + ".rle"), write);
+}
+
+std::shared_ptr<const MappedFile> LocalJobStore::layer_rle(const std::string& id, const std::string& name) const {
+  for (const char* type : {"u8", "f32", "rgba8"}) {
+    const fs::path path = job_dir(id) / (name + "." + type + ".rle");
+    std::error_code ec;
+    if (fs::is_regular_file(path, ec)) return std::make_shared<const MappedFile>(path.string(), MapAccess::sequential);
+  }
+  return nullptr;
 }
 
 void LocalJobStore::share_volume(const std::string& from_id, const std::string& to_id) const {

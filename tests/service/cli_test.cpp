@@ -131,6 +131,27 @@ TEST_F(CliTest, StreamingWritesTheInMemoryBytesSlabBySlab) {
   }
 }
 
+TEST_F(CliTest, StreamedCoverageWritesTheInMemoryBytesAndSummary) {
+  const std::string mesh = shared_mesh("torus.stl");
+  for (const char* coverage : {"{}", "{\"values\":\"f32\"}", "{\"threshold\":0.25}"}) {
+    for (const std::string& out : {std::string("c.rle"), std::string("c.raw"), std::string("c.nrrd")}) {
+      SCOPED_TRACE(out + " " + coverage);
+      const std::string base = kVoxd + " voxelize " + mesh + " --resolution 70 --params '{\"mode\":\"coverage\"," +
+                               "\"coverage\":" + coverage + "}'";
+      const auto on = run_process(base + " --streaming on --json -o " + path("on_" + out));
+      ASSERT_EQ(on.exit_code, 0) << on.err;
+      const auto off = run_process(base + " --streaming off --json -o " + path("off_" + out));
+      ASSERT_EQ(off.exit_code, 0) << off.err;
+      EXPECT_EQ(test::read_file(path("on_" + out)), test::read_file(path("off_" + out)));
+      const auto a = nlohmann::json::parse(on.out), b = nlohmann::json::parse(off.out);
+      EXPECT_TRUE(a.at("streamed").get<bool>());
+      EXPECT_EQ(a.at("filled_voxels"), b.at("filled_voxels"));
+      EXPECT_GT(a.at("filled_voxels").get<std::uint64_t>(), 10000u);
+      EXPECT_EQ(a.at("values"), b.at("values"));  // the covered volume to the last bit, the type, the unit
+    }
+  }
+}
+
 TEST_F(CliTest, StreamingOnSaysWhyAJobCannotStream) {
   const std::string mesh = shared_mesh("torus.stl");
   struct Case {
@@ -138,7 +159,10 @@ TEST_F(CliTest, StreamingOnSaysWhyAJobCannotStream) {
   };
   for (const Case& c : {Case{"-o " + path("t.binvox"), "binvox does not stream slab by slab"},
                         Case{"--inside vote -o " + path("t.rle"), "the vote inside test needs the whole grid"},
-                        Case{"--mode coverage -o " + path("t.rle"), "mode coverage makes values over the whole grid"},
+                        Case{"--mode sdf -o " + path("t.rle"), "mode sdf makes values over the whole grid"},
+                        Case{"--params '{\"mode\":\"coverage\",\"coverage\":{\"values\":\"f32\"}}' --quantize u8 -o " +
+                                 path("t.rle"),
+                             "quantized RLE does not stream"},
                         Case{"--streaming maybe -o " + path("t.rle"), "--streaming must be auto, on or off"}}) {
     SCOPED_TRACE(c.flags);
     const std::string streaming = c.flags.find("--streaming") == std::string::npos ? " --streaming on " : " ";

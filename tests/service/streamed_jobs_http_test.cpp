@@ -100,6 +100,46 @@ TEST_F(StreamedJobsHttpTest, AStreamedJobAnswersWithTheInMemoryJobsBytes) {
   EXPECT_EQ(analysis.at("parts").at("total_voxels"), done.at("filled_voxels"));
 }
 
+TEST_F(StreamedJobsHttpTest, AStreamedCoverageJobAnswersWithTheInMemoryJobsBytes) {
+  start();
+  const auto mesh = bunny_stl();
+  for (const char* coverage : {"{}", R"({"values":"f32"})", R"({"threshold":0.3})"}) {
+    SCOPED_TRACE(coverage);
+    const std::string params = std::string(R"({"grid":{"resolution":67,"padding":1},"mode":"coverage","coverage":)") + coverage;
+    const json in_memory = submit(mesh, params + R"(,"streaming":"off"})");
+    const json streamed = submit(mesh, params + R"(,"streaming":"on"})");
+    EXPECT_TRUE(streamed.at("streamed"));
+    const std::string a = finished(in_memory), b = finished(streamed);
+    const json done_a = wait_for_job(http(), a), done_b = wait_for_job(http(), b);
+    // The covered volume to the last bit, the type and unit; the solid's count.
+    EXPECT_EQ(done_b.at("values"), done_a.at("values"));
+    EXPECT_EQ(done_b.at("filled_voxels"), done_a.at("filled_voxels"));
+    EXPECT_GT(done_b.at("filled_voxels").get<std::uint64_t>(), 10000u);
+
+    std::vector<std::string> queries = {"", "?format=raw", "?format=nrrd", "?format=nrrd&encoding=gzip"};
+    if (std::string(coverage) != R"({"values":"f32"})") queries.push_back("?format=binvox");  // loaded whole: it fits
+    for (const std::string& query : queries) {
+      const std::string expected = volume(a, query);
+      ASSERT_GT(expected.size(), 100u) << query;
+      EXPECT_TRUE(volume(b, query) == expected) << query;
+    }
+    // Coverage sections in grey levels from the stored values; the preview
+    // and the radiography of the solid.
+    for (const std::string route : {"section?axis=x&index=30", "section?axis=y&index=20", "section?axis=z&index=33",
+                                    "preview?view=-y", "radiography?axis=z"}) {
+      EXPECT_EQ(png_pixels_and_header(get_ok("/v1/jobs/" + b + "/" + route)),
+                png_pixels_and_header(get_ok("/v1/jobs/" + a + "/" + route)))
+          << route;
+    }
+  }
+  // The quantized levels span the whole volume's range: not streamed; this
+  // small job's values are loaded whole instead, with the in-memory bytes.
+  const std::string params = R"({"grid":{"resolution":40},"mode":"coverage","coverage":{"values":"f32"})";
+  const std::string a = finished(submit(mesh, params + R"(,"streaming":"off"})"));
+  const std::string b = finished(submit(mesh, params + R"(,"streaming":"on"})"));
+  EXPECT_TRUE(volume(b, "?quantize=u8") == volume(a, "?quantize=u8"));
+}
+
 TEST_F(StreamedJobsHttpTest, PastThePerJobMemoryAJobStreamsAndWholeGridAnalysesAnswer422NamingTheLargestGrid) {
   // 24 MiB a job: the bunny at 700 (700 x 686 x 544 voxels, 33 MB of bits)
   // does not fit in memory, so it streams by itself.
