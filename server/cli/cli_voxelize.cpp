@@ -34,10 +34,11 @@ api::VolumeSource result_volumes(const VoxelJobResult& result) {
 
 using nlohmann::json;
 
-// Grids past 2^32 voxels (512 MiB of bits, e.g. 1625^3) stream unless told
-// otherwise, in slabs of about 128 MiB: as fast as in memory, and the peak
-// stays the mesh plus a slab (docs/benchmarks.md).
-constexpr std::uint64_t kStreamAboveVoxels = std::uint64_t{1} << 32;
+// Jobs whose volumes in memory would pass 512 MiB (2^32 voxels of bits,
+// e.g. 1625^3; 1 Gi voxels of coverage) stream unless told otherwise, as in
+// the service (JobLimits::stream_above_bytes): slab by slab is then as fast
+// or faster (fresh memory costs page faults) and far smaller.
+const std::uint64_t kStreamAboveBytes = JobLimits{}.stream_above_bytes;
 
 constexpr const char* kUsage = R"(usage: voxd voxelize MESH -o OUT [options]
 
@@ -66,7 +67,8 @@ volume to OUT ("-" for standard output).
                          write each slab as it is done, in bounded memory
                          (modes of bits with the parity inside test, and
                          coverage, to rle, raw or nrrd; not quantized);
-                         auto streams grids over 2^32 voxels
+                         auto streams past 512 MiB of volumes in memory
+                         (2^32 voxels of bits)
   --max-voxels N         refuse grids with more voxels (default: 2^36, 8 GiB
                          of bits, in memory; no limit but disk when streamed)
   --report               include the mesh report (topology, area, volume)
@@ -177,7 +179,7 @@ int voxelize_command(int argc, char** argv) {
   // too: the preparation only resolves the grid.
   params.streaming = api::Streaming::off;
   PreparedVoxelJob job = prepare_voxel_job(file.bytes(), mesh_path, params, limits);
-  const bool streamed = streaming == "on" || (streaming == "auto" && !no_stream && job.grid.voxel_count() > kStreamAboveVoxels);
+  const bool streamed = streaming == "on" || (streaming == "auto" && !no_stream && estimate_job_memory(job.grid, params) > kStreamAboveBytes);
   if (!streamed)  // the in-memory limit; a job that could stream is told so
     check_voxel_limit(job.grid, max_voxels,
                       no_stream || user_limit ? "" : " (or --streaming on: slab by slab it needs the memory of one slab, not the grid's)");

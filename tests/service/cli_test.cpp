@@ -152,6 +152,24 @@ TEST_F(CliTest, StreamedCoverageWritesTheInMemoryBytesAndSummary) {
   }
 }
 
+TEST_F(CliTest, AutoStreamsFromTheMemoryEstimateNotTheVoxelCount) {
+  // 560 x 543 x 432 voxels: 16 MiB of bits stay in memory, while the same
+  // grid's coverage (5 bytes a voxel in memory, past 512 MiB) streams.
+  const std::string mesh = shared_mesh("bunny.stl");
+  const auto bits = run_process(kVoxd + " voxelize " + mesh + " --resolution 560 --json -o " + path("b.rle"));
+  ASSERT_EQ(bits.exit_code, 0) << bits.err;
+  EXPECT_FALSE(nlohmann::json::parse(bits.out).at("streamed").get<bool>());
+  const auto coverage = run_process(kVoxd + " voxelize " + mesh +
+                                    " --resolution 560 --params '{\"mode\":\"coverage\",\"coverage\":{\"rays\":1}}' --json -o " +
+                                    path("c.rle"));
+  ASSERT_EQ(coverage.exit_code, 0) << coverage.err;
+  const auto summary = nlohmann::json::parse(coverage.out);
+  EXPECT_TRUE(summary.at("streamed").get<bool>());
+  EXPECT_GT(summary.at("grid").at("dims").at(0).get<std::int64_t>() * summary.at("grid").at("dims").at(1).get<std::int64_t>() *
+                summary.at("grid").at("dims").at(2).get<std::int64_t>() * 5,
+            std::int64_t{512} << 20);
+}
+
 TEST_F(CliTest, StreamingOnSaysWhyAJobCannotStream) {
   const std::string mesh = shared_mesh("torus.stl");
   struct Case {
