@@ -125,7 +125,7 @@ class Voxelizer {
     out.clear();
     for (std::uint32_t t = bins.offsets[static_cast<std::size_t>(chunk)];
          t < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++t)
-      detail::cross_row_rays(fixed_, bins.triangles[t], k, grid_.dims.y, k_ * k_,
+      detail::cross_row_rays(fixed_, bins.triangles[t], k, 0, grid_.dims.y, k_ * k_,
                              [&](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
                                ray_position(seed_, k_, j, k, r / k_, r % k_, pu, pv);
                              },

@@ -111,7 +111,7 @@ DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const C
   DenseVolume<float> out(grid, 0.0f);
   if (grid.voxel_count() == 0) return out;
   const CoverageVoxelizer v(mesh, grid, options);
-  const detail::RayRows rows(v.fixed(), grid, options.rays * options.rays, thread_count(options));
+  const detail::RayRows rows(v.fixed(), grid, options.rays * options.rays, thread_count(options), 0, true);
   v.fill(rows, 0, grid.dims.z, out, control);
   return out;
 }
@@ -128,7 +128,7 @@ void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const Covera
   const std::int64_t per_chunk = std::max<std::int64_t>(1, layers_wanted / (4 * threads));
   const std::int64_t layers = std::min(nz, (layers_wanted + per_chunk - 1) / per_chunk * per_chunk);
   const CoverageVoxelizer v(mesh, grid, options);
-  const detail::RayRows rows(v.fixed(), grid, options.rays * options.rays, threads, per_chunk);
+  const detail::RayRows rows(v.fixed(), grid, options.rays * options.rays, threads, per_chunk, true);
   for (std::int64_t k0 = 0; k0 < nz; k0 += layers) {
     if (control) control->check_cancelled();
     const std::int64_t n = std::min(layers, nz - k0);

@@ -44,13 +44,13 @@ inline void sort_crossings(std::vector<RayCrossing>& crossings) {
   });
 }
 
-// Appends the crossings of triangle `t` with the rays of row k (columns
-// 0..ny-1, `rays` rays each). position(j, r, pu, pv) gives ray r of column
+// Appends the crossings of triangle `t` with the rays of row k in columns
+// [j_begin, j_end) (`rays` rays each). position(j, r, pu, pv) gives ray r of column
 // j in fixed point (u = y, v = z); every ray must lie within half a voxel
 // of its column's centre line, i.e. in [j - 1/2, j + 1/2) x [k - 1/2, k + 1/2).
 template <typename RayPosition>
-void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std::int64_t ny, int rays,
-                    const RayPosition& position, std::vector<RayCrossing>& out) {
+void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std::int64_t j_begin, std::int64_t j_end,
+                    int rays, const RayPosition& position, std::vector<RayCrossing>& out) {
   using i128 = __int128;
   const auto& tri = fixed.triangles()[t];
   const FixedPoint A = fixed.vertex(tri[0]), B = fixed.vertex(tri[1]), C = fixed.vertex(tri[2]);
@@ -62,8 +62,8 @@ void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std
   const std::int64_t minv = std::min({av, bv, cv}), maxv = std::max({av, bv, cv});
   const std::int64_t half = kFixedOne / 2;
   if (maxv < k * kFixedOne - half || minv >= k * kFixedOne + half) return;
-  const std::int64_t j0 = std::max<std::int64_t>(0, floor_fixed(minu + half));
-  const std::int64_t j1 = std::min<std::int64_t>(ny - 1, floor_fixed(maxu + half));
+  const std::int64_t j0 = std::max<std::int64_t>(j_begin, floor_fixed(minu + half));
+  const std::int64_t j1 = std::min<std::int64_t>(j_end - 1, floor_fixed(maxu + half));
   if (j0 > j1) return;
   // The plane: x(u, v) = ax + gu (u - au) + gv (v - av), as in the parity
   // scan converter (voxelize/column_scan.h).
@@ -96,8 +96,11 @@ void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std
 class RayRows {
  public:
   // `rows_per_chunk` 0: enough chunks to balance `threads` over the grid.
-  RayRows(const FixedMesh& fixed, const Grid& grid, int rays, int threads, std::int64_t rows_per_chunk = 0)
-      : fixed_(fixed), grid_(grid), rays_(rays), threads_(threads),
+  // `column_blocks`: the consumer takes any subset of a row's columns (see
+  // run()); false hands it whole rows only.
+  RayRows(const FixedMesh& fixed, const Grid& grid, int rays, int threads, std::int64_t rows_per_chunk = 0,
+          bool column_blocks = false)
+      : fixed_(fixed), grid_(grid), rays_(rays), threads_(threads), column_blocks_(column_blocks),
         per_chunk_(rows_per_chunk > 0 ? rows_per_chunk : std::max<std::int64_t>(1, grid.dims.z / (threads * 8))),
         // Rays of row k sit within half a voxel of its centre: margin 1.
         bins_(bin_triangles(fixed, 2, grid.dims.z, per_chunk_, 1, threads)) {}
@@ -108,24 +111,45 @@ class RayRows {
   // each own a chunk: the sorted crossings of row k's rays (`rays` per
   // column) with the mesh. prepare(k, scratch) returns row k's ray positions
   // (as cross_row_rays wants them); consume(k, crossings, scratch) uses the
-  // crossings. Scratch is per thread. Reports progress by rows of the grid
-  // and honours cancellation when `control` is given.
+  // crossings. Scratch is per thread. With column_blocks and fewer rows
+  // than threads (a slab of a layer or two of a huge grid) each row goes in
+  // blocks of columns, so that every thread has work: consume then gets a
+  // block's crossings at a time, and blocks of one row may run at once (they
+  // touch other columns).
+  // Reports progress by columns of the grid and honours cancellation when
+  // `control` is given.
   template <typename Scratch, typename Prepare, typename Consume>
   void run(std::int64_t k0, std::int64_t k1, JobControl* control, const Prepare& prepare, const Consume& consume) const {
-    parallel_for(k0, k1, per_chunk_, threads_, [&](std::int64_t a, std::int64_t b) {
-      const auto chunk = static_cast<std::size_t>(a / per_chunk_);
+    const std::int64_t ny = grid_.dims.y, rows = k1 - k0;
+    const std::int64_t blocks =
+        !column_blocks_ || rows <= 0 ? 1 : std::clamp<std::int64_t>((2 * threads_ + rows - 1) / rows, 1, std::max<std::int64_t>(ny / 8, 1));
+    const auto columns = [&](std::int64_t k, std::int64_t j_begin, std::int64_t j_end, Scratch& scratch,
+                             std::vector<RayCrossing>& crossings) {
+      if (control) control->check_cancelled();
+      const auto position = prepare(k, scratch);
+      crossings.clear();
+      const auto chunk = static_cast<std::size_t>(k / per_chunk_);
+      for (std::uint32_t t = bins_.offsets[chunk]; t < bins_.offsets[chunk + 1]; ++t)
+        cross_row_rays(fixed_, bins_.triangles[t], k, j_begin, j_end, rays_, position, crossings);
+      sort_crossings(crossings);
+      consume(k, crossings, scratch);
+      const std::int64_t done = columns_done_ += j_end - j_begin;
+      if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(grid_.dims.z * ny));
+    };
+    if (blocks == 1) {
+      parallel_for(k0, k1, per_chunk_, threads_, [&](std::int64_t a, std::int64_t b) {
+        Scratch scratch;
+        std::vector<RayCrossing> crossings;
+        for (std::int64_t k = a; k < b; ++k) columns(k, 0, ny, scratch, crossings);
+      });
+      return;
+    }
+    parallel_for(0, rows * blocks, 1, threads_, [&](std::int64_t a, std::int64_t b) {
       Scratch scratch;
       std::vector<RayCrossing> crossings;
-      for (std::int64_t k = a; k < b; ++k) {
-        if (control) control->check_cancelled();
-        const auto position = prepare(k, scratch);
-        crossings.clear();
-        for (std::uint32_t t = bins_.offsets[chunk]; t < bins_.offsets[chunk + 1]; ++t)
-          cross_row_rays(fixed_, bins_.triangles[t], k, grid_.dims.y, rays_, position, crossings);
-        sort_crossings(crossings);
-        consume(k, crossings, scratch);
-        const std::int64_t done = ++rows_done_;
-        if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(grid_.dims.z));
+      for (std::int64_t item = a; item < b; ++item) {
+        const std::int64_t block = item % blocks;
+        columns(k0 + item / blocks, ny * block / blocks, ny * (block + 1) / blocks, scratch, crossings);
       }
     });
   }
@@ -135,9 +159,10 @@ class RayRows {
   Grid grid_;
   int rays_;
   int threads_;
+  bool column_blocks_;
   std::int64_t per_chunk_;
   TriangleBins bins_;
-  mutable std::atomic<std::int64_t> rows_done_{0};
+  mutable std::atomic<std::int64_t> columns_done_{0};
 };
 
 // Every row of the grid: RayRows::run over [0, nz).
