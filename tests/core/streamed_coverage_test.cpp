@@ -5,7 +5,9 @@
 // files are byte for byte encode_volume()'s in every format that streams;
 // a stored values RLE replays as those slabs, and its sections gathered over
 // them are the whole volume's.
+#include <algorithm>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,7 +20,9 @@
 #include "voxd/encode/volume_format.h"
 #include "voxd/error.h"
 #include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/progress.h"
 #include "voxd/voxelize/coverage.h"
+#include "voxd/voxelize/streamed.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd {
@@ -210,6 +214,56 @@ TEST(ValueSlabs, AStoredRleReplaysAsItsSlabsAndItsSectionsAreTheWholeVolumes) {
   ReadLimits tight;
   tight.max_volume_bytes = 100;
   EXPECT_THROW(read_rle_value_slabs(u8.data, 4, [](std::int64_t, const ValueVolume&) {}, tight), Error);
+}
+
+// A long streamed job shows steady progress and stops within a slab when
+// cancelled: for the bits and for coverage, the progress seen by each slab
+// grows to the slab's share of the grid, and a cancel asked for in the third
+// slab's consumer is the last slab handed on.
+TEST(StreamedProgress, EachSlabAdvancesTheProgressAndACancelStopsWithinTheNext) {
+  const Mesh mesh = shared_mesh("bunny.stl");
+  const Grid grid = grid_for(mesh, 64);
+  const std::int64_t layers = 8, slabs = (grid.dims.z + layers - 1) / layers;
+  ASSERT_GE(slabs, 5);
+  using Run = std::function<void(JobControl&, const std::function<void(std::int64_t, std::int64_t)>&)>;
+  const std::vector<std::pair<std::string, Run>> runs = {
+      {"bits",
+       [&](JobControl& control, const std::function<void(std::int64_t, std::int64_t)>& seen) {
+         voxelize_streamed(mesh, grid, VoxelizeOptions{}, layers,
+                           [&](std::int64_t k0, const BitVolume& slab) { seen(k0, slab.grid().dims.z); }, &control);
+       }},
+      {"coverage", [&](JobControl& control, const std::function<void(std::int64_t, std::int64_t)>& seen) {
+         voxelize_coverage_streamed(mesh, grid, CoverageOptions{}, layers,
+                                    [&](std::int64_t k0, const DenseVolume<float>& slab) { seen(k0, slab.grid().dims.z); },
+                                    &control);
+       }}};
+  for (const auto& [name, run] : runs) {
+    SCOPED_TRACE(name);
+    JobControl control;
+    std::vector<double> progress;
+    run(control, [&](std::int64_t k0, std::int64_t n) {
+      // The coverage reports rows as they finish; the bits report a slab
+      // once handed on: at least the slabs before this one are counted.
+      EXPECT_GE(control.progress() + 1e-9, static_cast<double>(k0) / static_cast<double>(grid.dims.z));
+      EXPECT_LE(control.progress(), static_cast<double>(k0 + n) / static_cast<double>(grid.dims.z) + 1e-9);
+      progress.push_back(control.progress());
+    });
+    EXPECT_EQ(static_cast<std::int64_t>(progress.size()), slabs);
+    EXPECT_TRUE(std::is_sorted(progress.begin(), progress.end()));
+    EXPECT_DOUBLE_EQ(control.progress(), 1.0);
+
+    JobControl cancelled;
+    std::int64_t handed_on = 0;
+    try {
+      run(cancelled, [&](std::int64_t, std::int64_t) {
+        if (++handed_on == 3) cancelled.request_cancel();
+      });
+      FAIL() << "a cancelled run finished";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::cancelled);
+    }
+    EXPECT_EQ(handed_on, 3);
+  }
 }
 
 }  // namespace

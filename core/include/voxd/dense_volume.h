@@ -3,6 +3,7 @@
 // indices, colours), x fastest, then y, then z, no row padding. Large
 // volumes live on huge pages (voxd/volume_memory.h).
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 #include "voxd/grid.h"
@@ -23,6 +24,12 @@ class DenseVolume {
       : grid_(grid), values_(grid.voxel_count(), fill) {}
 
   const Grid& grid() const { return grid_; }
+  // The same values placed on another grid of the same dims (a reused slab
+  // moved up the grid). Throws std::invalid_argument for other dims.
+  void move_to(const Grid& grid) {
+    if (grid.dims != grid_.dims) throw std::invalid_argument("DenseVolume::move_to: a grid of other dims");
+    grid_ = grid;
+  }
   std::size_t index(std::int64_t i, std::int64_t j, std::int64_t k) const {
     return static_cast<std::size_t>(i + grid_.dims.x * (j + grid_.dims.y * k));
   }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "voxd/bit_slabs.h"
@@ -129,22 +130,33 @@ void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const Covera
   const std::int64_t layers = std::min(nz, (layers_wanted + per_chunk - 1) / per_chunk * per_chunk);
   const CoverageVoxelizer v(mesh, grid, options);
   const detail::RayRows rows(v.fixed(), grid, options.rays * options.rays, threads, per_chunk, true);
+  // One slab's memory, cleared and reused: fresh pages cost the kernel's
+  // zeroing and a fault each (docs/benchmarks.md); the last, shorter slab
+  // is one of its own size.
+  std::optional<DenseVolume<float>> slab;
   for (std::int64_t k0 = 0; k0 < nz; k0 += layers) {
     if (control) control->check_cancelled();
     const std::int64_t n = std::min(layers, nz - k0);
-    DenseVolume<float> slab(slab_grid(grid, k0, n), 0.0f);
-    v.fill(rows, k0, k0 + n, slab, control);
-    consume(k0, slab);
+    if (!slab || slab->grid().dims.z != n) {
+      slab.emplace(slab_grid(grid, k0, n), 0.0f);
+    } else {
+      slab->move_to(slab_grid(grid, k0, n));
+      parallel_for(0, static_cast<std::int64_t>(slab->values().size()), std::int64_t{1} << 22, threads,
+                   [&](std::int64_t a, std::int64_t b) { std::fill(slab->values().begin() + a, slab->values().begin() + b, 0.0f); });
+    }
+    v.fill(rows, k0, k0 + n, *slab, control);
+    consume(k0, *slab);
   }
 }
 
 DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int threads) {
   DenseVolume<std::uint8_t> out(coverage.grid(), 0);
-  const std::size_t slab = coverage.slab_size();
-  parallel_for(0, coverage.grid().dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
-    const float* in = coverage.slab(k0);
-    std::uint8_t* dst = out.slab(k0);
-    for (std::size_t i = 0, n = slab * static_cast<std::size_t>(k1 - k0); i < n; ++i) {
+  // Blocks of values, not layers: a streamed slab may be a single layer.
+  parallel_for(0, static_cast<std::int64_t>(coverage.values().size()), std::int64_t{1} << 20, threads,
+               [&](std::int64_t a, std::int64_t b) {
+    const float* in = coverage.values().data();
+    std::uint8_t* dst = out.values().data();
+    for (auto i = static_cast<std::size_t>(a); i < static_cast<std::size_t>(b); ++i) {
       // lround of the float product, without the library call: y is in
       // [0, 255] and y + 0.5 is exact in double, so the floor is lround(y).
       const float y = std::clamp(in[i], 0.0f, 1.0f) * 255.0f;
@@ -155,19 +167,31 @@ DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int
 }
 
 void CoveredVoxels::add(const DenseVolume<float>& slab, int threads) {
-  // A sum per layer, added in layer order: the same total on any thread
-  // count and any slabs.
-  std::vector<double> layer_sums(static_cast<std::size_t>(slab.grid().dims.z), 0.0);
-  const std::size_t layer = slab.slab_size();
-  parallel_for(0, slab.grid().dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k) {
-      const float* v = slab.slab(k);
-      double sum = 0.0;
-      for (std::size_t i = 0; i < layer; ++i) sum += v[i];
-      layer_sums[static_cast<std::size_t>(k)] = sum;
+  // Each layer in fixed blocks, each block over four interleaved sums (so
+  // neither one thread nor one chain of additions bounds a layer of a huge
+  // grid); the blocks added in order into the layer's sum, the layers in
+  // order into the total: the same bits on any thread count and any slabs.
+  constexpr std::size_t kBlock = std::size_t{1} << 16;
+  const std::size_t layer = slab.slab_size(), blocks = std::max<std::size_t>((layer + kBlock - 1) / kBlock, 1);
+  const auto layers = static_cast<std::size_t>(slab.grid().dims.z);
+  std::vector<double> block_sums(layers * blocks, 0.0);
+  parallel_for(0, static_cast<std::int64_t>(layers * blocks), 16, threads, [&](std::int64_t a, std::int64_t b) {
+    for (auto item = static_cast<std::size_t>(a); item < static_cast<std::size_t>(b); ++item) {
+      const std::size_t k = item / blocks, begin = item % blocks * kBlock, end = std::min(begin + kBlock, layer);
+      const float* v = slab.slab(static_cast<std::int64_t>(k));
+      double s[4] = {0.0, 0.0, 0.0, 0.0};
+      std::size_t i = begin;
+      for (; i + 4 <= end; i += 4)
+        for (int l = 0; l < 4; ++l) s[l] += v[i + static_cast<std::size_t>(l)];
+      for (; i < end; ++i) s[0] += v[i];
+      block_sums[item] = (s[0] + s[1]) + (s[2] + s[3]);
     }
   });
-  for (double s : layer_sums) total_ += s;
+  for (std::size_t k = 0; k < layers; ++k) {
+    double layer_sum = 0.0;
+    for (std::size_t b = 0; b < blocks; ++b) layer_sum += block_sums[k * blocks + b];
+    total_ += layer_sum;
+  }
 }
 
 double covered_voxels(const DenseVolume<float>& coverage, int threads) {

@@ -59,7 +59,8 @@ void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions
       }
     });
     consume(k0, slab);
-    if (control) control->set_progress(static_cast<double>(s + 1) / static_cast<double>(slabs));
+    // By layers, not slabs: the last, shorter slab counts for what it is.
+    if (control) control->set_progress(static_cast<double>(k0 + n) / static_cast<double>(nz));
   }
 }
 
