@@ -2,9 +2,9 @@
 # Issue #14 in the service: the 1.1M-triangle mesh as a solid job over HTTP
 # at N^3 (default 8192), streamed into its stored RLE, then its /volume, a
 # radiography along z, its mass properties (analysis with
-# thickness=false&skin=false) and shaded previews, each timed, and local thickness, which must
-# answer 422. Prints the seconds of each step and the server's peak RSS
-# (VmHWM) after each.
+# thickness=false&skin=false) and shaded previews, each timed, and local
+# thickness, which must answer 422. Prints the seconds of each step and the
+# server's peak RSS (VmHWM) after each.
 #   bench/stream_service_bench.sh [BUILD_DIR] [RESOLUTION]
 set -euo pipefail
 build="${1:-build}"
