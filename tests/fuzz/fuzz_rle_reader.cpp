@@ -23,5 +23,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     voxd::read_rle_bit_slabs(bytes, 3, [&](std::int64_t, const voxd::BitVolume& slab) { filled += slab.count(); }, limits);
   } catch (const voxd::Error&) {
   }
+  try {
+    std::uint64_t layers = 0;
+    voxd::read_rle_value_slabs(bytes, 2, [&](std::int64_t, const voxd::ValueVolume& slab) { layers += voxd::grid_of(slab).dims.z; },
+                               limits);
+  } catch (const voxd::Error&) {
+  }
   return 0;
 }
