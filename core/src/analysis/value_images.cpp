@@ -110,7 +110,9 @@ ValueSection<std::uint8_t> as_bytes(const ValueSection<float>& f) {
 
 std::vector<std::uint8_t> coverage_section_png(const DenseVolume<float>& coverage, int axis, std::int64_t index,
                                                std::vector<PngText> text) {
-  return grey_png(as_bytes(extract(coverage, axis, index)), plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
+  // The section first: it checks the axis and the index the plane's text uses.
+  const ValueSection<std::uint8_t> s = as_bytes(extract(coverage, axis, index));
+  return grey_png(s, plane_text(coverage.grid(), axis, index, {kCoverageText}, text));
 }
 
 CoverageSectionGatherer::CoverageSectionGatherer(const Grid& grid, int axis, std::int64_t index)
