@@ -119,7 +119,7 @@ void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile
         if (v.format == VolumeFormat::rle) return send_stored(stored, sink);
         const Grid grid = read_rle_bit_grid(stored);
         BitSlabWriter writer(grid, v.format, v.options, sink);
-        read_rle_bit_slabs(stored, streamed_slab_layers(grid, std::uint64_t{16} << 20),
+        read_rle_bit_slabs(stored, replay_bit_slab_layers(grid),
                            [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); }, kStoredSlabLimits);
         writer.finish();
       },
@@ -136,8 +136,7 @@ void answer_stored_values(httplib::Response& res, std::shared_ptr<const MappedFi
         const std::span<const std::uint8_t> stored = rle->bytes();
         if (v.format == VolumeFormat::rle) return send_stored(stored, sink);
         ValueSlabWriter writer(grid, type, v.format, v.options, sink);
-        const std::uint64_t layer = static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) * 4;
-        read_rle_value_slabs(stored, static_cast<std::int64_t>((std::uint64_t{16} << 20) / std::max<std::uint64_t>(layer, 1)),
+        read_rle_value_slabs(stored, replay_value_slab_layers(grid),
                              [&](std::int64_t k0, const ValueVolume& slab) { writer.write(k0, slab); }, kStoredSlabLimits);
         writer.finish();
       },

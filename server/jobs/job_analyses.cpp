@@ -120,15 +120,14 @@ ThicknessImage job_radiography(const AnalysisRequest& r, const BitVolume& origin
   return radiography(peeled_model ? *peeled_model : original, r.axis);
 }
 
-// Replays a streamed job's stored volume slab by slab (16 MiB slabs: small
-// beside the images, large enough that a slab is cheap to hand on), with
-// progress over the slabs and cancellation between them.
+// Replays a streamed job's stored volume slab by slab (kReplaySlabBytes),
+// with progress over the slabs and cancellation between them.
 // The progress runs over [from, to] (a request of two passes takes half each).
 void replay(const JobOutput& output, const Grid& grid, JobControl* control, const BitSlabConsumer& consume,
             double from = 0.0, double to = 1.0) {
   if (!output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
   const double slabs_total = static_cast<double>(grid.dims.z);
-  read_rle_bit_slabs(output.rle->bytes(), streamed_slab_layers(grid, std::uint64_t{16} << 20),
+  read_rle_bit_slabs(output.rle->bytes(), replay_bit_slab_layers(grid),
                      [&](std::int64_t k0, const BitVolume& slab) {
                        if (control) control->check_cancelled();
                        consume(k0, slab);
@@ -141,9 +140,8 @@ void replay(const JobOutput& output, const Grid& grid, JobControl* control, cons
 // The same for a streamed job's stored values.
 void replay_values(const JobOutput& output, const Grid& grid, JobControl* control, const ValueSlabConsumer& consume) {
   if (!output.values_rle) throw std::logic_error("a streamed job's section of values without its stored values");
-  const std::uint64_t layer = static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) * 4;
   const double slabs_total = static_cast<double>(grid.dims.z);
-  read_rle_value_slabs(output.values_rle->bytes(), static_cast<std::int64_t>((std::uint64_t{16} << 20) / std::max<std::uint64_t>(layer, 1)),
+  read_rle_value_slabs(output.values_rle->bytes(), replay_value_slab_layers(grid),
                        [&](std::int64_t k0, const ValueVolume& slab) {
                          if (control) control->check_cancelled();
                          consume(k0, slab);
@@ -311,7 +309,7 @@ std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& gri
     // pixel, one layer of bits and the PNG; a section's image and PNG; a
     // preview's visible voxels, depths, normals (raw and smoothed), shades,
     // pixels sorted by layer, the RGB image and its PNG, and three layers.
-    const std::uint64_t slab = std::uint64_t{16} << 20;
+    const std::uint64_t slab = kReplaySlabBytes;
     const int axis = r.kind == AnalysisKind::preview ? parse_view(r.view)->axis : r.axis;
     const std::uint64_t pixels = r.kind == AnalysisKind::analysis ? 0
                                  : static_cast<std::uint64_t>(axis == 0 ? grid.dims.y : grid.dims.x) *

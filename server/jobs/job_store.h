@@ -4,6 +4,7 @@
 // to this interface; the embedded implementation is the local data directory
 // (server/jobs/local_job_store.h). A shared backend (replicas on one Redis)
 // implements the same calls.
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -17,6 +18,7 @@
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/voxelize/streamed.h"
 
 namespace voxd::server {
 
@@ -30,6 +32,16 @@ class StorageFull : public std::runtime_error {
 // Slabs replayed from a stored volume (trusted: written by the service) are
 // at least one layer of a grid of up to kMaxGridDim^2 voxels a layer.
 inline constexpr ReadLimits kStoredSlabLimits{std::uint64_t{4} << 30};
+
+// A stored result is replayed (re-encoded, analysed) in slabs of about
+// 16 MiB: small beside the images, large enough that a slab is cheap to
+// hand on. Z layers per slab of bits, and of values (up to 4 bytes each).
+inline constexpr std::uint64_t kReplaySlabBytes = std::uint64_t{16} << 20;
+inline std::int64_t replay_bit_slab_layers(const Grid& grid) { return streamed_slab_layers(grid, kReplaySlabBytes); }
+inline std::int64_t replay_value_slab_layers(const Grid& grid) {
+  const std::uint64_t layer = static_cast<std::uint64_t>(grid.dims.x) * static_cast<std::uint64_t>(grid.dims.y) * 4;
+  return static_cast<std::int64_t>(kReplaySlabBytes / std::max<std::uint64_t>(layer, 1));
+}
 
 class JobStore {
  public:

@@ -30,6 +30,23 @@ class CliTest : public ::testing::Test {
     test::write_file(path(name), test::to_binary_stl(mesh));
     return path(name);
   }
+  // Runs `command` with --streaming on and off, each writing `out`: the
+  // two files must be equal, the first run streamed and the second not.
+  // Returns both summaries (null ones after a fatal failure).
+  std::pair<json, json> streamed_and_in_memory(const std::string& command, const std::string& out) {
+    const auto on = run_process(command + " --streaming on --json -o " + path("on_" + out));
+    const auto off = run_process(command + " --streaming off --json -o " + path("off_" + out));
+    [&] {
+      ASSERT_EQ(on.exit_code, 0) << on.err;
+      ASSERT_EQ(off.exit_code, 0) << off.err;
+    }();
+    if (HasFatalFailure()) return {};
+    EXPECT_EQ(test::read_file(path("on_" + out)), test::read_file(path("off_" + out)));
+    json a = json::parse(on.out), b = json::parse(off.out);
+    EXPECT_TRUE(a.at("streamed").get<bool>());
+    EXPECT_FALSE(b.at("streamed").get<bool>());
+    return {std::move(a), std::move(b)};
+  }
   std::string dir_;
 };
 
@@ -116,15 +133,9 @@ TEST_F(CliTest, StreamingWritesTheInMemoryBytesSlabBySlab) {
       if (std::string(extra).find("raw-packing") != std::string::npos && out != "v.raw") continue;
       if (std::string(extra).find("nrrd-encoding") != std::string::npos && out != "v.nrrd") continue;
       SCOPED_TRACE(out + extra);
-      const std::string base = kVoxd + " voxelize " + mesh + " --resolution 150 --mode solid+surface" + extra;
-      const auto on = run_process(base + " --streaming on --json -o " + path("on_" + out));
-      ASSERT_EQ(on.exit_code, 0) << on.err;
-      const auto off = run_process(base + " --streaming off --json -o " + path("off_" + out));
-      ASSERT_EQ(off.exit_code, 0) << off.err;
-      EXPECT_EQ(test::read_file(path("on_" + out)), test::read_file(path("off_" + out)));
-      const auto a = nlohmann::json::parse(on.out), b = nlohmann::json::parse(off.out);
-      EXPECT_TRUE(a.at("streamed").get<bool>());
-      EXPECT_FALSE(b.at("streamed").get<bool>());
+      const auto [a, b] = streamed_and_in_memory(
+          kVoxd + " voxelize " + mesh + " --resolution 150 --mode solid+surface" + extra, out);
+      if (HasFatalFailure()) return;
       EXPECT_EQ(a.at("filled_voxels"), b.at("filled_voxels"));
       EXPECT_GT(a.at("filled_voxels").get<std::uint64_t>(), 100000u);
     }
@@ -136,15 +147,11 @@ TEST_F(CliTest, StreamedCoverageWritesTheInMemoryBytesAndSummary) {
   for (const char* coverage : {"{}", "{\"values\":\"f32\"}", "{\"threshold\":0.25}"}) {
     for (const std::string& out : {std::string("c.rle"), std::string("c.raw"), std::string("c.nrrd")}) {
       SCOPED_TRACE(out + " " + coverage);
-      const std::string base = kVoxd + " voxelize " + mesh + " --resolution 70 --params '{\"mode\":\"coverage\"," +
-                               "\"coverage\":" + coverage + "}'";
-      const auto on = run_process(base + " --streaming on --json -o " + path("on_" + out));
-      ASSERT_EQ(on.exit_code, 0) << on.err;
-      const auto off = run_process(base + " --streaming off --json -o " + path("off_" + out));
-      ASSERT_EQ(off.exit_code, 0) << off.err;
-      EXPECT_EQ(test::read_file(path("on_" + out)), test::read_file(path("off_" + out)));
-      const auto a = nlohmann::json::parse(on.out), b = nlohmann::json::parse(off.out);
-      EXPECT_TRUE(a.at("streamed").get<bool>());
+      const auto [a, b] = streamed_and_in_memory(kVoxd + " voxelize " + mesh +
+                                                     " --resolution 70 --params '{\"mode\":\"coverage\",\"coverage\":" +
+                                                     coverage + "}'",
+                                                 out);
+      if (HasFatalFailure()) return;
       EXPECT_EQ(a.at("filled_voxels"), b.at("filled_voxels"));
       EXPECT_GT(a.at("filled_voxels").get<std::uint64_t>(), 10000u);
       EXPECT_EQ(a.at("values"), b.at("values"));  // the covered volume to the last bit, the type, the unit
