@@ -8,7 +8,7 @@ set -euo pipefail
 
 runtime_packages=(
   libc6 libgcc-s1 libstdc++6 libcpp-httplib0.11 libdraco7 libfmt9 libspdlog1.10 libssl3 libbrotli1 zlib1g
-  libembree3-3 libpng16-16 curl
+  libembree3-3 libpng16-16 libhiredis0.14 curl
 )
 if [[ "${1:-}" == --print-runtime ]]; then
   printf '%s\n' "${runtime_packages[@]}"
@@ -20,6 +20,7 @@ packages=(
   libembree-dev libglm-dev libcpp-httplib-dev nlohmann-json3-dev
   libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libhiredis-dev redis-server
   python3 python3-numpy python3-jsonschema python3-yaml
   clang libclang-rt-14-dev util-linux
 )

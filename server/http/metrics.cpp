@@ -40,6 +40,11 @@ std::string Metrics::render(const JobCounts& jobs) const {
   for (const auto& [name, n] : states) o << "voxd_jobs{state=\"" << name << "\"} " << n << '\n';
   o << "# HELP voxd_queue_depth Jobs waiting for a worker.\n# TYPE voxd_queue_depth gauge\n";
   o << "voxd_queue_depth " << jobs.queue_depth << '\n';
+  if (jobs.live_replicas) {
+    o << "# HELP voxd_replicas_live Replicas sharing this service's Redis that reported in the last 5 s.\n"
+         "# TYPE voxd_replicas_live gauge\n";
+    o << "voxd_replicas_live " << *jobs.live_replicas << '\n';
+  }
   o << "# HELP voxd_http_bytes_received_total Request body bytes received.\n# TYPE voxd_http_bytes_received_total counter\n";
   o << "voxd_http_bytes_received_total " << bytes_in_.load() << '\n';
   o << "# HELP voxd_http_bytes_sent_total Response body bytes sent.\n# TYPE voxd_http_bytes_sent_total counter\n";

@@ -43,6 +43,12 @@ Problem problem_from_current_exception() {
     Problem p = make_problem(429, "memory-busy", "The service's memory is taken", e.what());
     p.headers.emplace_back("Retry-After", std::to_string(MemoryBusy::kRetryAfterSeconds));
     return p;
+  } catch (const BackendUnavailable& e) {
+    spdlog::warn("request refused: {}", log_safe(e.what()));
+    Problem p = make_problem(503, "backend-unavailable", "The service's shared backend is unavailable",
+                             "the service cannot reach its job store (Redis) right now; retry in a few seconds");
+    p.headers.emplace_back("Retry-After", "5");
+    return p;
   } catch (const NotAccepting& e) {
     return make_problem(503, "shutting-down", "The service is shutting down", e.what());
   } catch (const Error& e) {

@@ -3,7 +3,10 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <unistd.h>
+
 #include <iostream>
+#include <random>
 #include <thread>
 
 #include <httplib.h>
@@ -17,6 +20,8 @@
 #include "server/http/metrics.h"
 #include "server/http/server_config.h"
 #include "server/jobs/job_manager.h"
+#include "server/redis/redis_job_queue.h"
+#include "server/redis/redis_job_store.h"
 #include "server/log_safe.h"
 #include "voxd/error.h"
 
@@ -86,6 +91,32 @@ int serve_command(int argc, char** argv) {
     else
       spdlog::info("job {} {}{}", s.id, to_string(s.state), s.failure ? ": " + log_safe(s.failure->detail) : "");
   };
+  if (!config.redis_url.empty()) {
+    // Scale-out: queue, records and results on the shared Redis.
+    char host[256] = {};
+    ::gethostname(host, sizeof host - 1);
+    const std::string replica =
+        std::string(host) + ":" + std::to_string(::getpid()) + ":" + std::to_string(std::random_device{}() % 100000);
+    auto pool = std::make_shared<RedisPool>(parse_redis_url(config.redis_url));
+    RedisBackendOptions ro;
+    ro.result_ttl = std::chrono::seconds(config.result_ttl);
+    ro.inflight_ttl = std::max<std::chrono::milliseconds>(std::chrono::hours(24), ro.result_ttl);
+    ro.max_result_bytes = config.max_result_bytes;
+    ro.spool_dir = std::filesystem::path(config.data_dir) / "spool";
+    ro.replica_id = replica;
+    auto store = std::make_shared<RedisJobStore>(pool, ro);
+    RedisQueueOptions qo;
+    qo.consumer = replica;
+    qo.capacity = config.queue_size;
+    qo.lease = std::chrono::seconds(config.redis_lease);
+    jc.queue = std::make_shared<RedisJobQueue>(pool, qo);
+    jc.store = store;
+    jc.records = store;
+    jc.max_deliveries = config.max_deliveries;
+    jc.max_result_bytes = config.max_result_bytes;
+    log("shared backend: Redis at " + pool->url().redacted() + " as replica " + replica +
+        (store->reachable() ? "" : " (not reachable yet: not ready until it is)"));
+  }
   JobManager jobs(jc);
 
   ConnectionLimits limits;

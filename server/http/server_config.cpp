@@ -7,6 +7,8 @@
 #include "server/cli/cli_args.h"
 #include "voxd/encode/number_text.h"
 
+#include "server/redis/redis_client.h"
+
 namespace voxd::server {
 namespace {
 
@@ -121,6 +123,27 @@ const std::vector<Option>& options() {
          c.log_format = v;
        },
        [](const ServeConfig& c) { return c.log_format; }},
+      {"redis", "redis://[:password@]host:port[/db] or unix:///path: share queue, records and results with every replica on this Redis (empty: embedded, one process)",
+       [](ServeConfig& c, const std::string& v, const std::string& s) {
+         if (!v.empty()) {
+           try {
+             parse_redis_url(v);
+           } catch (const std::invalid_argument& e) {
+             throw UsageError(s + ": " + e.what());
+           }
+         }
+         c.redis_url = v;
+       },
+       [](const ServeConfig& c) { return c.redis_url.empty() ? std::string() : parse_redis_url(c.redis_url).redacted(); }},
+      {"redis-lease", "seconds a replica's lease on a running job lasts unrenewed: a job whose replica died runs again elsewhere after it",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.redis_lease = static_cast<int>(to_u64(v, s, 1, 3600)); },
+       [](const ServeConfig& c) { return std::to_string(c.redis_lease); }},
+      {"max-deliveries", "times a shared job is handed to a worker before it fails (redelivery-limit)",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_deliveries = static_cast<int>(to_u64(v, s, 1, 100)); },
+       [](const ServeConfig& c) { return std::to_string(c.max_deliveries); }},
+      {"max-result-bytes", "bytes a job's volumes may take uncompressed with --redis (422 at admission above); 0 = no cap",
+       [](ServeConfig& c, const std::string& v, const std::string& s) { c.max_result_bytes = to_u64(v, s, 0, std::uint64_t{1} << 50); },
+       [](const ServeConfig& c) { return std::to_string(c.max_result_bytes); }},
       {"shutdown-grace", "seconds running jobs get to finish on SIGTERM",
        [](ServeConfig& c, const std::string& v, const std::string& s) { c.shutdown_grace = static_cast<int>(to_u64(v, s, 0, 3600)); },
        [](const ServeConfig& c) { return std::to_string(c.shutdown_grace); }},

@@ -36,6 +36,11 @@ struct ServeConfig {
   std::vector<std::string> api_keys;      // empty: no authentication
   std::string log_format = "text";        // text | json
   int shutdown_grace = 30;                // seconds running jobs get on SIGTERM
+  // Scale-out: replicas sharing one Redis (docs/scale-out.md). Empty: embedded.
+  std::string redis_url;
+  int redis_lease = 15;  // seconds
+  int max_deliveries = 3;
+  std::uint64_t max_result_bytes = std::uint64_t{1} << 30;  // with --redis only
 };
 
 // Parses argv[first..] over the environment over the defaults. Throws

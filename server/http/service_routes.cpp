@@ -18,6 +18,8 @@ void install_service_routes(RouteTable& routes, JobManager& jobs, Metrics& metri
   routes.get("/healthz", [](const Request&, Response& res) { send_json(res, 200, {{"status", "ok"}}); });
   routes.get("/readyz", [&](const Request&, Response& res) {
     if (draining || !jobs.accepting()) return send_json(res, 503, {{"status", "not ready"}, {"reason", "shutting down"}});
+    if (!jobs.backend_ok())
+      return send_json(res, 503, {{"status", "not ready"}, {"reason", "the shared backend (Redis) is unreachable"}});
     if (jobs.counts().queue_depth >= config.queue_size)
       return send_json(res, 503, {{"status", "not ready"}, {"reason", "the job queue is full"}});
     if (!jobs.storage_ok())

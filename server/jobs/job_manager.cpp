@@ -1,6 +1,7 @@
 #include "server/jobs/job_manager.h"
 
 #include <algorithm>
+#include <atomic>
 #include <condition_variable>
 #include <mutex>
 #include <random>
@@ -20,6 +21,7 @@
 #include "server/jobs/job_queue.h"
 #include "server/jobs/job_store.h"
 #include "server/jobs/local_job_store.h"
+#include "server/jobs/shared_records.h"
 #include "server/jobs/volume_cache.h"
 #include "server/log_safe.h"
 #include "voxd/error.h"
@@ -43,6 +45,19 @@ std::string new_job_id() {
   return id;
 }
 
+// The job's volumes as stored, uncompressed: the bits, its values and the
+// layers its mode keeps beside them (RLE is usually far smaller; this is
+// the bound a result-size cap is checked against at admission).
+std::uint64_t result_volume_bytes(const Grid& grid, const api::JobParams& params) {
+  const std::uint64_t voxels = grid.voxel_count();
+  std::uint64_t bytes = (voxels + 7) / 8;
+  if (const std::optional<ValueVolume> type = params.value_type()) {
+    const std::uint64_t value = std::visit([]<typename T>(const DenseVolume<T>&) { return sizeof(T); }, *type);
+    bytes += voxels * value * (1 + params.mode->stored_layers().size());
+  }
+  return bytes;
+}
+
 JobFailure interrupted(const char* was) {
   return {"interrupted", "Interrupted by a restart",
           std::string("the job was ") + was + " when the service stopped; submit it again"};
@@ -55,6 +70,9 @@ struct Job {
   std::optional<PreparedVoxelJob> prepared;  // until a worker takes it
   JobControl control;
   bool ephemeral = false;           // synchronous job: never stored, dropped after use
+  // Taken from a shared queue: its record lives in the shared backend and its
+  // end is written there by compare-and-set; this process only runs it.
+  bool shared = false;
   JobOutput result;  // a synchronous job's volumes, for its caller
   bool stopped_by_shutdown = false;  // cancelled because the service stops
   // The job's share of the memory budget (its decoded mesh, volumes and
@@ -72,6 +90,10 @@ struct JobManager::Impl {
       : config(std::move(c)),
         store(config.store ? config.store : std::make_shared<LocalJobStore>(config.data_dir)),
         queue(config.queue ? config.queue : std::make_shared<InProcessJobQueue>(config.queue_size)),
+        records(config.records),
+        // Synchronous jobs never leave this process: with a shared queue they
+        // wait in one of their own.
+        local_queue(records ? std::make_shared<InProcessJobQueue>(config.queue_size) : queue),
         events(config.on_state_change),
         budget(config.memory_budget ? config.memory_budget : available_memory() / 10 * 6) {}
 
@@ -79,6 +101,9 @@ struct JobManager::Impl {
   // The seams a shared backend replaces (server/jobs/job_store.h, job_queue.h).
   std::shared_ptr<JobStore> store;
   std::shared_ptr<JobQueue> queue;
+  std::shared_ptr<SharedJobRecords> records;  // null: embedded
+  std::shared_ptr<JobQueue> local_queue;      // synchronous jobs (all jobs, embedded)
+  bool shared() const { return records != nullptr; }
   JobEvents events;
   VolumeCache cache{std::size_t{1} << 30};
   MemoryBudget budget;
@@ -95,6 +120,16 @@ struct JobManager::Impl {
   std::vector<std::thread> workers;
   std::unique_ptr<ExpiryTimer> expiry;  // sweeps expired jobs until shutdown
   bool shut_down = false;
+
+  // Shared backend: jobs this replica's workers finished since it started
+  // (the per-replica counts), and the keeper that reports the running ones.
+  std::uint64_t finished_here[3] = {0, 0, 0};  // succeeded, failed, cancelled; under mutex
+  std::thread keeper;
+  std::mutex keeper_mutex;
+  std::condition_variable keeper_wake;
+  bool keeper_stop = false;
+  std::atomic<bool> backend_ok{true};
+  std::atomic<std::int64_t> backend_warned_at{0};
 
   void announce(const JobSnapshot& s) { events.announce(s); }  // caller holds mutex: the table's order
   void deliver() { events.deliver(); }                         // caller holds no lock
@@ -175,6 +210,112 @@ struct JobManager::Impl {
     return status;
   }
 
+  // Logs a lost backend once every 10 s, not on every retry.
+  void warn_backend(const std::exception& e) {
+    backend_ok = false;
+    const std::int64_t now = std::chrono::duration_cast<std::chrono::seconds>(Clock::now().time_since_epoch()).count();
+    std::int64_t last = backend_warned_at.load();
+    if (now - last >= 10 && backend_warned_at.compare_exchange_strong(last, now))
+      spdlog::warn("shared backend: {} (retrying)", e.what());
+  }
+
+  // The limits a job is prepared under: a job that would not fit the per-job
+  // memory whole streams where it can; a synchronous one is never stored, so
+  // never streamed.
+  JobLimits job_limits(bool ephemeral) const {
+    JobLimits limits = config.limits;
+    limits.stream_above_bytes = ephemeral ? 0 : std::min(limits.stream_above_bytes, config.max_job_memory);
+    limits.stream_slab_bytes = std::min(limits.stream_slab_bytes, config.max_job_memory / 4);
+    return limits;
+  }
+
+  // The most memory the job's analyses take beside its volumes.
+  std::uint64_t analyses_memory(const api::JobParams& params, const PreparedVoxelJob& prepared) const {
+    std::uint64_t peak = 0;
+    for (const api::AnalysisRequest& r : params.analyses) {
+      try {
+        peak = std::max(peak, analysis_memory_on_job(r, prepared.grid, prepared.streamed, config.max_job_memory));
+      } catch (const Error& e) {
+        throw Error(e.code(), std::string("analyses: ") + e.what());
+      }
+    }
+    return peak;
+  }
+
+  // Ends a shared job that will not run, by compare-and-set (unless another
+  // replica or a client ended it first), and acknowledges it.
+  void fail_shared(const JobSnapshot& record, JobFailure failure) {
+    JobSnapshot s = record;
+    s.state = JobState::failed;
+    s.failure = std::move(failure);
+    s.finished_at = format_time(Clock::now());
+    if (records->transition(s, {JobState::queued, JobState::running})) {
+      records->drop_input(s.id);
+      std::lock_guard lock(mutex);
+      ++finished_here[1];
+      announce(s);
+    }
+    queue->ack(s.id);
+    deliver();
+  }
+
+  // A job handed out by the shared queue, made ready to run here: its record
+  // and upload read back, prepared again (as at admission) and its memory
+  // reserved. Null when it is not to run (ended meanwhile, too many
+  // deliveries, upload expired): then it was acknowledged.
+  std::shared_ptr<Job> adopt(const TakenJob& taken, PreparedVoxelJob& prepared) {
+    const std::optional<JobSnapshot> record = records->load(taken.id);
+    if (!record || finished(record->state)) {
+      queue->ack(taken.id);
+      return nullptr;
+    }
+    if (taken.deliveries > config.max_deliveries) {
+      fail_shared(*record, JobFailure{"redelivery-limit", "The job stopped its workers",
+                                      "the job was handed to a worker " + std::to_string(taken.deliveries) +
+                                          " times and none finished it (each one's replica stopped while running it); "
+                                          "it is not tried again: check the service's logs, or submit it again"});
+      return nullptr;
+    }
+    std::optional<SharedJobRecords::Input> input = records->load_input(taken.id);
+    if (!input) {
+      fail_shared(*record, JobFailure{"input-expired", "The job's upload expired",
+                                      "the uploaded mesh was no longer kept when a worker took the job; submit it again"});
+      return nullptr;
+    }
+    auto job = std::make_shared<Job>();
+    job->snap = *record;
+    job->snap.state = JobState::queued;  // as far as this process is concerned: mark_running moves it on
+    job->shared = true;
+    try {
+      prepared = prepare_voxel_job(input->bytes, input->name_hint, *record->job, job_limits(false));
+      const std::uint64_t need = mesh_memory(prepared.mesh) + prepared.memory_estimate + analyses_memory(*record->job, prepared);
+      input.reset();
+      // The job was admitted by the replica it was submitted to: here it
+      // waits for its share of this replica's memory.
+      for (;;) {
+        try {
+          job->memory = budget.reserve(need, "the job");
+          break;
+        } catch (const MemoryBusy&) {
+          if (queue->closed()) {
+            queue->release(taken.id);
+            return nullptr;
+          }
+          queue->renew_leases();
+          std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+      }
+    } catch (const Error& e) {
+      const api::ErrorKind& kind = api::error_kind(e.code());
+      fail_shared(*record, JobFailure{kind.slug, "The job failed",
+                                      kind.client_message ? e.what() : "the job failed unexpectedly; it was logged"});
+      return nullptr;
+    }
+    std::lock_guard lock(mutex);
+    jobs[taken.id] = job;
+    return job;
+  }
+
   // A job taken from the queue becomes running only once its record says
   // so: a client that saw "running" then learns after a kill and a restart
   // that it was interrupted while running. False if it was cancelled
@@ -189,7 +330,11 @@ struct JobManager::Impl {
     }
     s.state = JobState::running;
     s.started_at = format_time(Clock::now());
-    if (!job.ephemeral && !job.removed) {
+    if (job.shared) {
+      // Queued, or running on a replica that stopped: another replica, or a
+      // client's cancellation, may have moved it on since it was read.
+      if (!records->transition(s, {JobState::queued, JobState::running})) return false;
+    } else if (!job.ephemeral && !job.removed) {
       try {
         store->save(s);
       } catch (const std::exception& e) {
@@ -204,137 +349,272 @@ struct JobManager::Impl {
     return true;
   }
 
+  // The next job for this worker: synchronous ones first (they have a
+  // caller waiting), then the shared queue's; nullopt when none came.
+  std::optional<TakenJob> next_job(bool* from_shared) {
+    *from_shared = false;
+    if (!shared()) return queue->take(std::chrono::seconds(1));
+    if (auto local = local_queue->take(std::chrono::milliseconds(0))) return local;
+    if (queue->closed()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      return std::nullopt;
+    }
+    auto taken = queue->take(std::chrono::milliseconds(100));
+    *from_shared = taken.has_value();
+    return taken;
+  }
+
   void work() {
     for (;;) {
-      const std::optional<std::string> id = queue->take();
-      if (!id) return;  // closed: the service stops
+      bool from_shared = false;
+      std::optional<TakenJob> taken;
       std::shared_ptr<Job> job;
       PreparedVoxelJob prepared;
-      {
+      try {
+        taken = next_job(&from_shared);
+        if (!taken) {
+          if (queue->closed() && local_queue->closed()) return;  // the service stops
+          continue;
+        }
+        if (from_shared) {
+          job = adopt(*taken, prepared);
+          if (!job) continue;
+        }
+      } catch (const BackendUnavailable& e) {
+        warn_backend(e);
+        // A job taken but not adopted is handed back when the lease runs out.
+        if (from_shared && taken) queue->release(taken->id);
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));
+        continue;
+      }
+      const std::string id = taken->id;
+      if (!job) {
         std::lock_guard lock(mutex);
-        auto it = jobs.find(*id);
+        auto it = jobs.find(id);
         if (it == jobs.end() || it->second->snap.state != JobState::queued || !it->second->prepared) {
-          queue->ack(*id);  // cancelled while waiting
+          local_queue->ack(id);  // cancelled while waiting
           continue;
         }
         job = it->second;
         prepared = std::move(*job->prepared);
         job->prepared.reset();
       }
-      if (!mark_running(*job)) {  // cancelled meanwhile
-        queue->ack(*id);
+      JobQueue& from = job->shared ? *queue : *local_queue;
+      if (job->shared && queue->closed()) {  // this process stops: another replica runs it
+        forget_running(id);
+        job->memory.release();
+        queue->release(id);
+        continue;
+      }
+      bool running = false;
+      try {
+        running = mark_running(*job);
+      } catch (const BackendUnavailable& e) {
+        warn_backend(e);
+      }
+      if (!running) {  // cancelled meanwhile (or the backend went away: the lease runs out)
+        if (job->shared) forget_running(id);
+        job->memory.release();
+        try {
+          from.ack(id);
+        } catch (const std::exception& e) {
+          warn_backend(e);
+        }
         continue;
       }
       deliver();
-      const auto t0 = std::chrono::steady_clock::now();
-      JobSnapshot done;
-      try {
-        const std::vector<api::AnalysisRequest> analyses = prepared.params.analyses;
-        // With analyses to prepare, voxelizing is the first half of the bar.
-        if (!analyses.empty()) job->control.set_span(0.0, 0.5);
-        JobOutput output;
-        VoxelJobResult r;
-        if (prepared.streamed) {
-          // Slab by slab straight into the stored RLE: the grid is never whole.
-          const Grid grid = prepared.grid;
-          const std::int64_t slab_layers = prepared.slab_layers;
-          // A job of values writes them beside its bits, both at once.
-          const std::optional<ValueVolume> type = prepared.params.value_type();
-          store->write_volume(job->snap.id, [&](ByteSink& bits_sink) {
-            BitSlabWriter bits(grid, VolumeFormat::rle, EncodeOptions{}, bits_sink);
-            const BitSlabConsumer to_bits = [&](std::int64_t k0, const BitVolume& slab) { bits.write(k0, slab); };
-            if (!type) {
-              r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
-                                             slab_layers, to_bits);
-            } else {
-              store->write_layer(job->snap.id, "values", *type, [&](ByteSink& values_sink) {
-                ValueSlabWriter values(grid, *type, VolumeFormat::rle, EncodeOptions{}, values_sink);
-                r = execute_streamed_voxel_job(
-                    std::move(prepared), /*with_report=*/true, &job->control, engine_threads, slab_layers, to_bits,
-                    [&](std::int64_t k0, const ValueVolume& slab) { values.write(k0, slab); });
-                values.finish();
-              });
-            }
-            bits.finish();
-          });
-          output.rle = store->volume_rle(job->snap.id);
-          if (type) output.values_rle = store->layer_rle(job->snap.id, "values");
-        } else {
-          r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
-          output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
-          if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
-          for (auto& [name, layer] : r.layers)
-            output.layers.emplace_back(name, std::make_shared<const ValueVolume>(std::move(layer)));
-          if (!job->ephemeral) {
-            store->save_volume(job->snap.id, *output.solid);
-            if (output.values) store->save_layer(job->snap.id, "values", *output.values);
-            for (const auto& [name, layer] : output.layers) store->save_layer(job->snap.id, name, *layer);
+      run(*job, std::move(prepared), from);
+    }
+  }
+
+  // Requires no lock: drops a shared job this process ran from the table.
+  void forget_running(const std::string& id) {
+    std::lock_guard lock(mutex);
+    jobs.erase(id);
+  }
+
+  void run(Job& job_ref, PreparedVoxelJob prepared, JobQueue& from) {
+    Job* job = &job_ref;
+    const std::string id = job->snap.id;
+    const auto t0 = std::chrono::steady_clock::now();
+    JobSnapshot done;
+    bool backend_lost = false;  // the shared backend went away: another replica redoes the job
+    try {
+      const std::vector<api::AnalysisRequest> analyses = prepared.params.analyses;
+      // With analyses to prepare, voxelizing is the first half of the bar.
+      if (!analyses.empty()) job->control.set_span(0.0, 0.5);
+      JobOutput output;
+      VoxelJobResult r;
+      if (prepared.streamed) {
+        // Slab by slab straight into the stored RLE: the grid is never whole.
+        const Grid grid = prepared.grid;
+        const std::int64_t slab_layers = prepared.slab_layers;
+        // A job of values writes them beside its bits, both at once.
+        const std::optional<ValueVolume> type = prepared.params.value_type();
+        store->write_volume(job->snap.id, [&](ByteSink& bits_sink) {
+          BitSlabWriter bits(grid, VolumeFormat::rle, EncodeOptions{}, bits_sink);
+          const BitSlabConsumer to_bits = [&](std::int64_t k0, const BitVolume& slab) { bits.write(k0, slab); };
+          if (!type) {
+            r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
+                                           slab_layers, to_bits);
+          } else {
+            store->write_layer(job->snap.id, "values", *type, [&](ByteSink& values_sink) {
+              ValueSlabWriter values(grid, *type, VolumeFormat::rle, EncodeOptions{}, values_sink);
+              r = execute_streamed_voxel_job(
+                  std::move(prepared), /*with_report=*/true, &job->control, engine_threads, slab_layers, to_bits,
+                  [&](std::int64_t k0, const ValueVolume& slab) { values.write(k0, slab); });
+              values.finish();
+            });
           }
+          bits.finish();
+        });
+        output.rle = store->volume_rle(job->snap.id);
+        if (type) output.values_rle = store->layer_rle(job->snap.id, "values");
+      } else {
+        r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
+        output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
+        if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
+        for (auto& [name, layer] : r.layers)
+          output.layers.emplace_back(name, std::make_shared<const ValueVolume>(std::move(layer)));
+        if (!job->ephemeral) {
+          store->save_volume(job->snap.id, *output.solid);
+          if (output.values) store->save_layer(job->snap.id, "values", *output.values);
+          for (const auto& [name, layer] : output.layers) store->save_layer(job->snap.id, name, *layer);
         }
-        nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
-        std::lock_guard lock(mutex);
-        JobSnapshot& s = job->snap;
-        if (!analyses.empty()) s.analyses = std::move(analyses_done);
-        s.state = JobState::succeeded;
-        s.progress = 1.0;
-        s.mesh = r.report;
-        s.mesh_mass = r.mesh_mass;
-        for (auto& t : r.timings.stages)
-          if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
-            s.timings.push_back(t);
-        s.filled_voxels = r.filled;
-        s.values = r.values_info.is_null() ? nlohmann::json(nullptr) : r.values_info;
-        if (job->ephemeral) {
-          job->result = output;
-        } else {
-          cache_put(s.id, output);
-          succeeded_by_hash[s.content_hash] = s.id;
-        }
-      } catch (const Error& e) {
-        std::lock_guard lock(mutex);
-        JobSnapshot& s = job->snap;
-        if (e.code() == ErrorCode::cancelled) {
-          s.state = job->stopped_by_shutdown ? JobState::failed : JobState::cancelled;
-          if (job->stopped_by_shutdown) s.failure = interrupted("running");
-        } else {
-          s.state = JobState::failed;
-          const api::ErrorKind& kind = api::error_kind(e.code());
-          if (!kind.client_message) spdlog::error("job {}: {}", s.id, log_safe(e.what()));
-          s.failure = JobFailure{kind.slug, "The job failed",
-                                 kind.client_message ? e.what() : "the job failed unexpectedly; it was logged"};
-        }
-      } catch (const StorageFull& e) {
-        // Nothing half-written stays: the disk is not kept full by this job.
-        spdlog::error("job {}: cannot store its result: {}", job->snap.id, e.what());
+      }
+      nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
+      std::lock_guard lock(mutex);
+      JobSnapshot& s = job->snap;
+      if (!analyses.empty()) s.analyses = std::move(analyses_done);
+      s.state = JobState::succeeded;
+      s.progress = 1.0;
+      s.mesh = r.report;
+      s.mesh_mass = r.mesh_mass;
+      for (auto& t : r.timings.stages)
+        if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
+          s.timings.push_back(t);
+      s.filled_voxels = r.filled;
+      s.values = r.values_info.is_null() ? nlohmann::json(nullptr) : r.values_info;
+      if (job->ephemeral) {
+        job->result = output;
+      } else {
+        cache_put(s.id, output);
+        if (!job->shared) succeeded_by_hash[s.content_hash] = s.id;
+      }
+    } catch (const Error& e) {
+      std::lock_guard lock(mutex);
+      JobSnapshot& s = job->snap;
+      if (e.code() == ErrorCode::cancelled) {
+        s.state = job->stopped_by_shutdown ? JobState::failed : JobState::cancelled;
+        if (job->stopped_by_shutdown) s.failure = interrupted("running");
+      } else {
+        s.state = JobState::failed;
+        const api::ErrorKind& kind = api::error_kind(e.code());
+        if (!kind.client_message) spdlog::error("job {}: {}", s.id, log_safe(e.what()));
+        s.failure = JobFailure{kind.slug, "The job failed",
+                               kind.client_message ? e.what() : "the job failed unexpectedly; it was logged"};
+      }
+    } catch (const StorageFull& e) {
+      // Nothing half-written stays: the disk is not kept full by this job.
+      spdlog::error("job {}: cannot store its result: {}", job->snap.id, e.what());
+      if (!job->shared) {
         std::lock_guard guard(job->store_mutex);
         if (!job->removed) store->remove(job->snap.id);
-        std::lock_guard lock(mutex);
-        job->snap.state = JobState::failed;
-        job->snap.failure = JobFailure{"storage-full", "The service's storage is full",
-                                       "the result could not be stored: " + std::string(e.what()) + "; retry later"};
-      } catch (const std::exception& e) {
-        spdlog::error("job {}: internal error: {}", job->snap.id, log_safe(e.what()));
-        std::lock_guard lock(mutex);
-        job->snap.state = JobState::failed;
-        job->snap.failure = JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
       }
-      {
+      std::lock_guard lock(mutex);
+      job->snap.state = JobState::failed;
+      job->snap.failure = JobFailure{"storage-full", "The service's storage is full",
+                                     "the result could not be stored: " + std::string(e.what()) + "; retry later"};
+    } catch (const BackendUnavailable& e) {
+      warn_backend(e);
+      backend_lost = true;
+    } catch (const std::exception& e) {
+      spdlog::error("job {}: internal error: {}", job->snap.id, log_safe(e.what()));
+      std::lock_guard lock(mutex);
+      job->snap.state = JobState::failed;
+      job->snap.failure = JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
+    }
+    {
+      std::lock_guard lock(mutex);
+      job->snap.finished_at = format_time(Clock::now());
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      recent_job_seconds = 0.8 * recent_job_seconds + 0.2 * seconds;
+      done = job->snap;
+      if (!job->shared) announce(done);
+    }
+    job->memory.release();
+    if (job->shared) {
+      finish_shared(*job, done, backend_lost);
+    } else {
+      persist(*job, done);
+      from.ack(id);
+    }
+    deliver();
+    finished_cv.notify_all();
+  }
+
+  // A shared job's end: written by compare-and-set (a job run twice ends
+  // once), its upload dropped, its queue entry acknowledged. A job this
+  // process stops, or whose end cannot be written, is handed back instead.
+  void finish_shared(Job& job, JobSnapshot& done, bool backend_lost) {
+    const std::string id = done.id;
+    forget_running(id);
+    if (backend_lost || job.stopped_by_shutdown) {
+      queue->release(id);  // another replica runs it again
+      return;
+    }
+    try {
+      if (records->transition(done, {JobState::running})) {
         std::lock_guard lock(mutex);
-        job->snap.finished_at = format_time(Clock::now());
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        recent_job_seconds = 0.8 * recent_job_seconds + 0.2 * seconds;
-        done = job->snap;
+        ++finished_here[done.state == JobState::succeeded ? 0 : done.state == JobState::failed ? 1 : 2];
         announce(done);
       }
-      job->memory.release();
-      persist(*job, done);
-      queue->ack(*id);
-      deliver();
-      finished_cv.notify_all();
+      records->drop_input(id);
+      queue->ack(id);
+    } catch (const BackendUnavailable& e) {
+      warn_backend(e);
+      queue->release(id);
+    }
+  }
+
+  // Shared backend: every ~100 ms, the running jobs' progress and this
+  // replica's heartbeat out, cancellations in, leases renewed.
+  void keep() {
+    std::unique_lock wait_lock(keeper_mutex);
+    while (!keeper_wake.wait_for(wait_lock, std::chrono::milliseconds(100), [&] { return keeper_stop; })) {
+      std::vector<std::pair<std::string, double>> running;
+      {
+        std::lock_guard lock(mutex);
+        for (const auto& [id, job] : jobs)
+          if (job->shared && job->snap.state == JobState::running) running.emplace_back(id, job->control.progress());
+      }
+      try {
+        const std::vector<std::string> cancel = records->report_running(running);
+        backend_ok = true;
+        std::lock_guard lock(mutex);
+        for (const std::string& id : cancel)
+          if (auto it = jobs.find(id); it != jobs.end()) it->second->control.request_cancel();
+      } catch (const std::exception& e) {
+        warn_backend(e);
+      }
+      try {
+        queue->renew_leases();
+      } catch (const std::exception& e) {
+        warn_backend(e);
+      }
     }
   }
 
   std::size_t expire() {
+    if (shared()) {
+      // The backend expires records and results itself; its index is pruned.
+      try {
+        records->prune();
+      } catch (const std::exception& e) {
+        warn_backend(e);
+      }
+      return 0;
+    }
     const auto now = Clock::now();
     std::vector<std::shared_ptr<Job>> victims;
     {
@@ -363,12 +643,33 @@ struct JobManager::Impl {
     jobs.erase(it);
   }
 
+  // A job's current snapshot: from the table (every job, embedded; the jobs
+  // running here, shared) or the shared records. Synchronous jobs are not
+  // found: they have no routes.
+  std::optional<JobSnapshot> find(const std::string& id) const {
+    {
+      std::lock_guard lock(mutex);
+      auto it = jobs.find(id);
+      if (it != jobs.end()) {
+        if (it->second->ephemeral) return std::nullopt;
+        return snapshot_of(*it->second);
+      }
+    }
+    if (shared()) return records->load(id);
+    return std::nullopt;
+  }
+  bool succeeded(const std::string& id) const {
+    const auto s = find(id);
+    return s && s->state == JobState::succeeded;
+  }
+
   int retry_after() const {
     const int workers_n = std::max<int>(1, static_cast<int>(workers.size()));
     const double seconds = recent_job_seconds * static_cast<double>(queue->depth() + 1) / workers_n;
     return std::clamp(static_cast<int>(std::ceil(seconds)), 1, 3600);
   }
 
+  RemoveResult cancel_or_delete_shared(const std::string& id);
   std::shared_ptr<Job> enqueue(std::vector<std::uint8_t>& mesh_bytes, const std::string& name_hint,
                                const nlohmann::json& params_json, bool ephemeral, JobSnapshot* cached_out,
                                std::uint64_t max_voxels = 0);
@@ -379,7 +680,8 @@ JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(s
   // Jobs a previous process left queued or running are reported failed with
   // reason "interrupted" rather than silently re-run: a client polling them
   // learns what happened and decides whether to resubmit.
-  for (JobSnapshot s : m.store->load_all()) {
+  // Shared records belong to every replica: none is this process's to mark.
+  for (JobSnapshot s : m.shared() ? std::vector<JobSnapshot>{} : m.store->load_all()) {
     if (!finished(s.state)) {
       s.failure = interrupted(s.state == JobState::queued ? "queued" : "running");
       s.state = JobState::failed;
@@ -401,6 +703,7 @@ JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(s
   m.engine_threads = 0;
   for (int i = 0; i < n; ++i) m.workers.emplace_back([&m] { m.work(); });
   m.expiry = std::make_unique<ExpiryTimer>(m.config.result_ttl, [&m] { m.expire(); });
+  if (m.shared()) m.keeper = std::thread([&m] { m.keep(); });
 }
 
 JobManager::~JobManager() { shutdown(std::chrono::seconds(0)); }
@@ -408,17 +711,21 @@ JobManager::~JobManager() { shutdown(std::chrono::seconds(0)); }
 std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_bytes, const std::string& name_hint,
                                                const nlohmann::json& params_json, bool ephemeral,
                                                JobSnapshot* cached_out, std::uint64_t max_voxels) {
+  // Synchronous jobs wait in this process; with a shared backend the others
+  // wait in its queue, for any replica.
+  const bool to_shared = shared() && !ephemeral;
+  JobQueue& target = to_shared ? *queue : *local_queue;
   {
     std::lock_guard lock(mutex);
     if (!accepting) throw NotAccepting("the service is shutting down and accepts no new jobs");
-    if (queue->depth() >= config.queue_size)
-      throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later",
-                      retry_after());
   }
+  if (target.depth() >= config.queue_size)
+    throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later",
+                    retry_after());
   const auto parsed = std::make_shared<const api::JobParams>(api::parse_job_params(params_json));
   const api::JobParams& params = *parsed;
   if (!ephemeral && store->free_bytes() < config.min_free_disk)
-    throw StorageFull("the service's disk has less than " + std::to_string(config.min_free_disk >> 20) +
+    throw StorageFull("the service's storage has less than " + std::to_string(config.min_free_disk >> 20) +
                       " MiB free and takes no new jobs until results expire or are deleted; retry later");
   // Synchronous jobs are never stored, so never answered from the store: they
   // skip the hash (a tenth of a small job's time).
@@ -427,7 +734,12 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   // An identical earlier submission that succeeded answers this one.
   if (!ephemeral && cached_out) {
     std::optional<JobSnapshot> original;
-    {
+    if (to_shared) {
+      if (const auto id = records->succeeded_with_hash(hash)) {
+        original = records->load(*id);
+        if (original && original->state != JobState::succeeded) original.reset();
+      }
+    } else {
       std::lock_guard lock(mutex);
       auto h = succeeded_by_hash.find(hash);
       if (h != succeeded_by_hash.end()) original = jobs.at(h->second)->snap;
@@ -444,14 +756,16 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
       try {
         store->share_volume(original->id, s.id);
         store->save(s);
-        auto job = std::make_shared<Job>();
-        job->snap = s;
-        {
+        if (!to_shared) {
+          auto job = std::make_shared<Job>();
+          job->snap = s;
           std::lock_guard lock(mutex);
           jobs.emplace(s.id, job);
         }
         *cached_out = s;
         return nullptr;
+      } catch (const BackendUnavailable&) {
+        throw;
       } catch (const std::exception& e) {
         // The original was deleted meanwhile: fall through and compute.
         store->remove(s.id);
@@ -467,12 +781,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   // decoded mesh is known, a bound from the bytes and the format.
   MemoryBudget::Reservation decoding =
       budget.reserve(decode_memory_estimate(mesh_bytes, name_hint, config.limits.decode), "decoding this upload");
-  JobLimits limits = config.limits;
-  // A job that would not fit the per-job memory whole streams where it can;
-  // a synchronous one is never stored, so never streamed.
-  limits.stream_above_bytes = ephemeral ? 0 : std::min(limits.stream_above_bytes, config.max_job_memory);
-  limits.stream_slab_bytes = std::min(limits.stream_slab_bytes, config.max_job_memory / 4);
-  PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, limits);
+  PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, job_limits(ephemeral));
   if (max_voxels > 0 && prepared.grid.voxel_count() > max_voxels)
     throw Error(ErrorCode::limit_exceeded, "the grid has " + std::to_string(prepared.grid.voxel_count()) +
                                                " voxels; synchronous voxelization takes at most " +
@@ -481,19 +790,22 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
     throw Error(ErrorCode::limit_exceeded,
                 "the job needs about " + std::to_string(prepared.memory_estimate >> 20) + " MiB for its volumes, over the limit of " +
                     std::to_string(config.max_job_memory >> 20) + " MiB; use a lower resolution or a larger voxel_size");
-  std::uint64_t analyses_peak = 0;
-  for (const api::AnalysisRequest& r : params.analyses) {
-    try {
-      analyses_peak = std::max(analyses_peak, analysis_memory_on_job(r, prepared.grid, prepared.streamed, config.max_job_memory));
-    } catch (const Error& e) {
-      throw Error(e.code(), std::string("analyses: ") + e.what());
-    }
+  if (!ephemeral && config.max_result_bytes > 0) {
+    const std::uint64_t bytes = result_volume_bytes(prepared.grid, params);
+    if (bytes > config.max_result_bytes)
+      throw Error(ErrorCode::limit_exceeded,
+                  "the job's volumes take up to " + std::to_string(bytes >> 20) + " MiB to store, over the service's cap of " +
+                      std::to_string(config.max_result_bytes >> 20) +
+                      " MiB a result; use a lower resolution or a larger voxel_size");
   }
-  mesh_bytes.clear();
-  mesh_bytes.shrink_to_fit();
-  decoding.release();
-  MemoryBudget::Reservation memory =
-      budget.reserve(mesh_memory(prepared.mesh) + prepared.memory_estimate + analyses_peak, "the job");
+  const std::uint64_t analyses_peak = analyses_memory(params, prepared);
+  MemoryBudget::Reservation memory;
+  if (!to_shared) {
+    mesh_bytes.clear();
+    mesh_bytes.shrink_to_fit();
+    decoding.release();
+    memory = budget.reserve(mesh_memory(prepared.mesh) + prepared.memory_estimate + analyses_peak, "the job");
+  }
 
   auto job = std::make_shared<Job>();
   job->memory = std::move(memory);
@@ -511,6 +823,37 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
   s.timings = prepared.timings.stages;
   s.content_hash = hash;
   s.analyses = analyses_status(params.analyses, s.id, "pending");
+  if (to_shared) {
+    // Whichever replica takes it prepares it again from the stored upload:
+    // only the record and the bytes travel.
+    prepared = PreparedVoxelJob{};
+    store->save(s);
+    try {
+      records->save_input(s.id, mesh_bytes, name_hint);
+      mesh_bytes.clear();
+      mesh_bytes.shrink_to_fit();
+      if (!queue->submit(s.id)) {
+        store->remove(s.id);
+        throw QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later",
+                        retry_after());
+      }
+    } catch (const QueueFull&) {
+      throw;
+    } catch (...) {
+      try {
+        store->remove(s.id);
+      } catch (const std::exception&) {
+        // The backend is away: the record without an entry expires with nothing.
+      }
+      throw;
+    }
+    {
+      std::lock_guard lock(mutex);
+      announce(s);
+    }
+    deliver();
+    return job;
+  }
   job->prepared = std::move(prepared);
   // Recorded before a worker can see it, so the final record always wins. A
   // job that cannot be recorded is not accepted (a full disk is a 507).
@@ -519,7 +862,7 @@ std::shared_ptr<Job> JobManager::Impl::enqueue(std::vector<std::uint8_t>& mesh_b
     std::lock_guard lock(mutex);
     // Queued under the table's lock: a worker that takes it at once finds it.
     const bool closing = !accepting;
-    if (closing || !queue->submit(s.id)) {
+    if (closing || !target.submit(s.id)) {
       const int wait = retry_after();
       if (!ephemeral) store->remove(s.id);
       if (closing) throw NotAccepting("the service is shutting down and accepts no new jobs");
@@ -548,14 +891,17 @@ JobSnapshot JobManager::submit(std::vector<std::uint8_t> mesh_bytes, const std::
   return impl_->snapshot_of(*job);
 }
 
-std::optional<JobSnapshot> JobManager::get(const std::string& id) const {
-  std::lock_guard lock(impl_->mutex);
-  auto it = impl_->jobs.find(id);
-  if (it == impl_->jobs.end() || it->second->ephemeral) return std::nullopt;
-  return impl_->snapshot_of(*it->second);
-}
+std::optional<JobSnapshot> JobManager::get(const std::string& id) const { return impl_->find(id); }
 
 std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
+  if (impl_->shared()) {
+    std::vector<JobSnapshot> page = impl_->records->list(offset, limit, total);
+    // Those running here show their live progress.
+    std::lock_guard lock(impl_->mutex);
+    for (JobSnapshot& s : page)
+      if (auto it = impl_->jobs.find(s.id); it != impl_->jobs.end() && !it->second->ephemeral) s = impl_->snapshot_of(*it->second);
+    return page;
+  }
   std::vector<JobSnapshot> all;
   {
     std::lock_guard lock(impl_->mutex);
@@ -571,7 +917,49 @@ std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit,
   return {first, first + static_cast<std::ptrdiff_t>(std::min(limit, all.size() - offset))};
 }
 
+JobManager::RemoveResult JobManager::Impl::cancel_or_delete_shared(const std::string& id) {
+  {
+    std::lock_guard lock(mutex);
+    auto it = jobs.find(id);
+    if (it != jobs.end()) {
+      if (it->second->ephemeral) return RemoveResult::not_found;
+      if (it->second->snap.state == JobState::running) {
+        it->second->control.request_cancel();  // running here: the worker records the end
+        return RemoveResult::cancelled;
+      }
+    }
+  }
+  std::optional<JobSnapshot> record = records->load(id);
+  if (!record) return RemoveResult::not_found;
+  if (record->state == JobState::queued) {
+    JobSnapshot s = *record;
+    s.state = JobState::cancelled;
+    s.finished_at = format_time(Clock::now());
+    if (records->transition(s, {JobState::queued})) {
+      queue->cancel(id);
+      records->drop_input(id);
+      {
+        std::lock_guard lock(mutex);
+        announce(s);
+      }
+      deliver();
+      return RemoveResult::cancelled;
+    }
+    record = records->load(id);  // taken meanwhile
+    if (!record) return RemoveResult::not_found;
+  }
+  if (record->state == JobState::running) {
+    // Whichever replica runs it sees the request within ~100 ms.
+    records->request_cancel(id);
+    return RemoveResult::cancelled;
+  }
+  store->remove(id);
+  cache.drop_job(id);
+  return RemoveResult::deleted;
+}
+
 JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) {
+  if (impl_->shared()) return impl_->cancel_or_delete_shared(id);
   std::optional<JobSnapshot> cancelled;
   std::shared_ptr<Job> target;
   {
@@ -610,6 +998,15 @@ std::optional<std::string> JobManager::load_artifact(const std::string& id, cons
 }
 
 void JobManager::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) {
+  if (impl_->shared()) {
+    // The store keeps it only while the job's record is there.
+    try {
+      impl_->store->save_artifact(id, key, bytes);
+    } catch (const std::exception& e) {
+      spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
+    }
+    return;
+  }
   std::shared_ptr<Job> job;
   {
     std::lock_guard lock(impl_->mutex);
@@ -627,62 +1024,43 @@ void JobManager::save_artifact(const std::string& id, const std::string& key, co
 }
 
 std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
-  {
-    std::lock_guard lock(impl_->mutex);
-    auto it = impl_->jobs.find(id);
-    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
-  }
+  if (!impl_->succeeded(id)) return nullptr;
   if (auto v = impl_->cache.get<BitVolume>(id)) return v;
   auto v = impl_->store->load_volume(id);
   if (v) {
     std::lock_guard lock(impl_->mutex);
-    if (impl_->jobs.count(id)) impl_->cache.put(id, v, v->byte_size());
+    if (impl_->shared() || impl_->jobs.count(id)) impl_->cache.put(id, v, v->byte_size());
   }
   return v;
 }
 
 std::shared_ptr<const MappedFile> JobManager::volume_rle(const std::string& id) {
-  {
-    std::lock_guard lock(impl_->mutex);
-    auto it = impl_->jobs.find(id);
-    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
-  }
+  if (!impl_->succeeded(id)) return nullptr;
   return impl_->store->volume_rle(id);
 }
 
 std::shared_ptr<const MappedFile> JobManager::values_rle(const std::string& id) {
-  {
-    std::lock_guard lock(impl_->mutex);
-    auto it = impl_->jobs.find(id);
-    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded || !it->second->snap.has_value_volume())
-      return nullptr;
-  }
+  const auto s = impl_->find(id);
+  if (!s || s->state != JobState::succeeded || !s->has_value_volume()) return nullptr;
   return impl_->store->layer_rle(id, "values");
 }
 
 std::uint64_t JobManager::max_job_memory() const { return impl_->config.max_job_memory; }
 
 std::shared_ptr<const ValueVolume> JobManager::values(const std::string& id) {
-  {
-    std::lock_guard lock(impl_->mutex);
-    auto it = impl_->jobs.find(id);
-    if (it == impl_->jobs.end() || !it->second->snap.has_value_volume()) return nullptr;
-  }
+  const auto s = impl_->find(id);
+  if (!s || !s->has_value_volume()) return nullptr;
   return layer(id, "values");
 }
 
 std::shared_ptr<const ValueVolume> JobManager::layer(const std::string& id, const std::string& name) {
   const std::string key = VolumeCache::layer_key(id, name);
-  {
-    std::lock_guard lock(impl_->mutex);
-    auto it = impl_->jobs.find(id);
-    if (it == impl_->jobs.end() || it->second->snap.state != JobState::succeeded) return nullptr;
-  }
+  if (!impl_->succeeded(id)) return nullptr;
   if (auto v = impl_->cache.get<ValueVolume>(key)) return v;
   auto v = impl_->store->load_layer(id, name);
   if (v) {
     std::lock_guard lock(impl_->mutex);
-    if (impl_->jobs.count(id)) impl_->cache.put(key, v, byte_size(*v));
+    if (impl_->shared() || impl_->jobs.count(id)) impl_->cache.put(key, v, byte_size(*v));
   }
   return v;
 }
@@ -702,7 +1080,7 @@ JobOutput JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::
     cancelled = true;
     spdlog::info("job {}: the client of a synchronous request went away; cancelling", job->snap.id);
     if (job->snap.state == JobState::queued) {
-      impl_->queue->cancel(job->snap.id);
+      impl_->local_queue->cancel(job->snap.id);
       job->snap.state = JobState::cancelled;  // the worker skips it
       job->snap.finished_at = format_time(Clock::now());
       job->prepared.reset();
@@ -718,6 +1096,24 @@ JobOutput JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::
 
 JobCounts JobManager::counts() const {
   JobCounts c;
+  if (impl_->shared()) {
+    {
+      std::lock_guard lock(impl_->mutex);
+      for (const auto& [id, job] : impl_->jobs)
+        if (job->shared && job->snap.state == JobState::running) ++c.running;
+      c.succeeded = impl_->finished_here[0];
+      c.failed = impl_->finished_here[1];
+      c.cancelled = impl_->finished_here[2];
+    }
+    try {
+      c.queue_depth = impl_->queue->depth();
+      c.live_replicas = impl_->records->live_replicas();
+    } catch (const std::exception& e) {
+      impl_->warn_backend(e);
+      c.live_replicas = 0;
+    }
+    return c;
+  }
   std::lock_guard lock(impl_->mutex);
   for (const auto& [id, job] : impl_->jobs) {
     switch (job->snap.state) {
@@ -738,7 +1134,16 @@ MemoryBudget::Reservation JobManager::reserve_memory(std::uint64_t bytes, const 
 
 std::uint64_t JobManager::memory_budget() const { return impl_->budget.total(); }
 std::uint64_t JobManager::memory_in_use() const { return impl_->budget.used(); }
-bool JobManager::storage_ok() const { return impl_->store->free_bytes() >= impl_->config.min_free_disk; }
+bool JobManager::storage_ok() const {
+  try {
+    return impl_->store->free_bytes() >= impl_->config.min_free_disk;
+  } catch (const std::exception& e) {
+    impl_->warn_backend(e);
+    return false;
+  }
+}
+
+bool JobManager::backend_ok() const { return !impl_->shared() || impl_->backend_ok.load(); }
 
 bool JobManager::accepting() const {
   std::lock_guard lock(impl_->mutex);
@@ -754,7 +1159,10 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
     m.shut_down = true;
     m.accepting = false;
     // Queued jobs will not run in this process: record them as interrupted.
-    for (const std::string& id : m.queue->close()) {
+    // (A shared queue's stay there, for the other replicas.)
+    std::vector<std::string> left = m.local_queue->close();
+    if (m.shared()) m.queue->close();
+    for (const std::string& id : left) {
       auto it = m.jobs.find(id);
       if (it == m.jobs.end()) continue;
       const std::shared_ptr<Job>& job = it->second;
@@ -781,11 +1189,20 @@ void JobManager::shutdown(std::chrono::seconds deadline) {
       m.finished_cv.wait(lock, [&] { return !running(); });
     }
   }
-  for (const auto& s : abandoned) m.store->save(s);
+  for (const auto& s : abandoned)
+    if (!s.content_hash.empty()) m.store->save(s);  // synchronous jobs (no hash) are never stored
   m.deliver();
   m.finished_cv.notify_all();
   for (auto& t : m.workers) t.join();
   m.expiry.reset();
+  if (m.keeper.joinable()) {
+    {
+      std::lock_guard lock(m.keeper_mutex);
+      m.keeper_stop = true;
+    }
+    m.keeper_wake.notify_all();
+    m.keeper.join();
+  }
 }
 
 std::size_t JobManager::expire_now() { return impl_->expire(); }

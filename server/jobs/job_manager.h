@@ -96,8 +96,9 @@ struct JobOutput {
   std::shared_ptr<const MappedFile> values_rle;
 };
 
-class JobQueue;  // server/jobs/job_queue.h
-class JobStore;  // server/jobs/job_store.h
+class JobQueue;          // server/jobs/job_queue.h
+class JobStore;          // server/jobs/job_store.h
+class SharedJobRecords;  // server/jobs/shared_records.h
 
 struct JobManagerConfig {
   // Where jobs wait and where they are kept: null = the embedded ones (an
@@ -105,6 +106,17 @@ struct JobManagerConfig {
   // backend pass theirs.
   std::shared_ptr<JobQueue> queue;
   std::shared_ptr<JobStore> store;
+  // Set when replicas share one backend (server/redis/): the job records are
+  // there, not in this process; queue and store are then the backend's.
+  // Synchronous jobs (run_sync) still run in this process only.
+  std::shared_ptr<SharedJobRecords> records;
+  // A shared job handed out this many times without finishing (its workers'
+  // replicas died on it) fails with "redelivery-limit" instead of looping.
+  int max_deliveries = 3;
+  // Jobs whose volumes (uncompressed) would be over this many bytes are
+  // refused at admission (422); 0 = no cap. For a backend that keeps results
+  // in memory (Redis), so that one job cannot fill it.
+  std::uint64_t max_result_bytes = 0;
   int workers = 0;              // 0 = hardware concurrency
   std::size_t queue_size = 64;  // jobs waiting (not running) at most
   std::filesystem::path data_dir = "voxd-data";
@@ -139,9 +151,14 @@ class NotAccepting : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Embedded: every job the service keeps, by state. Shared: this replica's
+// jobs (queued by it and waiting here for nothing: 0; running here; and
+// finished by its workers since it started), the shared queue's depth and
+// the replicas alive.
 struct JobCounts {
   std::uint64_t queued = 0, running = 0, succeeded = 0, failed = 0, cancelled = 0;
   std::size_t queue_depth = 0;
+  std::optional<std::size_t> live_replicas;  // shared backends only
 };
 
 class JobManager {
@@ -216,8 +233,11 @@ class JobManager {
   std::uint64_t memory_budget() const;
   // The most memory one job's volumes (and an analysis of them) may take.
   std::uint64_t max_job_memory() const;
-  // Whether the data directory has at least min_free_disk free.
+  // Whether the data directory (or the shared store) has at least
+  // min_free_disk free.
   bool storage_ok() const;
+  // Whether the shared backend answered lately (always true embedded).
+  bool backend_ok() const;
   std::uint64_t memory_in_use() const;
 
   // Stops accepting; lets running jobs finish for up to `deadline`, then

@@ -14,13 +14,18 @@ bool InProcessJobQueue::submit(const std::string& id) {
   return true;
 }
 
-std::optional<std::string> InProcessJobQueue::take() {
+std::optional<TakenJob> InProcessJobQueue::take(std::chrono::milliseconds wait) {
   std::unique_lock lock(mutex_);
-  ready_.wait(lock, [&] { return closed_ || !waiting_.empty(); });
-  if (closed_) return std::nullopt;
-  std::string id = std::move(waiting_.front());
+  ready_.wait_for(lock, wait, [&] { return closed_ || !waiting_.empty(); });
+  if (closed_ || waiting_.empty()) return std::nullopt;
+  TakenJob taken{std::move(waiting_.front())};
   waiting_.pop_front();
-  return id;
+  return taken;
+}
+
+bool InProcessJobQueue::closed() const {
+  std::lock_guard lock(mutex_);
+  return closed_;
 }
 
 bool InProcessJobQueue::cancel(const std::string& id) {

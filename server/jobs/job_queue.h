@@ -1,9 +1,11 @@
 #pragma once
 // Jobs waiting for a worker, by id: submit, take, ack, cancel. The job
 // engine's workers only talk to this interface; the embedded implementation
-// is in-process (InProcessJobQueue below). A shared backend (replicas taking
-// from one Redis list) implements the same calls: take() then hands out a
-// job another replica accepted, and ack() ends its lease.
+// is in-process (InProcessJobQueue below). A shared backend
+// (server/redis/redis_job_queue.h: replicas taking from one Redis stream)
+// implements the same calls: take() then hands out a job another replica
+// accepted, or one whose worker died, under a lease that ack() ends.
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -14,20 +16,36 @@
 
 namespace voxd::server {
 
+struct TakenJob {
+  std::string id;
+  // How many times the job was handed out, this time included: more than
+  // one when a worker before this one stopped (its replica died).
+  int deliveries = 1;
+};
+
 class JobQueue {
  public:
   virtual ~JobQueue() = default;
   // Queues a job; false when the queue holds its capacity already (or is closed).
   virtual bool submit(const std::string& id) = 0;
-  // The next job, waiting for one; nullopt once the queue is closed.
-  virtual std::optional<std::string> take() = 0;
+  // The next job, waiting up to `wait` for one; nullopt when none came or
+  // the queue is closed (closed() tells which).
+  virtual std::optional<TakenJob> take(std::chrono::milliseconds wait) = 0;
+  virtual bool closed() const = 0;
   // The worker that took `id` is done with it (succeeded, failed or cancelled).
   virtual void ack(const std::string& id) = 0;
+  // The worker that took `id` gives it back unfinished (this process stops):
+  // the next take, here or in another replica, gets it.
+  virtual void release(const std::string& id) { ack(id); }
+  // Keeps the leases of the jobs taken here alive; the engine calls it about
+  // every 100 ms. Nothing to do in-process.
+  virtual void renew_leases() {}
   // Removes a job that waits; false when it is not waiting (taken, unknown).
   virtual bool cancel(const std::string& id) = 0;
   // Jobs waiting.
   virtual std::size_t depth() const = 0;
-  // Takes no more, wakes every take(), and hands back the jobs that waited.
+  // Takes no more, wakes every take(), and hands back the jobs that waited
+  // for this process (none for a shared queue: they wait for other replicas).
   virtual std::vector<std::string> close() = 0;
 };
 
@@ -35,7 +53,8 @@ class InProcessJobQueue final : public JobQueue {
  public:
   explicit InProcessJobQueue(std::size_t capacity) : capacity_(capacity) {}
   bool submit(const std::string& id) override;
-  std::optional<std::string> take() override;
+  std::optional<TakenJob> take(std::chrono::milliseconds wait) override;
+  bool closed() const override;
   void ack(const std::string&) override {}
   bool cancel(const std::string& id) override;
   std::size_t depth() const override;

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "api/analysis_json.h"
 #include "api/result_json.h"
 
 namespace voxd::server {
@@ -163,6 +164,12 @@ JobSnapshot job_from_json(const json& r) {
   job.streamed = r.value("streamed", false);  // records of earlier releases have none
   job.content_hash = r.at("content_hash");
   return job;
+}
+
+nlohmann::json stored_record(const JobSnapshot& job) {
+  nlohmann::json record = to_json(job);
+  if (job.mesh_mass) record["mesh_mass"] = api::to_json(*job.mesh_mass);
+  return record;
 }
 
 }  // namespace voxd::server

@@ -11,6 +11,9 @@
 namespace voxd::server {
 
 nlohmann::json to_json(const JobSnapshot& job);
+// The record a store keeps: the status JSON plus what only the service
+// reads back (the mesh's exact mass properties).
+nlohmann::json stored_record(const JobSnapshot& job);
 // Throws std::exception on a malformed record.
 JobSnapshot job_from_json(const nlohmann::json& record);
 // RFC 3339 UTC with milliseconds, e.g. 2026-11-22T23:41:30.123Z.

@@ -29,9 +29,22 @@ class StorageFull : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The shared backend (Redis) cannot be reached: HTTP 503 backend-unavailable,
+// /readyz not ready. Nothing was changed by the call that threw it.
+class BackendUnavailable : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // Slabs replayed from a stored volume (trusted: written by the service) are
 // at least one layer of a grid of up to kMaxGridDim^2 voxels a layer.
 inline constexpr ReadLimits kStoredSlabLimits{std::uint64_t{4} << 30};
+
+// A stored volume read whole is trusted to be as large as the job limits let
+// it be (8 Gi voxels), not the untrusted-input default of 1 GiB.
+inline constexpr ReadLimits kStoredVolumeLimits{std::uint64_t{1} << 36};
+// A stored layer's RLE of values of `type` ("u8", "f32", "rgba8"), decoded.
+ValueVolume read_stored_layer(std::string_view type, std::span<const std::uint8_t> rle);
 
 // A stored result is replayed (re-encoded, analysed) in slabs of about
 // 16 MiB: small beside the images, large enough that a slab is cheap to

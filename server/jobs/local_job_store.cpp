@@ -1,7 +1,5 @@
 #include "server/jobs/local_job_store.h"
 
-#include "api/analysis_json.h"
-
 #include <sstream>
 
 #include <fcntl.h>
@@ -98,9 +96,7 @@ std::vector<JobSnapshot> LocalJobStore::load_all() const {
 
 void LocalJobStore::save(const JobSnapshot& job) const {
   make_dirs(job_dir(job.id));
-  nlohmann::json record = to_json(job);
-  if (job.mesh_mass) record["mesh_mass"] = api::to_json(*job.mesh_mass);
-  const std::string text = record.dump();
+  const std::string text = stored_record(job).dump();
   write_atomically(job_dir(job.id) / "record.json", [&](ByteSink& sink) { sink.write(text.data(), text.size()); });
 }
 
@@ -175,10 +171,6 @@ std::optional<std::vector<std::uint8_t>> read_file(const fs::path& path) {
   return std::vector<std::uint8_t>{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// The store's own files are trusted to be as large as the job limits let
-// them be (8 Gi voxels), not the untrusted-input default of 1 GiB.
-constexpr ReadLimits kStoredVolumeLimits{std::uint64_t{1} << 36};
-
 }  // namespace
 
 std::shared_ptr<const BitVolume> LocalJobStore::load_volume(const std::string& id) const {
@@ -188,12 +180,9 @@ std::shared_ptr<const BitVolume> LocalJobStore::load_volume(const std::string& i
 }
 
 std::shared_ptr<const ValueVolume> LocalJobStore::load_layer(const std::string& id, const std::string& name) const {
-  if (const auto bytes = read_file(job_dir(id) / (name + ".u8.rle")))
-    return std::make_shared<const ValueVolume>(read_rle_u8(*bytes, kStoredVolumeLimits));
-  if (const auto bytes = read_file(job_dir(id) / (name + ".f32.rle")))
-    return std::make_shared<const ValueVolume>(read_rle_f32(*bytes, kStoredVolumeLimits));
-  if (const auto bytes = read_file(job_dir(id) / (name + ".rgba8.rle")))
-    return std::make_shared<const ValueVolume>(read_rle_rgba8(*bytes, kStoredVolumeLimits));
+  for (const char* type : {"u8", "f32", "rgba8"})
+    if (const auto bytes = read_file(job_dir(id) / (name + "." + type + ".rle")))
+      return std::make_shared<const ValueVolume>(read_stored_layer(type, *bytes));
   return nullptr;
 }
 

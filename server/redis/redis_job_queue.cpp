@@ -1,0 +1,207 @@
+#include "server/redis/redis_job_queue.h"
+
+#include <spdlog/spdlog.h>
+
+#include "server/jobs/job_store.h"
+#include "voxd/encode/number_text.h"
+
+namespace voxd::server {
+namespace {
+
+// KEYS: stream, job. ARGV: group, capacity, job id. Queues the job unless
+// the jobs waiting (in the stream, not yet handed out) fill the capacity;
+// the job's record remembers its entry, for cancelling it.
+constexpr const char* kSubmit = R"lua(
+local n = redis.call('XLEN', KEYS[1])
+local pending = redis.call('XPENDING', KEYS[1], ARGV[1])[1]
+if n - pending >= tonumber(ARGV[2]) then return false end
+local e = redis.call('XADD', KEYS[1], '*', 'job', ARGV[3])
+redis.call('HSET', KEYS[2], 'entry', e)
+return e
+)lua";
+
+// KEYS: stream. ARGV: group, consumer, entries... Renews the lease of each
+// entry this consumer still holds; one another replica claimed is left to it.
+constexpr const char* kRenew = R"lua(
+local kept = 0
+for i = 3, #ARGV do
+  local p = redis.call('XPENDING', KEYS[1], ARGV[1], ARGV[i], ARGV[i], 1)
+  if p[1] and p[1][2] == ARGV[2] then
+    redis.call('XCLAIM', KEYS[1], ARGV[1], ARGV[2], 0, ARGV[i], 'JUSTID')
+    kept = kept + 1
+  end
+end
+return kept
+)lua";
+
+// The job id in a stream entry [id, [field, value, ...]].
+std::string job_of(const RedisReply& entry) {
+  const RedisReply fields = entry.at(1);
+  for (std::size_t i = 0; i + 1 < fields.size(); i += 2)
+    if (fields.at(i).text() == "job") return std::string(fields.at(i + 1).text());
+  return {};
+}
+
+}  // namespace
+
+RedisJobQueue::RedisJobQueue(std::shared_ptr<RedisPool> pool, RedisQueueOptions options)
+    : pool_(std::move(pool)), options_(std::move(options)), stream_(options_.prefix + "queue"),
+      group_(options_.prefix + "workers") {
+  try {
+    ensure_group();
+  } catch (const BackendUnavailable& e) {
+    // The replica starts anyway (not ready); the group is made on first use.
+    spdlog::warn("redis: {}", e.what());
+  }
+}
+
+void RedisJobQueue::ensure_group() const {
+  if (group_ready_) return;
+  try {
+    pool_->command({"XGROUP", "CREATE", stream_, group_, "0", "MKSTREAM"});
+  } catch (const RedisError& e) {
+    if (std::string(e.what()).find("BUSYGROUP") == std::string::npos) throw;
+  }
+  group_ready_ = true;
+}
+
+bool RedisJobQueue::submit(const std::string& id) {
+  if (closed_) return false;
+  ensure_group();
+  const std::string capacity = std::to_string(options_.capacity);
+  const RedisReply r = pool_->command({"EVAL", kSubmit, "2", stream_, job_key(id), group_, capacity, id});
+  return !r.is_nil();
+}
+
+std::optional<TakenJob> RedisJobQueue::claim_stale() {
+  {
+    // Once a second per replica is enough: a lease is many seconds.
+    std::lock_guard lock(mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_claim_ < std::chrono::seconds(1)) return std::nullopt;
+    last_claim_ = now;
+  }
+  std::string cursor;
+  {
+    std::lock_guard lock(mutex_);
+    cursor = claim_cursor_;
+  }
+  const std::string idle = std::to_string(options_.lease.count());
+  const RedisReply r =
+      pool_->command({"XAUTOCLAIM", stream_, group_, options_.consumer, idle, cursor, "COUNT", "1"});
+  {
+    std::lock_guard lock(mutex_);
+    claim_cursor_ = std::string(r.at(0).text());
+  }
+  const RedisReply claimed = r.at(1);
+  for (std::size_t i = 0; i < claimed.size(); ++i) {
+    const RedisReply entry = claimed.at(i);
+    if (entry.is_nil() || !entry.is_array()) continue;
+    const std::string entry_id(entry.at(0).text());
+    const std::string job = job_of(entry);
+    if (job.empty()) {
+      pool_->pipeline({{"XACK", stream_, group_, entry_id}, {"XDEL", stream_, entry_id}});
+      continue;
+    }
+    const RedisReply p = pool_->command({"XPENDING", stream_, group_, entry_id, entry_id, "1"});
+    const int deliveries = p.size() > 0 ? static_cast<int>(p.at(0).at(3).integer()) : 2;
+    spdlog::warn("redis queue: job {} was left by its worker (lease of {} ms expired): taking it over, delivery {}", job,
+                 options_.lease.count(), deliveries);
+    std::lock_guard lock(mutex_);
+    entries_[job] = entry_id;
+    return TakenJob{job, deliveries};
+  }
+  return std::nullopt;
+}
+
+std::optional<TakenJob> RedisJobQueue::take(std::chrono::milliseconds wait) {
+  if (closed_) return std::nullopt;
+  ensure_group();
+  if (auto stale = claim_stale()) return stale;
+  const std::string block = std::to_string(std::max<std::int64_t>(wait.count(), 1));
+  const RedisReply r = pool_->command(
+      {"XREADGROUP", "GROUP", group_, options_.consumer, "COUNT", "1", "BLOCK", block, "STREAMS", stream_, ">"});
+  if (r.is_nil() || r.size() == 0) return std::nullopt;
+  const RedisReply entries = r.at(0).at(1);
+  if (entries.size() == 0) return std::nullopt;
+  const RedisReply entry = entries.at(0);
+  const std::string entry_id(entry.at(0).text());
+  const std::string job = job_of(entry);
+  if (job.empty()) {
+    pool_->pipeline({{"XACK", stream_, group_, entry_id}, {"XDEL", stream_, entry_id}});
+    return std::nullopt;
+  }
+  {
+    std::lock_guard lock(mutex_);
+    entries_[job] = entry_id;
+  }
+  if (closed_) {
+    // Taken just as this process stops: give it straight back.
+    release(job);
+    return std::nullopt;
+  }
+  return TakenJob{job, 1};
+}
+
+void RedisJobQueue::ack(const std::string& id) {
+  std::string entry;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(id);
+    if (it == entries_.end()) return;
+    entry = it->second;
+    entries_.erase(it);
+  }
+  pool_->pipeline({{"XACK", stream_, group_, entry}, {"XDEL", stream_, entry}});
+}
+
+void RedisJobQueue::release(const std::string& id) {
+  std::string entry;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(id);
+    if (it == entries_.end()) return;
+    entry = it->second;
+    entries_.erase(it);
+  }
+  // Idle as if its lease had run out long ago: the next claim anywhere takes it.
+  const std::string idle = std::to_string(options_.lease.count() * 100);
+  pool_->command({"XCLAIM", stream_, group_, options_.consumer, "0", entry, "IDLE", idle, "JUSTID"});
+}
+
+void RedisJobQueue::renew_leases() {
+  RedisArgs args{"EVAL", kRenew, "1", stream_, group_, options_.consumer};
+  std::vector<std::string> entries;
+  {
+    std::lock_guard lock(mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    // Three renewals a lease: one lost round trip does not lose it.
+    if (now - last_renew_ < options_.lease / 3) return;
+    last_renew_ = now;
+    for (const auto& [job, entry] : entries_) entries.push_back(entry);
+  }
+  if (entries.empty()) return;
+  for (const std::string& e : entries) args.push_back(e);
+  pool_->command(args);
+}
+
+bool RedisJobQueue::cancel(const std::string& id) {
+  const RedisReply entry = pool_->command({"HGET", job_key(id), "entry"});
+  if (entry.is_nil()) return false;
+  const std::string e(entry.text());
+  return pool_->command({"XDEL", stream_, e}).integer() == 1;
+}
+
+std::size_t RedisJobQueue::depth() const {
+  ensure_group();
+  const std::vector<RedisReply> r = pool_->pipeline({{"XLEN", stream_}, {"XPENDING", stream_, group_}});
+  const long long waiting = r[0].integer() - r[1].at(0).integer();
+  return static_cast<std::size_t>(std::max(waiting, 0LL));
+}
+
+std::vector<std::string> RedisJobQueue::close() {
+  closed_ = true;
+  return {};
+}
+
+}  // namespace voxd::server

@@ -1,0 +1,531 @@
+#include "server/redis/redis_job_store.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <random>
+#include <sstream>
+
+#include <spdlog/spdlog.h>
+
+#include "server/jobs/job_record.h"
+#include "voxd/encode/number_text.h"
+#include "voxd/error.h"
+
+namespace voxd::server {
+namespace {
+
+using Clock = std::chrono::system_clock;
+
+std::int64_t now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now().time_since_epoch()).count();
+}
+
+std::string random_hex(std::size_t n) {
+  thread_local std::mt19937_64 rng{std::random_device{}() ^ (static_cast<std::uint64_t>(std::random_device{}()) << 32)};
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string s(n, '0');
+  for (char& c : s) c = kHex[rng() & 15];
+  return s;
+}
+
+std::string ms_text(std::chrono::milliseconds t) { return std::to_string(std::max<std::int64_t>(t.count(), 1)); }
+
+// Scripts run atomically on Redis: each is one state change no other replica
+// can interleave with. (Keys outside KEYS are touched: a single Redis, not a
+// Redis Cluster, as docs/scale-out.md says.)
+
+// KEYS: job, index, keys set, hash index key. ARGV: record, state, created
+// ms, id, result ttl ms, allowed current states (",a,b," or "" for any),
+// content hash (succeeded jobs).
+constexpr const char* kWriteRecord = R"lua(
+if ARGV[6] ~= '' then
+  local cur = redis.call('HGET', KEYS[1], 'state')
+  if not cur or not string.find(ARGV[6], ',' .. cur .. ',', 1, true) then return 0 end
+end
+redis.call('HSET', KEYS[1], 'record', ARGV[1], 'state', ARGV[2])
+redis.call('ZADD', KEYS[2], ARGV[3], ARGV[4])
+local s = ARGV[2]
+if s == 'succeeded' or s == 'failed' or s == 'cancelled' then
+  redis.call('HDEL', KEYS[1], 'cancel', 'progress')
+  redis.call('PEXPIRE', KEYS[1], ARGV[5])
+  for _, k in ipairs(redis.call('SMEMBERS', KEYS[3])) do redis.call('PEXPIRE', k, ARGV[5]) end
+  redis.call('PEXPIRE', KEYS[3], ARGV[5])
+  if s == 'succeeded' and ARGV[7] ~= '' then
+    redis.call('SET', KEYS[4], ARGV[4], 'PX', ARGV[5])
+    redis.call('HSET', KEYS[1], 'hash', ARGV[7])
+  end
+end
+return 1
+)lua";
+
+// KEYS: manifest, job, keys set. ARGV: generation, chunks, size, ttl for a
+// job not finished, chunk key prefix (ends with "GEN:").
+constexpr const char* kCommitBlob = R"lua(
+if redis.call('EXISTS', KEYS[2]) == 0 then return -1 end
+if redis.call('EXISTS', KEYS[1]) == 1 then return 0 end
+redis.call('HSET', KEYS[1], 'gen', ARGV[1], 'chunks', ARGV[2], 'size', ARGV[3])
+local ttl = redis.call('PTTL', KEYS[2])
+if ttl < 0 then ttl = tonumber(ARGV[4]) end
+redis.call('PEXPIRE', KEYS[1], ttl)
+for i = 0, tonumber(ARGV[2]) - 1 do redis.call('PEXPIRE', ARGV[5] .. i, ttl) end
+redis.call('SADD', KEYS[3], KEYS[1])
+if redis.call('PTTL', KEYS[3]) < ttl then redis.call('PEXPIRE', KEYS[3], ttl) end
+return 1
+)lua";
+
+// KEYS: manifest, keys set. ARGV: the blob's chunk key prefix (any generation).
+constexpr const char* kDropBlob = R"lua(
+for _, k in ipairs(redis.call('SMEMBERS', KEYS[2])) do
+  if string.sub(k, 1, #ARGV[1]) == ARGV[1] then
+    redis.call('DEL', k)
+    redis.call('SREM', KEYS[2], k)
+  end
+end
+redis.call('DEL', KEYS[1])
+redis.call('SREM', KEYS[2], KEYS[1])
+return 1
+)lua";
+
+// KEYS: job, index, keys set. ARGV: id, hash index key prefix.
+constexpr const char* kRemoveJob = R"lua(
+local h = redis.call('HGET', KEYS[1], 'hash')
+if h then
+  local k = ARGV[2] .. h
+  if redis.call('GET', k) == ARGV[1] then redis.call('DEL', k) end
+end
+for _, k in ipairs(redis.call('SMEMBERS', KEYS[3])) do redis.call('DEL', k) end
+redis.call('DEL', KEYS[3], KEYS[1])
+redis.call('ZREM', KEYS[2], ARGV[1])
+return 1
+)lua";
+
+// KEYS: source keys set, target keys set, source volume manifest. ARGV:
+// source blob prefix, target blob prefix, source chunk prefix, target chunk
+// prefix, ttl. Copies the volume and the layers (not the artifacts).
+constexpr const char* kShareResults = R"lua(
+if redis.call('EXISTS', KEYS[3]) == 0 then return 0 end
+local function target(k, from, to)
+  if string.sub(k, 1, #from) ~= from then return nil end
+  local rest = string.sub(k, #from + 1)
+  if rest == 'volume' or string.sub(rest, 1, 7) == 'volume:' or string.sub(rest, 1, 6) == 'layer:' then return to .. rest end
+  return nil
+end
+for _, k in ipairs(redis.call('SMEMBERS', KEYS[1])) do
+  local dst = target(k, ARGV[1], ARGV[2]) or target(k, ARGV[3], ARGV[4])
+  if dst and redis.call('EXISTS', k) == 1 then
+    redis.call('COPY', k, dst, 'REPLACE')
+    redis.call('PEXPIRE', dst, ARGV[5])
+    redis.call('SADD', KEYS[2], dst)
+  end
+end
+redis.call('PEXPIRE', KEYS[2], ARGV[5])
+return 1
+)lua";
+
+// KEYS: the running jobs' records. ARGV: their progress. Returns per job
+// "1" when its cancellation was asked, "gone" when it was deleted, "" else.
+constexpr const char* kReportRunning = R"lua(
+local out = {}
+for i, k in ipairs(KEYS) do
+  if redis.call('EXISTS', k) == 1 then
+    redis.call('HSET', k, 'progress', ARGV[i])
+    out[i] = redis.call('HGET', k, 'cancel') or ''
+  else
+    out[i] = 'gone'
+  end
+end
+return out
+)lua";
+
+// KEYS: job. Marks a running job's cancellation as asked.
+constexpr const char* kRequestCancel = R"lua(
+if redis.call('HGET', KEYS[1], 'state') == 'running' then
+  redis.call('HSET', KEYS[1], 'cancel', '1')
+  return 1
+end
+return 0
+)lua";
+
+// Streams a blob into chunks of chunk_bytes, each stored as it fills.
+class ChunkSink final : public ByteSink {
+ public:
+  ChunkSink(RedisPool& pool, std::string chunk_prefix, std::string keys_set, std::size_t chunk_bytes,
+            std::chrono::milliseconds ttl, std::uint64_t max_bytes)
+      : pool_(pool), prefix_(std::move(chunk_prefix)), keys_(std::move(keys_set)), chunk_bytes_(chunk_bytes),
+        ttl_(ms_text(ttl)), max_bytes_(max_bytes) {
+    buffer_.reserve(std::min<std::size_t>(chunk_bytes_, std::size_t{1} << 20));
+  }
+  using ByteSink::write;
+  void write(std::span<const std::uint8_t> bytes) override {
+    total_ += bytes.size();
+    if (max_bytes_ && total_ > max_bytes_)
+      throw Error(ErrorCode::limit_exceeded, "the result is over the store's limit of " + std::to_string(max_bytes_) +
+                                                 " bytes a result (--max-result-bytes); use a lower resolution");
+    while (!bytes.empty()) {
+      const std::size_t n = std::min(bytes.size(), chunk_bytes_ - buffer_.size());
+      buffer_.insert(buffer_.end(), bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
+      bytes = bytes.subspan(n);
+      if (buffer_.size() == chunk_bytes_) flush();
+    }
+  }
+  void flush() {
+    if (buffer_.empty()) return;
+    const std::string key = prefix_ + std::to_string(chunks_);
+    const std::string_view value(reinterpret_cast<const char*>(buffer_.data()), buffer_.size());
+    written_.push_back(key);
+    pool_.pipeline({{"SET", key, value, "PX", ttl_}, {"SADD", keys_, key}, {"PEXPIRE", keys_, ttl_}});
+    ++chunks_;
+    buffer_.clear();
+  }
+  std::size_t chunks() const { return chunks_; }
+  std::uint64_t total() const { return total_; }
+  // Best effort: a failed write or a lost race leaves nothing behind.
+  void discard() noexcept {
+    try {
+      for (const std::string& key : written_) pool_.pipeline({{"DEL", key}, {"SREM", keys_, key}});
+    } catch (const std::exception&) {
+      // Redis went away: the chunks expire by themselves.
+    }
+  }
+
+ private:
+  RedisPool& pool_;
+  std::string prefix_, keys_;
+  std::size_t chunk_bytes_;
+  std::string ttl_;
+  std::uint64_t max_bytes_;
+  std::vector<std::uint8_t> buffer_;
+  std::vector<std::string> written_;
+  std::size_t chunks_ = 0;
+  std::uint64_t total_ = 0;
+};
+
+std::string from_states(std::initializer_list<JobState> states) {
+  std::string text = ",";
+  for (JobState s : states) text += std::string(to_string(s)) + ",";
+  return text;
+}
+
+std::int64_t created_ms(const JobSnapshot& job) {
+  if (job.created_at.empty()) return now_ms();
+  return std::chrono::duration_cast<std::chrono::milliseconds>(parse_time(job.created_at).time_since_epoch()).count();
+}
+
+}  // namespace
+
+RedisJobStore::RedisJobStore(std::shared_ptr<RedisPool> pool, RedisBackendOptions options)
+    : pool_(std::move(pool)), options_(std::move(options)) {
+  std::error_code ec;
+  std::filesystem::create_directories(options_.spool_dir, ec);
+  if (ec)
+    throw Error(ErrorCode::io_error, "cannot create the spool directory '" + options_.spool_dir.string() + "': " + ec.message());
+}
+
+bool RedisJobStore::write_record(const JobSnapshot& job, const std::string& from) const {
+  const std::string record = stored_record(job).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  const std::string created = std::to_string(created_ms(job));
+  const std::string hash = job.state == JobState::succeeded ? job.content_hash : std::string();
+  const RedisReply r = pool_->command({"EVAL", kWriteRecord, "4", key("job", job.id), options_.prefix + "jobs",
+                                       key("keys", job.id), key("hash", hash), record, to_string(job.state), created,
+                                       job.id, ms_text(options_.result_ttl), from, hash});
+  return r.integer() == 1;
+}
+
+void RedisJobStore::save(const JobSnapshot& job) const { write_record(job, ""); }
+
+bool RedisJobStore::transition(const JobSnapshot& job, std::initializer_list<JobState> from) const {
+  return write_record(job, from_states(from));
+}
+
+std::optional<JobSnapshot> RedisJobStore::load(const std::string& id) const {
+  const RedisReply r = pool_->command({"HMGET", key("job", id), "record", "progress"});
+  if (r.at(0).is_nil()) return std::nullopt;
+  JobSnapshot job = job_from_json(nlohmann::json::parse(r.at(0).text()));
+  if (job.state == JobState::running && !r.at(1).is_nil())
+    job.progress = parse_number<double>(r.at(1).text()).value_or(job.progress);
+  return job;
+}
+
+std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
+  const std::string index = options_.prefix + "jobs";
+  const std::string first = std::to_string(offset), last = std::to_string(offset + std::max<std::size_t>(limit, 1) - 1);
+  const std::vector<RedisReply> page = pool_->pipeline({{"ZCARD", index}, {"ZREVRANGE", index, first, last}});
+  std::size_t count = static_cast<std::size_t>(page[0].integer());
+  std::vector<JobSnapshot> jobs;
+  if (limit == 0 || page[1].size() == 0) {
+    if (total) *total = count;
+    return jobs;
+  }
+  std::vector<RedisArgs> gets;
+  std::vector<std::string> keys;
+  keys.reserve(page[1].size());
+  for (std::size_t i = 0; i < page[1].size(); ++i) keys.push_back(key("job", std::string(page[1].at(i).text())));
+  for (std::size_t i = 0; i < keys.size(); ++i) gets.push_back({"HMGET", keys[i], "record", "progress"});
+  const std::vector<RedisReply> records = pool_->pipeline(gets);
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if (records[i].at(0).is_nil()) {
+      // Expired by Redis since: not listed, and no longer counted.
+      pool_->command({"ZREM", index, page[1].at(i).text()});
+      count = count > 0 ? count - 1 : 0;
+      continue;
+    }
+    try {
+      JobSnapshot job = job_from_json(nlohmann::json::parse(records[i].at(0).text()));
+      if (job.state == JobState::running && !records[i].at(1).is_nil())
+        job.progress = parse_number<double>(records[i].at(1).text()).value_or(job.progress);
+      jobs.push_back(std::move(job));
+    } catch (const std::exception& e) {
+      spdlog::warn("job store: skipping unreadable record {}: {}", keys[i], e.what());
+    }
+  }
+  if (total) *total = count;
+  return jobs;
+}
+
+std::optional<std::vector<std::uint8_t>> RedisJobStore::read_blob(const std::string& id, const std::string& name) const {
+  const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
+  if (m.at(0).is_nil()) return std::nullopt;
+  const std::string prefix = key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":";
+  const std::size_t chunks = parse_number<std::size_t>(m.at(1).text()).value_or(0);
+  const std::size_t size = parse_number<std::size_t>(m.at(2).text()).value_or(0);
+  std::vector<std::uint8_t> bytes;
+  bytes.reserve(size);
+  // A few chunks a round trip: fewer round trips, bounded replies.
+  constexpr std::size_t kBatch = 4;
+  for (std::size_t first = 0; first < chunks; first += kBatch) {
+    std::vector<std::string> keys;
+    for (std::size_t i = first; i < std::min(chunks, first + kBatch); ++i) keys.push_back(prefix + std::to_string(i));
+    std::vector<RedisArgs> gets;
+    for (const std::string& k : keys) gets.push_back({"GET", k});
+    for (const RedisReply& chunk : pool_->pipeline(gets)) {
+      if (chunk.is_nil()) return std::nullopt;  // expired or deleted while read
+      const std::string_view t = chunk.text();
+      bytes.insert(bytes.end(), t.begin(), t.end());
+    }
+  }
+  if (bytes.size() != size) return std::nullopt;
+  return bytes;
+}
+
+bool RedisJobStore::write_blob(const std::string& id, const std::string& name,
+                               const std::function<void(ByteSink&)>& write) const {
+  const std::string gen = random_hex(16);
+  const std::string chunk_prefix = key("chunk", id) + ":" + name + ":" + gen + ":";
+  const bool is_result = name == "volume" || name.rfind("layer:", 0) == 0;
+  ChunkSink sink(*pool_, chunk_prefix, key("keys", id), options_.chunk_bytes, options_.inflight_ttl,
+                 is_result ? options_.max_result_bytes : 0);
+  try {
+    write(sink);
+    sink.flush();
+  } catch (...) {
+    sink.discard();
+    throw;
+  }
+  const RedisReply r = pool_->command({"EVAL", kCommitBlob, "3", blob_key(id, name), key("job", id), key("keys", id), gen,
+                                       std::to_string(sink.chunks()), std::to_string(sink.total()),
+                                       ms_text(options_.inflight_ttl), chunk_prefix});
+  if (r.integer() == 1) return true;
+  sink.discard();  // an earlier run's identical blob is kept, or the job is gone
+  return false;
+}
+
+std::shared_ptr<const MappedFile> RedisJobStore::spool_blob(const std::string& id, const std::string& name) const {
+  const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
+  if (m.at(0).is_nil()) return nullptr;
+  const std::string prefix = key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":";
+  const std::size_t chunks = parse_number<std::size_t>(m.at(1).text()).value_or(0);
+  const std::filesystem::path path = options_.spool_dir / (random_hex(24) + ".rle");
+  // The file is unlinked as soon as it is mapped: the mapping keeps it,
+  // and nothing is left behind by a crash after this call returns.
+  struct Unlink {
+    std::string path;
+    ~Unlink() { ::unlink(path.c_str()); }
+  } unlink_after{path.string()};
+  {
+    FileSink file(path.string());
+    for (std::size_t i = 0; i < chunks; ++i) {
+      const std::string k = prefix + std::to_string(i);
+      const RedisReply chunk = pool_->command({"GET", k});
+      if (chunk.is_nil()) return nullptr;
+      file.write(chunk.text().data(), chunk.text().size());
+    }
+    file.close();
+  }
+  return std::make_shared<const MappedFile>(path.string(), MapAccess::sequential);
+}
+
+std::optional<std::string> RedisJobStore::load_artifact(const std::string& id, const std::string& key_name) const {
+  auto bytes = read_blob(id, "artifact:" + key_name);
+  if (!bytes) return std::nullopt;
+  return std::string(bytes->begin(), bytes->end());
+}
+
+void RedisJobStore::save_artifact(const std::string& id, const std::string& key_name, const std::string& bytes) const {
+  write_blob(id, "artifact:" + key_name, [&](ByteSink& sink) { sink.write(bytes.data(), bytes.size()); });
+}
+
+void RedisJobStore::save_volume(const std::string& id, const BitVolume& volume) const {
+  write_volume(id, [&](ByteSink& sink) { write_rle(volume, sink); });
+}
+
+void RedisJobStore::write_volume(const std::string& id, const std::function<void(ByteSink&)>& write) const {
+  write_blob(id, "volume", write);
+}
+
+std::shared_ptr<const BitVolume> RedisJobStore::load_volume(const std::string& id) const {
+  const auto bytes = read_blob(id, "volume");
+  if (!bytes) return nullptr;
+  return std::make_shared<const BitVolume>(read_rle_bits(*bytes, kStoredVolumeLimits));
+}
+
+std::shared_ptr<const MappedFile> RedisJobStore::volume_rle(const std::string& id) const { return spool_blob(id, "volume"); }
+
+void RedisJobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {
+  write_layer(id, name, values, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
+}
+
+void RedisJobStore::write_layer(const std::string& id, const std::string& name, const ValueVolume& type,
+                                const std::function<void(ByteSink&)>& write) const {
+  write_blob(id, "layer:" + name + "." + value_type_name(type), write);
+}
+
+namespace {
+constexpr const char* kValueTypes[] = {"u8", "f32", "rgba8"};
+}
+
+std::shared_ptr<const ValueVolume> RedisJobStore::load_layer(const std::string& id, const std::string& name) const {
+  for (const char* type : kValueTypes)
+    if (const auto bytes = read_blob(id, "layer:" + name + "." + type))
+      return std::make_shared<const ValueVolume>(read_stored_layer(type, *bytes));
+  return nullptr;
+}
+
+std::shared_ptr<const MappedFile> RedisJobStore::layer_rle(const std::string& id, const std::string& name) const {
+  for (const char* type : kValueTypes)
+    if (auto file = spool_blob(id, "layer:" + name + "." + type)) return file;
+  return nullptr;
+}
+
+void RedisJobStore::share_volume(const std::string& from_id, const std::string& to_id) const {
+  const RedisReply r =
+      pool_->command({"EVAL", kShareResults, "3", key("keys", from_id), key("keys", to_id), blob_key(from_id, "volume"),
+                      key("blob", from_id) + ":", key("blob", to_id) + ":", key("chunk", from_id) + ":",
+                      key("chunk", to_id) + ":", ms_text(options_.result_ttl)});
+  if (r.integer() != 1) throw std::runtime_error("the original job's result is gone");
+}
+
+void RedisJobStore::remove(const std::string& id) const {
+  pool_->command({"EVAL", kRemoveJob, "3", key("job", id), options_.prefix + "jobs", key("keys", id), id,
+                  options_.prefix + "hash:"});
+}
+
+std::uint64_t RedisJobStore::free_bytes() const {
+  // Asked at most once a second: every submission checks it.
+  const std::int64_t now = now_ms();
+  if (now - free_checked_ms_.load() < 1000) return free_bytes_.load();
+  const RedisReply info = pool_->command({"INFO", "memory"});
+  std::uint64_t used = 0, max = 0;
+  std::istringstream lines{std::string(info.text())};
+  for (std::string line; std::getline(lines, line);) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.rfind("used_memory:", 0) == 0) used = parse_number<std::uint64_t>(line.substr(12)).value_or(0);
+    if (line.rfind("maxmemory:", 0) == 0) max = parse_number<std::uint64_t>(line.substr(10)).value_or(0);
+  }
+  free_bytes_ = max == 0 ? UINT64_MAX : (max > used ? max - used : 0);
+  free_checked_ms_ = now;
+  return free_bytes_.load();
+}
+
+void RedisJobStore::save_input(const std::string& id, const std::vector<std::uint8_t>& bytes,
+                               const std::string& name_hint) const {
+  pool_->command({"HSET", key("job", id), "input_name", name_hint});
+  const bool stored = write_blob(id, "input", [&](ByteSink& sink) { sink.write(bytes.data(), bytes.size()); });
+  if (!stored) throw std::runtime_error("the job's record vanished while its upload was stored");
+}
+
+std::optional<SharedJobRecords::Input> RedisJobStore::load_input(const std::string& id) const {
+  auto bytes = read_blob(id, "input");
+  if (!bytes) return std::nullopt;
+  const RedisReply name = pool_->command({"HGET", key("job", id), "input_name"});
+  return Input{std::move(*bytes), std::string(name.text())};
+}
+
+void RedisJobStore::drop_input(const std::string& id) const {
+  pool_->command({"EVAL", kDropBlob, "2", blob_key(id, "input"), key("keys", id), key("chunk", id) + ":input:"});
+}
+
+std::optional<std::string> RedisJobStore::succeeded_with_hash(const std::string& hash) const {
+  const RedisReply r = pool_->command({"GET", key("hash", hash)});
+  if (r.is_nil()) return std::nullopt;
+  return std::string(r.text());
+}
+
+void RedisJobStore::request_cancel(const std::string& id) const {
+  pool_->command({"EVAL", kRequestCancel, "1", key("job", id)});
+}
+
+std::vector<std::string> RedisJobStore::report_running(const std::vector<std::pair<std::string, double>>& running) const {
+  const std::string now = std::to_string(now_ms()), replicas = options_.prefix + "replicas";
+  std::vector<RedisArgs> commands{{"ZADD", replicas, now, options_.replica_id}};
+  std::vector<std::string> keys, progress;
+  keys.reserve(running.size());
+  progress.reserve(running.size());
+  for (const auto& [id, p] : running) {
+    keys.push_back(key("job", id));
+    progress.push_back(std::to_string(p));
+  }
+  const std::string n = std::to_string(keys.size());
+  if (!keys.empty()) {
+    RedisArgs eval{"EVAL", kReportRunning, n};
+    for (const std::string& k : keys) eval.push_back(k);
+    for (const std::string& p : progress) eval.push_back(p);
+    commands.push_back(std::move(eval));
+  }
+  const std::vector<RedisReply> replies = pool_->pipeline(commands);
+  std::vector<std::string> cancel;
+  if (keys.empty()) return cancel;
+  for (std::size_t i = 0; i < running.size(); ++i)
+    if (!replies[1].at(i).text().empty()) cancel.push_back(running[i].first);
+  return cancel;
+}
+
+bool RedisJobStore::reachable() const {
+  try {
+    return pool_->command({"PING"}).text() == "PONG";
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+std::size_t RedisJobStore::live_replicas() const {
+  const std::string since = std::to_string(now_ms() - 5000);
+  return static_cast<std::size_t>(pool_->command({"ZCOUNT", options_.prefix + "replicas", since, "+inf"}).integer());
+}
+
+void RedisJobStore::prune() const {
+  const std::string index = options_.prefix + "jobs";
+  pool_->command({"ZREMRANGEBYSCORE", options_.prefix + "replicas", "-inf", std::to_string(now_ms() - 3600 * 1000)});
+  // Records Redis expired still have their index entry: drop those, a page
+  // at a time.
+  constexpr long long kPage = 1000;
+  for (long long first = 0;; first += kPage) {
+    const RedisReply ids = pool_->command({"ZRANGE", index, std::to_string(first), std::to_string(first + kPage - 1)});
+    if (ids.size() == 0) return;
+    std::vector<std::string> keys;
+    for (std::size_t i = 0; i < ids.size(); ++i) keys.push_back(key("job", std::string(ids.at(i).text())));
+    std::vector<RedisArgs> exists;
+    for (const std::string& k : keys) exists.push_back({"EXISTS", k});
+    const std::vector<RedisReply> found = pool_->pipeline(exists);
+    RedisArgs zrem{"ZREM", index};
+    std::vector<std::string> gone;
+    for (std::size_t i = 0; i < found.size(); ++i)
+      if (found[i].integer() == 0) gone.emplace_back(ids.at(i).text());
+    for (const std::string& id : gone) zrem.push_back(id);
+    if (!gone.empty()) pool_->command(zrem);
+    first -= static_cast<long long>(gone.size());
+    if (ids.size() < static_cast<std::size_t>(kPage)) return;
+  }
+}
+
+}  // namespace voxd::server
