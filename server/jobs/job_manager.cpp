@@ -703,7 +703,15 @@ JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(s
   m.engine_threads = 0;
   for (int i = 0; i < n; ++i) m.workers.emplace_back([&m] { m.work(); });
   m.expiry = std::make_unique<ExpiryTimer>(m.config.result_ttl, [&m] { m.expire(); });
-  if (m.shared()) m.keeper = std::thread([&m] { m.keep(); });
+  if (m.shared()) {
+    // Counted among the live replicas from the start, not a tick later.
+    try {
+      m.records->report_running({});
+    } catch (const std::exception& e) {
+      m.warn_backend(e);
+    }
+    m.keeper = std::thread([&m] { m.keep(); });
+  }
 }
 
 JobManager::~JobManager() { shutdown(std::chrono::seconds(0)); }
