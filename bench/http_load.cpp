@@ -3,12 +3,13 @@
 // percentiles, and samples the server's resident memory (a soak shows whether
 // it stays flat).
 //
-//   http_load --port P --mesh FILE --params JSON [--flow sync|async]
+//   http_load --port P[,P2,...] --mesh FILE --params JSON [--flow sync|async]
 //             [--connections C] [--seconds S] [--server-pid PID] [--json]
 //
 // sync:  POST /v1/voxelize (multipart), the volume comes back in the answer.
 // async: POST /v1/jobs, poll GET /v1/jobs/ID until it ends, GET its volume;
 //        the latency is the whole round trip a client sees.
+// Several ports (replicas on one Redis): connection t talks to port t mod n.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -30,6 +31,7 @@ using Clock = std::chrono::steady_clock;
 
 struct Options {
   int port = 0;
+  std::vector<int> ports;
   std::string mesh_path;
   std::string params = R"({"grid":{"resolution":64}})";
   std::string flow = "sync";
@@ -112,7 +114,11 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--port") o.port = std::stoi(next());
+    if (a == "--port") {
+      std::stringstream list(next());
+      for (std::string p; std::getline(list, p, ',');) o.ports.push_back(std::stoi(p));
+      o.port = o.ports.empty() ? 0 : o.ports.front();
+    }
     else if (a == "--mesh") o.mesh_path = next();
     else if (a == "--params") o.params = next();
     else if (a == "--flow") o.flow = next();
@@ -149,8 +155,8 @@ int main(int argc, char** argv) {
   });
   std::vector<std::thread> clients;
   for (int t = 0; t < o.connections; ++t)
-    clients.emplace_back([&] {
-      httplib::Client c("127.0.0.1", o.port);
+    clients.emplace_back([&, t] {
+      httplib::Client c("127.0.0.1", o.ports[static_cast<std::size_t>(t) % o.ports.size()]);
       c.set_keep_alive(true);
       c.set_tcp_nodelay(true);
       c.set_read_timeout(60, 0);

@@ -152,6 +152,8 @@ const std::vector<Option>& options() {
 }
 
 std::string env_name(const std::string& flag) {
+  // The one variable named for what it holds rather than for its flag.
+  if (flag == "redis") return "VOXD_REDIS_URL";
   std::string n = "VOXD_";
   for (char ch : flag) n += ch == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
   return n;

@@ -108,34 +108,79 @@ check(svc["build"]["dockerfile"] == "Dockerfile" and os.path.normpath(os.path.jo
 for name in svc.get("environment", {}):
     check(name in known_env, f"compose: {name} is not a voxd setting")
 check(any("/readyz" in part or "/healthz" in part for part in svc["healthcheck"]["test"]), "compose: healthcheck must probe voxd")
-check(any(v.endswith(":/var/lib/voxd") for v in svc["volumes"]), "compose: the data dir must be a volume")
 grace = int(svc.get("environment", {}).get("VOXD_SHUTDOWN_GRACE", grace_default))
 check(int(svc["stop_grace_period"].rstrip("s")) > grace, "compose: stop_grace_period must exceed VOXD_SHUTDOWN_GRACE")
+redis_url = svc.get("environment", {}).get("VOXD_REDIS_URL", "")
+if redis_url:
+    # Scale-out: the replicas share the Redis the file runs, which keeps an
+    # append-only file and never evicts; clients reach one endpoint.
+    redis_svc = compose["services"].get(redis_url.split("//")[1].split(":")[0])
+    check(redis_svc is not None, "compose: VOXD_REDIS_URL must name the Redis service of the file")
+    command = " ".join(redis_svc.get("command", [])) if redis_svc else ""
+    check("--appendonly yes" in command, "compose: Redis must run with --appendonly yes (accepted jobs survive a restart)")
+    check("--maxmemory-policy noeviction" in command, "compose: Redis must not evict results (noeviction)")
+    check(any(v.endswith(":/data") for v in redis_svc.get("volumes", [])), "compose: Redis's data must be a volume")
+    check(svc.get("deploy", {}).get("replicas", 1) >= 2, "compose: several voxd replicas")
+    check("ports" not in svc, "compose: replicas are reached through the endpoint, not published one by one")
+    endpoint = compose["services"].get("endpoint", {})
+    check(endpoint.get("ports") and "nginx.conf" in " ".join(endpoint.get("volumes", [])), "compose: an endpoint in front")
+    check("server voxd:8080" in read("deploy/nginx.conf"), "compose: the endpoint must proxy to the voxd service")
+else:
+    check(any(str(v).endswith(":/var/lib/voxd") for v in svc["volumes"]), "compose: the data dir must be a volume")
+
+
+def check_kubernetes(path, shared):
+    docs = [d for d in yaml.safe_load_all(read(path)) if d]
+    kinds = {}
+    for d in docs:
+        kinds.setdefault(d["kind"], d)
+    check({"Deployment", "Service"} <= set(kinds), f"{path}: needs a Deployment and a Service")
+    deployment = kinds["Deployment"]
+    pod = deployment["spec"]["template"]["spec"]
+    container = pod["containers"][0]
+    kenv = {e["name"]: e.get("value") for e in container.get("env", [])}
+    for name in kenv:
+        check(name in known_env, f"{path}: {name} is not a voxd setting")
+    port = container["ports"][0]
+    check(str(port["containerPort"]) == kenv.get("VOXD_PORT"), f"{path}: containerPort must match VOXD_PORT")
+    check(container["readinessProbe"]["httpGet"]["path"] == "/readyz", f"{path}: readiness probe must be /readyz")
+    check(container["livenessProbe"]["httpGet"]["path"] == "/healthz", f"{path}: liveness probe must be /healthz")
+    check({"cpu", "memory"} <= set(container["resources"]["limits"]), f"{path}: cpu and memory limits")
+    check(pod["terminationGracePeriodSeconds"] > int(kenv.get("VOXD_SHUTDOWN_GRACE", grace_default)),
+          f"{path}: terminationGracePeriodSeconds must exceed VOXD_SHUTDOWN_GRACE")
+    check(pod["securityContext"].get("runAsNonRoot") is True, f"{path}: runAsNonRoot")
+    mem_limit = container["resources"]["limits"]["memory"]
+    units = {"Gi": 1 << 30, "Mi": 1 << 20}
+    limit_bytes = int(mem_limit[:-2]) * units[mem_limit[-2:]]
+    check(int(kenv.get("VOXD_MAX_JOB_MEMORY", 0)) < limit_bytes, f"{path}: VOXD_MAX_JOB_MEMORY must be under the memory limit")
+    services = [d for d in docs if d["kind"] == "Service" and d["spec"]["selector"] == deployment["spec"]["selector"]["matchLabels"]]
+    check(len(services) == 1, f"{path}: one Service selects the voxd pods")
+    if services:
+        check(services[0]["spec"]["ports"][0]["targetPort"] in (port.get("name"), port["containerPort"]),
+              f"{path}: Service must target the container port")
+    volumes = pod.get("volumes", [])
+    if not shared:
+        check(deployment["spec"]["replicas"] == 1 and deployment["spec"]["strategy"]["type"] == "Recreate",
+              f"{path}: the embedded store is one replica's disk (1 replica, Recreate)")
+        return
+    check("VOXD_REDIS_URL" in kenv, f"{path}: the replicas need VOXD_REDIS_URL")
+    check(not any("persistentVolumeClaim" in v for v in volumes), f"{path}: replicas on Redis need no shared volume")
+    check(deployment["spec"]["replicas"] >= 2, f"{path}: several replicas")
+    check("HorizontalPodAutoscaler" in kinds and kinds["HorizontalPodAutoscaler"]["spec"]["scaleTargetRef"]["name"]
+          == deployment["metadata"]["name"], f"{path}: a HorizontalPodAutoscaler for the Deployment")
+    redis = kinds.get("StatefulSet")
+    check(redis is not None and redis["spec"].get("volumeClaimTemplates"), f"{path}: Redis as a StatefulSet with a persistent volume")
+    config = " ".join(str(d.get("data", "")) for d in docs if d["kind"] == "ConfigMap")
+    check("appendonly yes" in config and "maxmemory-policy noeviction" in config,
+          f"{path}: Redis with appendonly and noeviction")
+    host = kenv["VOXD_REDIS_URL"].split("//")[1].split(":")[0]
+    check(any(d["kind"] == "Service" and d["metadata"]["name"] == host for d in docs), f"{path}: VOXD_REDIS_URL must name the Redis Service")
+
 
 # --- Kubernetes --------------------------------------------------------------
-docs = [d for d in yaml.safe_load_all(read("deploy/kubernetes/voxd.yaml")) if d]
-kinds = {d["kind"]: d for d in docs}
-check({"Deployment", "Service"} <= set(kinds), "kubernetes: needs a Deployment and a Service")
-pod = kinds["Deployment"]["spec"]["template"]["spec"]
-container = pod["containers"][0]
-kenv = {e["name"]: e.get("value") for e in container.get("env", [])}
-for name in kenv:
-    check(name in known_env, f"kubernetes: {name} is not a voxd setting")
-port = container["ports"][0]
-check(str(port["containerPort"]) == kenv.get("VOXD_PORT"), "kubernetes: containerPort must match VOXD_PORT")
-check(container["readinessProbe"]["httpGet"]["path"] == "/readyz", "kubernetes: readiness probe must be /readyz")
-check(container["livenessProbe"]["httpGet"]["path"] == "/healthz", "kubernetes: liveness probe must be /healthz")
-check({"cpu", "memory"} <= set(container["resources"]["limits"]), "kubernetes: cpu and memory limits")
-check(pod["terminationGracePeriodSeconds"] > int(kenv.get("VOXD_SHUTDOWN_GRACE", grace_default)),
-      "kubernetes: terminationGracePeriodSeconds must exceed VOXD_SHUTDOWN_GRACE")
-check(pod["securityContext"].get("runAsNonRoot") is True, "kubernetes: runAsNonRoot")
-mem_limit = container["resources"]["limits"]["memory"]
-units = {"Gi": 1 << 30, "Mi": 1 << 20}
-limit_bytes = int(mem_limit[:-2]) * units[mem_limit[-2:]]
-check(int(kenv.get("VOXD_MAX_JOB_MEMORY", 0)) < limit_bytes, "kubernetes: VOXD_MAX_JOB_MEMORY must be under the memory limit")
-svc_ports = kinds["Service"]["spec"]["ports"]
-check(svc_ports[0]["targetPort"] in (port.get("name"), port["containerPort"]), "kubernetes: Service must target the container port")
-check(kinds["Service"]["spec"]["selector"] == kinds["Deployment"]["spec"]["selector"]["matchLabels"], "kubernetes: Service selector")
+check_kubernetes("deploy/kubernetes/voxd.yaml", shared=False)
+check_kubernetes("deploy/kubernetes/voxd-redis.yaml", shared=True)
+docs = [d for f in ("voxd.yaml", "voxd-redis.yaml") for d in yaml.safe_load_all(read("deploy/kubernetes/" + f)) if d]
 
 # --- systemd -----------------------------------------------------------------
 unit = read("deploy/systemd/voxd.service")

@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Scale-out benchmark on loopback: the async small-job flow (POST /v1/jobs,
+# poll, GET volume, DELETE; 10k triangles at 64^3) against the embedded
+# service, one replica on Redis (the shared queue's cost per job) and three
+# replicas on the same Redis (connections spread over them).
+#   bench/scale_out_bench.sh [BUILD_DIR] [SECONDS] [CONNECTIONS]
+set -euo pipefail
+build="${1:-build}"
+seconds="${2:-20}"
+connections="${3:-4}"
+work="$(mktemp -d)"
+pids=()
+cleanup() {
+  for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+"$build/bench/write_bench_mesh" "$work/small.stl" --small
+redis_port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
+redis-server --port "$redis_port" --bind 127.0.0.1 --dir "$work" --appendonly yes --appendfsync everysec --save "" \
+  --logfile "$work/redis.log" --daemonize no &
+pids+=($!)
+for _ in $(seq 200); do redis-cli -p "$redis_port" ping > /dev/null 2>&1 && break; sleep 0.02; done
+
+# Starts `voxd serve ARGS...`; prints its port.
+serve() {
+  local log="$work/voxd-${#pids[@]}.log"
+  "$build/server/voxd" serve --port 0 --data-dir "$work/data-${#pids[@]}" "$@" > "$log" 2>&1 &
+  pids+=($!)
+  for _ in $(seq 300); do
+    port=$(grep -o 'listening on http://127.0.0.1:[0-9]*' "$log" | grep -o '[0-9]*$' || true)
+    [[ -n "$port" ]] && { echo "$port"; return; }
+    sleep 0.02
+  done
+  echo "voxd did not start: $(cat "$log")" >&2
+  exit 1
+}
+stop_voxd() {  # all voxd started so far
+  for p in "${pids[@]:1}"; do kill "$p" 2>/dev/null || true; done
+  pids=("${pids[0]}")
+  redis-cli -p "$redis_port" flushall > /dev/null
+}
+params='{"grid":{"resolution":64}}'
+load() { "$build/bench/http_load" --mesh "$work/small.stl" --params "$params" --flow async --seconds "$seconds" "$@"; }
+echo "mesh: 10,000 triangles, grid 64^3, async flow, $(nproc) cores, $connections connections, $seconds s each"
+
+echo "== embedded (workers = cores)"
+port=$(serve)
+load --port "$port" --connections 1 --seconds 3 > /dev/null  # warm-up
+load --port "$port" --connections 1
+load --port "$port" --connections "$connections"
+stop_voxd
+
+echo "== one replica on Redis (workers = cores)"
+port=$(serve --redis "redis://127.0.0.1:$redis_port")
+load --port "$port" --connections 1 --seconds 3 > /dev/null
+load --port "$port" --connections 1
+load --port "$port" --connections "$connections"
+stop_voxd
+
+echo "== three replicas on Redis (workers = cores each), connections spread over them"
+ports=$(serve --redis "redis://127.0.0.1:$redis_port"),$(serve --redis "redis://127.0.0.1:$redis_port"),$(serve --redis "redis://127.0.0.1:$redis_port")
+load --port "$ports" --connections 3 --seconds 3 > /dev/null
+load --port "$ports" --connections "$connections"
