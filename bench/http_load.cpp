@@ -74,31 +74,41 @@ double percentile(std::vector<double>& v, double p) {
   return v[i];
 }
 
+// Says why a job failed, for the first few failures: an error in a
+// benchmark is a finding, not noise.
+bool failed(const char* step, const httplib::Result& r) {
+  static std::atomic<int> told{0};
+  if (told++ < 5)
+    std::cerr << "http_load: " << step << ": " << (r ? std::to_string(r->status) + " " + r->body.substr(0, 300) : "no response")
+              << "\n";
+  return false;
+}
+
 // One job as a client sees it; returns false on any error.
 bool run_one(httplib::Client& c, const Options& o, const std::string& mesh) {
   httplib::MultipartFormDataItems items = {{"mesh", mesh, "part.stl", "application/octet-stream"},
                                            {"params", o.params, "", "application/json"}};
   if (o.flow == "sync") {
     auto r = c.Post("/v1/voxelize", items);
-    return r && r->status == 200 && !r->body.empty();
+    return (r && r->status == 200 && !r->body.empty()) || failed("POST /v1/voxelize", r);
   }
   auto r = c.Post("/v1/jobs", items);
-  if (!r || r->status != 202) return false;
+  if (!r || r->status != 202) return failed("POST /v1/jobs", r);
   const std::string id = nlohmann::json::parse(r->body).at("id");
   for (;;) {
     auto s = c.Get(("/v1/jobs/" + id).c_str());
-    if (!s || s->status != 200) return false;
+    if (!s || s->status != 200) return failed("GET /v1/jobs/ID", s);
     const std::string state = nlohmann::json::parse(s->body).at("state");
     if (state == "succeeded") break;
-    if (state == "failed" || state == "cancelled") return false;
+    if (state == "failed" || state == "cancelled") return failed("the job ended", s);
     std::this_thread::sleep_for(std::chrono::microseconds(500));
   }
   auto v = c.Get(("/v1/jobs/" + id + "/volume").c_str());
-  if (!v || v->status != 200) return false;
+  if (!v || v->status != 200) return failed("GET /v1/jobs/ID/volume", v);
   // Clean up as a batch client would, so a soak measures the service, not
   // an ever-growing store.
   auto d = c.Delete(("/v1/jobs/" + id).c_str());
-  return d && d->status == 204;
+  return (d && d->status == 204) || failed("DELETE /v1/jobs/ID", d);
 }
 
 }  // namespace

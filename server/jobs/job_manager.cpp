@@ -558,21 +558,25 @@ struct JobManager::Impl {
   // process stops, or whose end cannot be written, is handed back instead.
   void finish_shared(Job& job, JobSnapshot& done, bool backend_lost) {
     const std::string id = done.id;
-    forget_running(id);
     if (backend_lost || job.stopped_by_shutdown) {
+      forget_running(id);
       queue->release(id);  // another replica runs it again
       return;
     }
     try {
+      // Recorded before it leaves the table: a client never sees the job
+      // gone or back to "running" from the backend after seeing its end here.
       if (records->transition(done, {JobState::running})) {
         std::lock_guard lock(mutex);
         ++finished_here[done.state == JobState::succeeded ? 0 : done.state == JobState::failed ? 1 : 2];
         announce(done);
       }
+      forget_running(id);
       records->drop_input(id);
       queue->ack(id);
     } catch (const BackendUnavailable& e) {
       warn_backend(e);
+      forget_running(id);
       queue->release(id);
     }
   }
@@ -652,7 +656,9 @@ struct JobManager::Impl {
       auto it = jobs.find(id);
       if (it != jobs.end()) {
         if (it->second->ephemeral) return std::nullopt;
-        return snapshot_of(*it->second);
+        // A shared job is shown from here only while it runs (its live
+        // progress); its end counts once it is recorded in the backend.
+        if (!it->second->shared || it->second->snap.state == JobState::running) return snapshot_of(*it->second);
       }
     }
     if (shared()) return records->load(id);
@@ -907,7 +913,7 @@ std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit,
     // Those running here show their live progress.
     std::lock_guard lock(impl_->mutex);
     for (JobSnapshot& s : page)
-      if (auto it = impl_->jobs.find(s.id); it != impl_->jobs.end() && !it->second->ephemeral) s = impl_->snapshot_of(*it->second);
+      if (auto it = impl_->jobs.find(s.id); it != impl_->jobs.end() && it->second->snap.state == JobState::running) s = impl_->snapshot_of(*it->second);
     return page;
   }
   std::vector<JobSnapshot> all;
