@@ -380,9 +380,9 @@ struct JobManager::Impl {
           job = adopt(*taken, prepared);
           if (!job) continue;
         }
-      } catch (const BackendUnavailable& e) {
+      } catch (const std::exception& e) {
         warn_backend(e);
-        // A job taken but not adopted is handed back when the lease runs out.
+        // A job taken but not adopted is handed back (or its lease lapses).
         if (from_shared && taken) queue->release(taken->id);
         std::this_thread::sleep_for(std::chrono::milliseconds(250));
         continue;
@@ -423,7 +423,15 @@ struct JobManager::Impl {
         continue;
       }
       deliver();
-      run(*job, std::move(prepared), from);
+      try {
+        run(*job, std::move(prepared), from);
+      } catch (const std::exception& e) {
+        // run() records every failure of the job itself; this is the
+        // bookkeeping after it failing (the backend gone mid-way): the
+        // worker lives on, and a shared job's lease lapses.
+        spdlog::error("job {}: {}", id, log_safe(e.what()));
+        if (job->shared) forget_running(id);
+      }
     }
   }
 

@@ -32,10 +32,13 @@ class JobQueue {
   // the queue is closed (closed() tells which).
   virtual std::optional<TakenJob> take(std::chrono::milliseconds wait) = 0;
   virtual bool closed() const = 0;
-  // The worker that took `id` is done with it (succeeded, failed or cancelled).
+  // The worker that took `id` is done with it (succeeded, failed or
+  // cancelled). Never throws: a shared queue that cannot be told now lets
+  // the lease lapse instead.
   virtual void ack(const std::string& id) = 0;
-  // The worker that took `id` gives it back unfinished (this process stops):
-  // the next take, here or in another replica, gets it.
+  // The worker that took `id` gives it back unfinished (this process stops,
+  // or the shared backend went away): the next take, here or in another
+  // replica, gets it. Never throws, like ack.
   virtual void release(const std::string& id) { ack(id); }
   // Keeps the leases of the jobs taken here alive; the engine calls it about
   // every 100 ms. Nothing to do in-process.

@@ -152,7 +152,13 @@ void RedisJobQueue::ack(const std::string& id) {
     entry = it->second;
     entries_.erase(it);
   }
-  pool_->pipeline({{"XACK", stream_, group_, entry}, {"XDEL", stream_, entry}});
+  try {
+    pool_->pipeline({{"XACK", stream_, group_, entry}, {"XDEL", stream_, entry}});
+  } catch (const std::exception& e) {
+    // Left pending and no longer renewed: its lease lapses, and the replica
+    // that claims it finds the job ended and acknowledges it then.
+    spdlog::warn("redis queue: cannot acknowledge job {} now ({}); it is acknowledged after its lease", id, e.what());
+  }
 }
 
 void RedisJobQueue::release(const std::string& id) {
@@ -166,7 +172,12 @@ void RedisJobQueue::release(const std::string& id) {
   }
   // Idle as if its lease had run out long ago: the next claim anywhere takes it.
   const std::string idle = std::to_string(options_.lease.count() * 100);
-  pool_->command({"XCLAIM", stream_, group_, options_.consumer, "0", entry, "IDLE", idle, "JUSTID"});
+  try {
+    pool_->command({"XCLAIM", stream_, group_, options_.consumer, "0", entry, "IDLE", idle, "JUSTID"});
+  } catch (const std::exception& e) {
+    // No longer renewed: another replica takes it once the lease lapses.
+    spdlog::warn("redis queue: cannot hand job {} back now ({}); it is taken over after its lease", id, e.what());
+  }
 }
 
 void RedisJobQueue::renew_leases() {
