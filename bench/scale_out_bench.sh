@@ -11,23 +11,28 @@ connections="${3:-4}"
 work="$(mktemp -d)"
 pids=()
 cleanup() {
+  stop_voxd 2>/dev/null || true
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
   wait 2>/dev/null || true
   rm -rf "$work"
 }
 trap cleanup EXIT
 "$build/bench/write_bench_mesh" "$work/small.stl" --small
+: > "$work/voxd.pids"
 redis_port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
 redis-server --port "$redis_port" --bind 127.0.0.1 --dir "$work" --appendonly yes --appendfsync everysec --save "" \
   --logfile "$work/redis.log" --daemonize no &
 pids+=($!)
 for _ in $(seq 200); do redis-cli -p "$redis_port" ping > /dev/null 2>&1 && break; sleep 0.02; done
 
-# Starts `voxd serve ARGS...`; prints its port.
+# Starts `voxd serve ARGS...`; prints its port. (It runs in a command
+# substitution, a subshell: its pid goes to a file, not to a variable.)
 serve() {
-  local log="$work/voxd-${#pids[@]}.log"
-  "$build/server/voxd" serve --port 0 --data-dir "$work/data-${#pids[@]}" "$@" > "$log" 2>&1 &
-  pids+=($!)
+  local n
+  n=$(wc -l < "$work/voxd.pids")
+  local log="$work/voxd-$n.log"
+  "$build/server/voxd" serve --port 0 --data-dir "$work/data-$n" "$@" > "$log" 2>&1 &
+  echo $! >> "$work/voxd.pids"
   for _ in $(seq 300); do
     port=$(grep -o 'listening on http://127.0.0.1:[0-9]*' "$log" | grep -o '[0-9]*$' || true)
     [[ -n "$port" ]] && { echo "$port"; return; }
@@ -36,9 +41,10 @@ serve() {
   echo "voxd did not start: $(cat "$log")" >&2
   exit 1
 }
-stop_voxd() {  # all voxd started so far
-  for p in "${pids[@]:1}"; do kill "$p" 2>/dev/null || true; done
-  pids=("${pids[0]}")
+stop_voxd() {  # every voxd started so far
+  while read -r p; do kill "$p" 2>/dev/null || true; done < "$work/voxd.pids"
+  : > "$work/voxd.pids"
+  sleep 0.5
   redis-cli -p "$redis_port" flushall > /dev/null
 }
 params='{"grid":{"resolution":64}}'
