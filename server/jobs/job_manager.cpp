@@ -424,7 +424,7 @@ struct JobManager::Impl {
       }
       deliver();
       try {
-        run(*job, std::move(prepared), from);
+        run(job.get(), std::move(prepared), from);
       } catch (const std::exception& e) {
         // run() records every failure of the job itself; this is the
         // bookkeeping after it failing (the backend gone mid-way): the
@@ -441,8 +441,7 @@ struct JobManager::Impl {
     jobs.erase(id);
   }
 
-  void run(Job& job_ref, PreparedVoxelJob prepared, JobQueue& from) {
-    Job* job = &job_ref;
+  void run(Job* job, PreparedVoxelJob prepared, JobQueue& from) {
     const std::string id = job->snap.id;
     const auto t0 = std::chrono::steady_clock::now();
     JobSnapshot done;

@@ -100,7 +100,7 @@ std::optional<TakenJob> RedisJobQueue::claim_stale() {
     const std::string entry_id(entry.at(0).text());
     const std::string job = job_of(entry);
     if (job.empty()) {
-      pool_->pipeline({{"XACK", stream_, group_, entry_id}, {"XDEL", stream_, entry_id}});
+      acknowledge(entry_id);
       continue;
     }
     const RedisReply p = pool_->command({"XPENDING", stream_, group_, entry_id, entry_id, "1"});
@@ -128,7 +128,7 @@ std::optional<TakenJob> RedisJobQueue::take(std::chrono::milliseconds wait) {
   const std::string entry_id(entry.at(0).text());
   const std::string job = job_of(entry);
   if (job.empty()) {
-    pool_->pipeline({{"XACK", stream_, group_, entry_id}, {"XDEL", stream_, entry_id}});
+    acknowledge(entry_id);
     return std::nullopt;
   }
   {
@@ -143,17 +143,24 @@ std::optional<TakenJob> RedisJobQueue::take(std::chrono::milliseconds wait) {
   return TakenJob{job, 1};
 }
 
+void RedisJobQueue::acknowledge(const std::string& entry) {
+  pool_->pipeline({{"XACK", stream_, group_, entry}, {"XDEL", stream_, entry}});
+}
+
+std::optional<std::string> RedisJobQueue::forget(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  auto it = entries_.find(id);
+  if (it == entries_.end()) return std::nullopt;
+  std::string entry = std::move(it->second);
+  entries_.erase(it);
+  return entry;
+}
+
 void RedisJobQueue::ack(const std::string& id) {
-  std::string entry;
-  {
-    std::lock_guard lock(mutex_);
-    auto it = entries_.find(id);
-    if (it == entries_.end()) return;
-    entry = it->second;
-    entries_.erase(it);
-  }
+  const std::optional<std::string> entry = forget(id);
+  if (!entry) return;
   try {
-    pool_->pipeline({{"XACK", stream_, group_, entry}, {"XDEL", stream_, entry}});
+    acknowledge(*entry);
   } catch (const std::exception& e) {
     // Left pending and no longer renewed: its lease lapses, and the replica
     // that claims it finds the job ended and acknowledges it then.
@@ -162,18 +169,12 @@ void RedisJobQueue::ack(const std::string& id) {
 }
 
 void RedisJobQueue::release(const std::string& id) {
-  std::string entry;
-  {
-    std::lock_guard lock(mutex_);
-    auto it = entries_.find(id);
-    if (it == entries_.end()) return;
-    entry = it->second;
-    entries_.erase(it);
-  }
+  const std::optional<std::string> entry = forget(id);
+  if (!entry) return;
   // Idle as if its lease had run out long ago: the next claim anywhere takes it.
   const std::string idle = std::to_string(options_.lease.count() * 100);
   try {
-    pool_->command({"XCLAIM", stream_, group_, options_.consumer, "0", entry, "IDLE", idle, "JUSTID"});
+    pool_->command({"XCLAIM", stream_, group_, options_.consumer, "0", *entry, "IDLE", idle, "JUSTID"});
   } catch (const std::exception& e) {
     // No longer renewed: another replica takes it once the lease lapses.
     spdlog::warn("redis queue: cannot hand job {} back now ({}); it is taken over after its lease", id, e.what());

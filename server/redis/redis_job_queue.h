@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "server/jobs/job_queue.h"
@@ -45,6 +46,10 @@ class RedisJobQueue final : public JobQueue {
  private:
   void ensure_group() const;
   std::optional<TakenJob> claim_stale();
+  // Drops a job taken here from the entries this replica renews; its entry.
+  std::optional<std::string> forget(const std::string& id);
+  // Ends an entry for good: acknowledged and deleted from the stream.
+  void acknowledge(const std::string& entry);
   std::string job_key(const std::string& id) const { return options_.prefix + "job:" + id; }
 
   std::shared_ptr<RedisPool> pool_;

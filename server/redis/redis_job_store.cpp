@@ -238,13 +238,23 @@ bool RedisJobStore::transition(const JobSnapshot& job, std::initializer_list<Job
   return write_record(job, from_states(from));
 }
 
+namespace {
+
+// A job from the reply to HMGET job record progress: the record, with the
+// live progress of a running job.
+JobSnapshot record_of(const RedisReply& fields) {
+  JobSnapshot job = job_from_json(nlohmann::json::parse(fields.at(0).text()));
+  if (job.state == JobState::running && !fields.at(1).is_nil())
+    job.progress = parse_number<double>(fields.at(1).text()).value_or(job.progress);
+  return job;
+}
+
+}  // namespace
+
 std::optional<JobSnapshot> RedisJobStore::load(const std::string& id) const {
   const RedisReply r = pool_->command({"HMGET", key("job", id), "record", "progress"});
   if (r.at(0).is_nil()) return std::nullopt;
-  JobSnapshot job = job_from_json(nlohmann::json::parse(r.at(0).text()));
-  if (job.state == JobState::running && !r.at(1).is_nil())
-    job.progress = parse_number<double>(r.at(1).text()).value_or(job.progress);
-  return job;
+  return record_of(r);
 }
 
 std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
@@ -271,10 +281,7 @@ std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t lim
       continue;
     }
     try {
-      JobSnapshot job = job_from_json(nlohmann::json::parse(records[i].at(0).text()));
-      if (job.state == JobState::running && !records[i].at(1).is_nil())
-        job.progress = parse_number<double>(records[i].at(1).text()).value_or(job.progress);
-      jobs.push_back(std::move(job));
+      jobs.push_back(record_of(records[i]));
     } catch (const std::exception& e) {
       spdlog::warn("job store: skipping unreadable record {}: {}", keys[i], e.what());
     }
@@ -283,14 +290,14 @@ std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t lim
   return jobs;
 }
 
-std::optional<std::vector<std::uint8_t>> RedisJobStore::read_blob(const std::string& id, const std::string& name) const {
+bool RedisJobStore::read_chunks(const std::string& id, const std::string& name,
+                                const std::function<void(std::string_view)>& chunk) const {
   const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
-  if (m.at(0).is_nil()) return std::nullopt;
+  if (m.at(0).is_nil()) return false;
   const std::string prefix = key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":";
   const std::size_t chunks = parse_number<std::size_t>(m.at(1).text()).value_or(0);
   const std::size_t size = parse_number<std::size_t>(m.at(2).text()).value_or(0);
-  std::vector<std::uint8_t> bytes;
-  bytes.reserve(size);
+  std::size_t read = 0;
   // A few chunks a round trip: fewer round trips, bounded replies.
   constexpr std::size_t kBatch = 4;
   for (std::size_t first = 0; first < chunks; first += kBatch) {
@@ -298,13 +305,19 @@ std::optional<std::vector<std::uint8_t>> RedisJobStore::read_blob(const std::str
     for (std::size_t i = first; i < std::min(chunks, first + kBatch); ++i) keys.push_back(prefix + std::to_string(i));
     std::vector<RedisArgs> gets;
     for (const std::string& k : keys) gets.push_back({"GET", k});
-    for (const RedisReply& chunk : pool_->pipeline(gets)) {
-      if (chunk.is_nil()) return std::nullopt;  // expired or deleted while read
-      const std::string_view t = chunk.text();
-      bytes.insert(bytes.end(), t.begin(), t.end());
+    for (const RedisReply& reply : pool_->pipeline(gets)) {
+      if (reply.is_nil()) return false;  // expired or deleted while read
+      read += reply.text().size();
+      chunk(reply.text());
     }
   }
-  if (bytes.size() != size) return std::nullopt;
+  return read == size;
+}
+
+std::optional<std::vector<std::uint8_t>> RedisJobStore::read_blob(const std::string& id, const std::string& name) const {
+  std::vector<std::uint8_t> bytes;
+  if (!read_chunks(id, name, [&](std::string_view c) { bytes.insert(bytes.end(), c.begin(), c.end()); }))
+    return std::nullopt;
   return bytes;
 }
 
@@ -331,10 +344,6 @@ bool RedisJobStore::write_blob(const std::string& id, const std::string& name,
 }
 
 std::shared_ptr<const MappedFile> RedisJobStore::spool_blob(const std::string& id, const std::string& name) const {
-  const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
-  if (m.at(0).is_nil()) return nullptr;
-  const std::string prefix = key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":";
-  const std::size_t chunks = parse_number<std::size_t>(m.at(1).text()).value_or(0);
   const std::filesystem::path path = options_.spool_dir / (random_hex(24) + ".rle");
   // The file is unlinked as soon as it is mapped: the mapping keeps it,
   // and nothing is left behind by a crash after this call returns.
@@ -344,12 +353,7 @@ std::shared_ptr<const MappedFile> RedisJobStore::spool_blob(const std::string& i
   } unlink_after{path.string()};
   {
     FileSink file(path.string());
-    for (std::size_t i = 0; i < chunks; ++i) {
-      const std::string k = prefix + std::to_string(i);
-      const RedisReply chunk = pool_->command({"GET", k});
-      if (chunk.is_nil()) return nullptr;
-      file.write(chunk.text().data(), chunk.text().size());
-    }
+    if (!read_chunks(id, name, [&](std::string_view c) { file.write(c.data(), c.size()); })) return nullptr;
     file.close();
   }
   return std::make_shared<const MappedFile>(path.string(), MapAccess::sequential);

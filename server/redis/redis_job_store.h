@@ -20,7 +20,9 @@
 #include <chrono>
 #include <filesystem>
 #include <memory>
+#include <functional>
 #include <string>
+#include <string_view>
 
 #include "server/jobs/job_store.h"
 #include "server/jobs/shared_records.h"
@@ -90,6 +92,10 @@ class RedisJobStore final : public JobStore, public SharedJobRecords {
  private:
   std::string key(const std::string& kind, const std::string& id) const { return options_.prefix + kind + ":" + id; }
   std::string blob_key(const std::string& id, const std::string& name) const { return key("blob", id) + ":" + name; }
+  // Hands a blob's chunks to `chunk` in order, a few per round trip; false
+  // when there is none, or it expired or was deleted while read.
+  bool read_chunks(const std::string& id, const std::string& name,
+                   const std::function<void(std::string_view)>& chunk) const;
   std::shared_ptr<const MappedFile> spool_blob(const std::string& id, const std::string& name) const;
   bool write_record(const JobSnapshot& job, const std::string& from) const;
 
