@@ -71,11 +71,15 @@ class ScaleOutTest : public HttpServiceTest {
     }
     return -1;
   }
-  // The replica whose worker runs the job now (the last to log it running).
+  // The replica whose worker runs the job now (its log says so, just after
+  // recording it); -1 if none.
   int running_on(const std::string& id) const {
-    for (std::size_t i = 0; i < replicas_.size(); ++i)
-      if (replicas_[i]->running() && replicas_[i]->log().find("job " + id + " running") != std::string::npos)
-        return static_cast<int>(i);
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      for (std::size_t i = 0; i < replicas_.size(); ++i)
+        if (replicas_[i]->running() && replicas_[i]->log().find("job " + id + " running") != std::string::npos)
+          return static_cast<int>(i);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
     return -1;
   }
   // Whether the replica's log says `text` within a few seconds (it logs a
