@@ -114,6 +114,60 @@ TEST(StreamedVoxelize, StreamedFilesAreByteForByteTheInMemoryOnes) {
   }
 }
 
+// A job spread over many workers is made range by range of layers, each
+// range by another process with its own thread count: the ranges' slabs put
+// side by side must be the whole run's voxels, whatever the ranges' ends
+// (not multiples of anything) and the threads.
+TEST(StreamedVoxelize, LayerRangesSideBySideAreTheWholeRunWhateverTheirEndsAndThreads) {
+  for (const Case c : {Case{"bunny.stl", 97, 1}, Case{"torus.stl", 131, 2}}) {
+    const Mesh mesh = shared_mesh(c.mesh);
+    const Grid grid = grid_for(mesh, c.resolution, c.padding);
+    const std::int64_t nz = grid.dims.z;
+    for (VoxelMode mode : {VoxelMode::solid, VoxelMode::surface, VoxelMode::solid_and_surface}) {
+      VoxelizeOptions options;
+      options.mode = mode;
+      const BitVolume expected = voxelize(mesh, grid, options);
+      for (const std::vector<std::int64_t>& ends :
+           {std::vector<std::int64_t>{13, nz}, {1, 7, nz / 2 + 1, nz - 1, nz}, {nz / 3, 2 * nz / 3, nz}}) {
+        for (const auto& [threads, slab_layers] : {std::pair{1, 16}, std::pair{3, 5}, std::pair{2, 40}}) {
+          SCOPED_TRACE(std::string(c.mesh) + " " + to_string(mode) + " threads " + std::to_string(threads) +
+                       " slab layers " + std::to_string(slab_layers) + " first end " + std::to_string(ends[0]));
+          options.threads = threads;
+          BitVolume whole(grid);
+          std::int64_t begin = 0, next = 0;
+          for (const std::int64_t end : ends) {
+            voxelize_streamed(
+                mesh, grid, options, slab_layers,
+                [&](std::int64_t k0, const BitVolume& slab) {
+                  EXPECT_EQ(k0, next);
+                  EXPECT_LE(k0 + slab.grid().dims.z, end);
+                  std::memcpy(whole.slab(k0), slab.data(), slab.byte_size());
+                  next = k0 + slab.grid().dims.z;
+                },
+                nullptr, LayerRange{begin, end});
+            EXPECT_EQ(next, end);
+            begin = end;
+          }
+          EXPECT_TRUE(same_words(whole, expected));
+        }
+      }
+    }
+  }
+  const Mesh mesh = shared_mesh("torus.stl");
+  const Grid grid = grid_for(mesh, 20, 0);
+  for (const LayerRange off : {LayerRange{-1, 4}, LayerRange{4, 4}, LayerRange{0, grid.dims.z + 1}}) {
+    try {
+      voxelize_streamed(mesh, grid, {}, 4, [](std::int64_t, const BitVolume&) {}, nullptr, off);
+      ADD_FAILURE() << "range " << off.begin << ".." << off.end << " accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+      EXPECT_NE(std::string(e.what()).find("are not a part of a grid of " + std::to_string(grid.dims.z) + " layers"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(StreamedVoxelize, InsideTestsThatNeedTheWholeGridAreRefusedByName) {
   VoxelizeOptions vote;
   vote.inside = InsideTest::vote;

@@ -1,6 +1,7 @@
 #include "voxd/voxelize/streamed.h"
 
 #include <algorithm>
+#include <numeric>
 #include <optional>
 
 #include "voxd/error.h"
@@ -25,28 +26,34 @@ std::int64_t streamed_slab_layers(const Grid& grid, std::uint64_t slab_bytes) {
 }
 
 void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, std::int64_t slab_layers,
-                       const BitSlabConsumer& consume, JobControl* control) {
+                       const BitSlabConsumer& consume, JobControl* control, LayerRange range) {
   if (!can_stream(options))
     throw Error(ErrorCode::invalid_argument, std::string("the ") + to_string(options.inside) +
                                                  " inside test needs the whole grid; only parity streams slab by slab");
   const std::int64_t nz = grid.dims.z;
+  const std::int64_t first = range.begin, end = range.end < 0 ? nz : range.end;
+  if (first < 0 || first >= end || end > nz)
+    throw Error(ErrorCode::invalid_argument, "layers " + std::to_string(first) + ".." + std::to_string(end) +
+                                                 " are not a part of a grid of " + std::to_string(nz) + " layers");
   if (grid.voxel_count() == 0) return;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   // Chunks of a few rows, so each slab has work for every thread; a slab is
-  // a whole number of chunks.
-  const std::int64_t layers_wanted = std::clamp<std::int64_t>(slab_layers, 1, nz);
-  const std::int64_t per_chunk = std::max<std::int64_t>(1, layers_wanted / (4 * threads));
-  const std::int64_t layers = std::min(nz, (layers_wanted + per_chunk - 1) / per_chunk * per_chunk);
+  // a whole number of chunks, and so are the range's ends (but the grid's
+  // last layer): a chunk never reaches out of the slab it fills.
+  const std::int64_t layers_wanted = std::clamp<std::int64_t>(slab_layers, 1, end - first);
+  const std::int64_t per_chunk =
+      std::gcd(std::gcd(std::max<std::int64_t>(1, layers_wanted / (4 * threads)), first), end == nz ? 0 : end);
+  const std::int64_t layers = std::min(end - first, (layers_wanted + per_chunk - 1) / per_chunk * per_chunk);
 
   std::optional<detail::ParityVoxelizer> parity;
   std::optional<detail::SurfaceVoxelizer> surface;
   if (options.mode != VoxelMode::surface) parity.emplace(mesh, grid, 0, threads, per_chunk);
   if (options.mode != VoxelMode::solid) surface.emplace(mesh, grid, threads, per_chunk);
 
-  const std::int64_t slabs = (nz + layers - 1) / layers;
+  const std::int64_t slabs = (end - first + layers - 1) / layers;
   for (std::int64_t s = 0; s < slabs; ++s) {
     if (control) control->check_cancelled();
-    const std::int64_t k0 = s * layers, n = std::min(layers, nz - k0);
+    const std::int64_t k0 = first + s * layers, n = std::min(layers, end - k0);
     // A fresh slab comes zeroed from the OS (only the touched pages cost);
     // the last, shorter one is a slab of its own size.
     BitVolume slab(slab_grid(grid, k0, n));
@@ -60,7 +67,7 @@ void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions
     });
     consume(k0, slab);
     // By layers, not slabs: the last, shorter slab counts for what it is.
-    if (control) control->set_progress(static_cast<double>(k0 + n) / static_cast<double>(nz));
+    if (control) control->set_progress(static_cast<double>(k0 + n - first) / static_cast<double>(end - first));
   }
 }
 

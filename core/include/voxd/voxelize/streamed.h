@@ -24,11 +24,19 @@ bool can_stream(const VoxelizeOptions& options);
 // most the grid's).
 std::int64_t streamed_slab_layers(const Grid& grid, std::uint64_t slab_bytes);
 
-// Voxelizes slab by slab in z order, handing each slab to `consume`. Throws
-// Error(invalid_argument) for options that do not stream (can_stream).
-// Progress runs over the slabs (the consumer's work included); cancellation
-// is honoured between slabs and between chunks of a slab.
+// Z layers [begin, end) of a grid: the part of it one streamed run makes
+// (a slab task of a job spread over many workers). end < 0: to the last.
+struct LayerRange {
+  std::int64_t begin = 0, end = -1;
+};
+
+// Voxelizes slab by slab in z order, handing each slab to `consume`; only
+// the layers of `range`, when given (bit for bit the whole run's: each row
+// of voxels is made alone). Throws Error(invalid_argument) for options that
+// do not stream (can_stream) or a range off the grid. Progress runs over
+// the slabs (the consumer's work included); cancellation is honoured
+// between slabs and between chunks of a slab.
 void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, std::int64_t slab_layers,
-                       const BitSlabConsumer& consume, JobControl* control = nullptr);
+                       const BitSlabConsumer& consume, JobControl* control = nullptr, LayerRange range = {});
 
 }  // namespace voxd
