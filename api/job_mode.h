@@ -60,6 +60,10 @@ struct ModeInput {
   JobControl* control = nullptr;
   // The parity solid, made first when the mode asks for it (needs_parity_solid).
   const BitVolume* parity_solid = nullptr;
+  // A streamed run of only these z layers (one part of a job spread over
+  // workers); honoured by run_streamed of the modes that say
+  // runs_in_layer_ranges, the whole grid for the others.
+  LayerRange layers{};
 };
 
 // What it makes.
@@ -135,6 +139,11 @@ class JobMode {
   virtual std::optional<std::string> streaming_refusal(const JobParams& params) const;
   virtual nlohmann::json run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& bits,
                                       const ValueSlabConsumer& values) const;
+  // Whether a streamed run can make any range of z layers alone (ModeInput::
+  // layers), bit for bit the whole run's, so that a huge job splits into
+  // slab tasks for many workers (server/jobs/slab_tasks.h): a job of bits
+  // only, each row of voxels made on its own.
+  virtual bool runs_in_layer_ranges(const JobParams&) const { return false; }
   // Bytes one z layer takes in a streamed run (what it holds per layer of a
   // slab at once), to size slabs and admit the job.
   virtual std::uint64_t streamed_layer_bytes(const Grid& grid, const JobParams& params) const;

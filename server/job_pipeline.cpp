@@ -241,6 +241,31 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
   return result;
 }
 
+VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,
+                                    const BitSlabConsumer& consume) {
+  const api::JobMode& mode = *job.params.mode;
+  if (!mode.runs_in_layer_ranges(job.params))
+    throw Error(ErrorCode::invalid_argument, "mode " + std::string(mode.name()) + " cannot make a part of its grid alone");
+  Stopwatch clock;
+  VoxelJobResult result = begin_voxel_job(job, /*with_report=*/false, control, clock);
+  result.streamed = true;
+  api::ModeInput in{job.mesh, job.grid, job.params, threads, control, nullptr};
+  in.layers = range;
+  mode.run_streamed(in, job.slab_layers, [&](std::int64_t k0, const BitVolume& slab) {
+    result.filled += slab.count();
+    consume(k0, slab);
+  }, {});
+  result.timings.add("voxelize+write", clock.lap());
+  return result;
+}
+
+VoxelJobResult describe_voxel_job(PreparedVoxelJob job) {
+  Stopwatch clock;
+  VoxelJobResult result = begin_voxel_job(job, /*with_report=*/true, nullptr, clock);
+  result.streamed = true;
+  return result;
+}
+
 VoxelJobResult run_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                              const api::JobParams& params, const JobLimits& limits, bool with_report,
                              JobControl* control, int threads) {

@@ -134,6 +134,19 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
                                           std::int64_t slab_layers, const BitSlabConsumer& consume,
                                           const ValueSlabConsumer& values = {});
 
+// One part of a job spread over many workers (server/jobs/slab_tasks.h):
+// only the z layers `range` of its bits, slab by slab to `consume`, bit for
+// bit those execute_streamed_voxel_job makes; `filled` counts them. No mesh
+// report (describe_voxel_job gives it). Throws Error(invalid_argument) for a
+// job whose mode cannot (api::JobMode::runs_in_layer_ranges).
+VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,
+                                    const BitSlabConsumer& consume);
+
+// What a job's result says beside its voxels, without making them: the mesh
+// report, the rotation, the mass properties in the voxels' frame (for the
+// worker that puts a job spread over workers together).
+VoxelJobResult describe_voxel_job(PreparedVoxelJob job);
+
 // Throws Error(limit_exceeded) for a grid of more than `max_voxels` voxels;
 // `hint` completes the advice.
 void check_voxel_limit(const Grid& grid, std::uint64_t max_voxels, std::string_view hint);

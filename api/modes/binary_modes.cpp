@@ -42,9 +42,11 @@ class BinaryMode final : public JobMode {
     options.mode = mode_;
     options.inside = in.params.inside;
     options.threads = in.threads;
-    voxelize_streamed(in.mesh, in.grid, options, slab_layers, bits, in.control);
+    voxelize_streamed(in.mesh, in.grid, options, slab_layers, bits, in.control, in.layers);
     return nullptr;
   }
+
+  bool runs_in_layer_ranges(const JobParams& params) const override { return !streaming_refusal(params); }
 
  private:
   std::string_view name_, summary_;

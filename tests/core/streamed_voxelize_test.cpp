@@ -168,6 +168,33 @@ TEST(StreamedVoxelize, LayerRangesSideBySideAreTheWholeRunWhateverTheirEndsAndTh
   }
 }
 
+// The RLE of a job made in parts by many workers: the head, each part's
+// blocks (written apart, as each worker stores its own) and the tail are
+// the whole stream's bytes.
+TEST(StreamedVoxelize, RleWrittenInPartsOfLayersIsTheWholeStream) {
+  const Mesh mesh = shared_mesh("bunny.stl");
+  const Grid grid = grid_for(mesh, 97, 1);
+  const std::int64_t nz = grid.dims.z;
+  VoxelizeOptions options;
+  const std::vector<std::uint8_t> whole = streamed_bytes(mesh, grid, options, 8, VolumeFormat::rle, {});
+  VectorSink joined;
+  write_rle_head(grid, joined);
+  std::int64_t begin = 0;
+  for (const std::int64_t end : {std::int64_t{5}, nz / 2, nz}) {
+    VectorSink part;
+    voxelize_streamed(mesh, grid, options, 3,
+                      [&](std::int64_t k0, const BitVolume& slab) { write_rle_layer_blocks(k0, slab, part); }, nullptr,
+                      LayerRange{begin, end});
+    joined.write(part.data.data(), part.data.size());
+    begin = end;
+  }
+  write_rle_tail(grid, joined);
+  EXPECT_EQ(joined.data, whole);
+  VectorSink in_memory;
+  write_rle(voxelize(mesh, grid, options), in_memory);
+  EXPECT_EQ(whole, in_memory.data);
+}
+
 TEST(StreamedVoxelize, InsideTestsThatNeedTheWholeGridAreRefusedByName) {
   VoxelizeOptions vote;
   vote.inside = InsideTest::vote;

@@ -116,6 +116,17 @@ void BitSlabWriter::finish() {
   s.finished = true;
 }
 
+void write_rle_head(const Grid& grid, ByteSink& sink) {
+  encode::require_voxels(grid, "RLE writer");
+  encode::write_rle_bit_header(grid, sink);
+}
+
+void write_rle_layer_blocks(std::int64_t k0, const BitVolume& slab, ByteSink& sink) {
+  encode::write_rle_bit_layers(slab, k0, sink);
+}
+
+void write_rle_tail(const Grid& grid, ByteSink& sink) { encode::write_rle_end(grid.dims.z, sink); }
+
 std::optional<std::string> streaming_refusal(const ValueVolume& type, VolumeFormat format, const EncodeOptions& options) {
   if (auto refusal = format_refusal(type, format, options)) return refusal;
   if (format != VolumeFormat::rle && format != VolumeFormat::raw && format != VolumeFormat::nrrd)

@@ -41,6 +41,16 @@ class BitSlabWriter {
   std::unique_ptr<State> state_;
 };
 
+// A bit volume's RLE in parts made apart (a huge job's slab tasks on many
+// workers, each with its own range of layers): the head, then each part's
+// layer blocks in z order, then the tail are byte for byte BitSlabWriter's
+// RLE of the whole grid, since that stream is one block per layer
+// (proto-schemas/rle-format.md).
+void write_rle_head(const Grid& grid, ByteSink& sink);
+// The blocks of z layers [k0, k0 + slab.grid().dims.z).
+void write_rle_layer_blocks(std::int64_t k0, const BitVolume& slab, ByteSink& sink);
+void write_rle_tail(const Grid& grid, ByteSink& sink);
+
 // The same for a volume of values (coverage bytes or fractions; u8, f32 or
 // rgba8) that arrives slab by slab: exactly encode_volume()'s bytes, in the
 // formats of z-slab order that hold the type (rle, raw, nrrd), the quantized
