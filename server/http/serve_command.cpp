@@ -114,6 +114,8 @@ int serve_command(int argc, char** argv) {
     jc.records = store;
     jc.max_deliveries = config.max_deliveries;
     jc.max_result_bytes = config.max_result_bytes;
+    jc.slab_tasks = store;
+    jc.slab_task_bytes = config.slab_task_bytes;
     log("shared backend: Redis at " + pool->url().redacted() + " as replica " + replica +
         (store->reachable() ? "" : " (not reachable yet: not ready until it is)"));
   }

@@ -22,6 +22,7 @@
 #include "server/jobs/job_store.h"
 #include "server/jobs/local_job_store.h"
 #include "server/jobs/shared_records.h"
+#include "server/jobs/slab_tasks.h"
 #include "server/jobs/volume_cache.h"
 #include "server/log_safe.h"
 #include "voxd/error.h"
@@ -73,6 +74,9 @@ struct Job {
   // Taken from a shared queue: its record lives in the shared backend and its
   // end is written there by compare-and-set; this process only runs it.
   bool shared = false;
+  // A slab task of a shared job split over the replicas: that job's id (the
+  // task's own is its queue id, its key in the table).
+  std::string task_of;
   JobOutput result;  // a synchronous job's volumes, for its caller
   bool stopped_by_shutdown = false;  // cancelled because the service stops
   // The job's share of the memory budget (its decoded mesh, volumes and
@@ -242,21 +246,63 @@ struct JobManager::Impl {
     return peak;
   }
 
-  // Ends a shared job that will not run, by compare-and-set (unless another
-  // replica or a client ended it first), and acknowledges it.
-  void fail_shared(const JobSnapshot& record, JobFailure failure) {
+  // Ends a shared job by compare-and-set (unless another replica or a client
+  // ended it first) and acknowledges the queue entry `qid` it was ended
+  // from: the job's own, or one of its slab tasks'.
+  void end_shared(JobSnapshot s, std::initializer_list<JobState> from, const std::string& qid) {
+    s.finished_at = format_time(Clock::now());
+    if (records->transition(s, from)) {
+      records->drop_input(s.id);
+      if (qid != s.id && config.slab_tasks) config.slab_tasks->drop_tasks(s.id);
+      std::lock_guard lock(mutex);
+      ++finished_here[s.state == JobState::succeeded ? 0 : s.state == JobState::failed ? 1 : 2];
+      announce(s);
+    }
+    forget_running(qid);
+    queue->ack(qid);
+    deliver();
+    finished_cv.notify_all();
+  }
+  // The same for a job that failed (or will not run).
+  void fail_shared(const JobSnapshot& record, JobFailure failure, const std::string& qid) {
     JobSnapshot s = record;
     s.state = JobState::failed;
     s.failure = std::move(failure);
-    s.finished_at = format_time(Clock::now());
-    if (records->transition(s, {JobState::queued, JobState::running})) {
-      records->drop_input(s.id);
-      std::lock_guard lock(mutex);
-      ++finished_here[1];
-      announce(s);
+    end_shared(std::move(s), {JobState::queued, JobState::running}, qid);
+  }
+  static JobFailure failure_of(const Error& e) {
+    const api::ErrorKind& kind = api::error_kind(e.code());
+    return JobFailure{kind.slug, "The job failed", kind.client_message ? e.what() : "the job failed unexpectedly; it was logged"};
+  }
+  static JobFailure redelivery_failure(int deliveries) {
+    return JobFailure{"redelivery-limit", "The job stopped its workers",
+                      "the job was handed to a worker " + std::to_string(deliveries) +
+                          " times and none finished it (each one's replica stopped while running it); "
+                          "it is not tried again: check the service's logs, or submit it again"};
+  }
+  static JobFailure input_expired() {
+    return JobFailure{"input-expired", "The job's upload expired",
+                      "the uploaded mesh was no longer kept when a worker took the job; submit it again"};
+  }
+
+  // Reserves `need` bytes of this replica's memory for a job taken from the
+  // shared queue (admitted by the replica it was submitted to), waiting for
+  // them with its lease renewed. False when this process stops meanwhile:
+  // the entry `qid` was handed back.
+  bool reserve_shared(Job& job, std::uint64_t need, const std::string& qid) {
+    for (;;) {
+      try {
+        job.memory = budget.reserve(need, "the job");
+        return true;
+      } catch (const MemoryBusy&) {
+        if (queue->closed()) {
+          queue->release(qid);
+          return false;
+        }
+        queue->renew_leases();
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
     }
-    queue->ack(s.id);
-    deliver();
   }
 
   // A job handed out by the shared queue, made ready to run here: its record
@@ -270,16 +316,12 @@ struct JobManager::Impl {
       return nullptr;
     }
     if (taken.deliveries > config.max_deliveries) {
-      fail_shared(*record, JobFailure{"redelivery-limit", "The job stopped its workers",
-                                      "the job was handed to a worker " + std::to_string(taken.deliveries) +
-                                          " times and none finished it (each one's replica stopped while running it); "
-                                          "it is not tried again: check the service's logs, or submit it again"});
+      fail_shared(*record, redelivery_failure(taken.deliveries), taken.id);
       return nullptr;
     }
     std::optional<SharedJobRecords::Input> input = records->load_input(taken.id);
     if (!input) {
-      fail_shared(*record, JobFailure{"input-expired", "The job's upload expired",
-                                      "the uploaded mesh was no longer kept when a worker took the job; submit it again"});
+      fail_shared(*record, input_expired(), taken.id);
       return nullptr;
     }
     auto job = std::make_shared<Job>();
@@ -290,30 +332,195 @@ struct JobManager::Impl {
       prepared = prepare_voxel_job(input->bytes, input->name_hint, *record->job, job_limits(false));
       const std::uint64_t need = mesh_memory(prepared.mesh) + prepared.memory_estimate + analyses_memory(*record->job, prepared);
       input.reset();
-      // The job was admitted by the replica it was submitted to: here it
-      // waits for its share of this replica's memory.
-      for (;;) {
-        try {
-          job->memory = budget.reserve(need, "the job");
-          break;
-        } catch (const MemoryBusy&) {
-          if (queue->closed()) {
-            queue->release(taken.id);
-            return nullptr;
-          }
-          queue->renew_leases();
-          std::this_thread::sleep_for(std::chrono::milliseconds(50));
-        }
-      }
+      if (!reserve_shared(*job, need, taken.id)) return nullptr;
     } catch (const Error& e) {
-      const api::ErrorKind& kind = api::error_kind(e.code());
-      fail_shared(*record, JobFailure{kind.slug, "The job failed",
-                                      kind.client_message ? e.what() : "the job failed unexpectedly; it was logged"});
+      fail_shared(*record, failure_of(e), taken.id);
       return nullptr;
     }
     std::lock_guard lock(mutex);
     jobs[taken.id] = job;
     return job;
+  }
+
+  // --- A huge job spread over the replicas (server/jobs/slab_tasks.h) ---
+
+  // Splits a shared job just marked running into slab tasks when it is a
+  // streamed job of bits of more than one task; true when it was: its tasks
+  // are then on the queue for every replica, and it leaves this worker.
+  bool split(Job& job, const PreparedVoxelJob& prepared) {
+    if (!config.slab_tasks || !prepared.streamed || !prepared.params.mode->runs_in_layer_ranges(prepared.params))
+      return false;
+    const std::optional<SlabTaskPlan> plan = plan_slab_tasks(prepared.grid, prepared.slab_layers, config.slab_task_bytes);
+    if (!plan) return false;
+    const std::string id = job.snap.id;
+    std::vector<std::string> tasks;
+    for (std::int64_t i = 0; i < plan->tasks; ++i) tasks.push_back(slab_task_id(id, i));
+    try {
+      config.slab_tasks->save_plan(id, *plan);
+      queue->split(id, tasks);
+      spdlog::info("job {} split into {} slab tasks of {} layers", id, plan->tasks, plan->task_layers);
+    } catch (const std::exception& e) {
+      // Unsplit: the job's entry goes back, and whoever takes it splits it.
+      warn_backend(e);
+      queue->release(id);
+    }
+    forget_running(id);
+    job.memory.release();
+    return true;
+  }
+
+  // One slab task from the shared queue: its layers made and stored, and
+  // counted done; the worker that counts the last one puts the job together.
+  void run_slab_task(const TakenJob& taken, const SlabTaskRef& ref) {
+    const std::string& qid = taken.id;
+    const std::string& id = ref.job_id;
+    const std::optional<JobSnapshot> record = records->load(id);
+    if (!record || record->state != JobState::running) {  // ended, deleted or expired: nothing to do
+      queue->ack(qid);
+      return;
+    }
+    const std::optional<SharedSlabTasks::State> state = config.slab_tasks ? config.slab_tasks->state(id) : std::nullopt;
+    if (!state || ref.index >= state->plan.tasks) {
+      spdlog::error("slab task {}: its job has no plan for it", qid);
+      fail_shared(*record, JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"}, qid);
+      return;
+    }
+    if (state->cancel_requested) {
+      JobSnapshot s = *record;
+      s.state = JobState::cancelled;
+      end_shared(std::move(s), {JobState::running}, qid);
+      return;
+    }
+    if (taken.deliveries > config.max_deliveries) {
+      fail_shared(*record, redelivery_failure(taken.deliveries), qid);
+      return;
+    }
+    auto job = std::make_shared<Job>();
+    job->snap = *record;
+    job->shared = true;
+    job->task_of = id;
+    const std::int64_t tasks = state->plan.tasks;
+    try {
+      std::int64_t done = 0;
+      if (config.slab_tasks->task_done(id, ref.index)) {
+        // Made before, by a worker that stopped before putting the job
+        // together: only that is left to do.
+        done = config.slab_tasks->finish_task(id, ref.index, 0, tasks);
+      } else {
+        const LayerRange range = state->plan.range(ref.index, record->grid.dims.z);
+        spdlog::info("slab task {} running (layers {} to {})", qid, range.begin, range.end - 1);
+        std::optional<PreparedVoxelJob> prepared = prepare_shared(job, *record, qid, /*with_analyses=*/false);
+        if (!prepared) return;
+        VoxelJobResult r;
+        config.slab_tasks->write_blocks(id, ref.index, [&](ByteSink& sink) {
+          r = execute_voxel_layers(std::move(*prepared), range, &job->control, engine_threads,
+                                   [&](std::int64_t k0, const BitVolume& slab) { write_rle_layer_blocks(k0, slab, sink); });
+        });
+        job->memory.release();
+        done = config.slab_tasks->finish_task(id, ref.index, r.filled, tasks);
+        spdlog::info("slab task {} done ({} of {} tasks)", qid, done, tasks);
+      }
+      if (done == tasks) {
+        assemble(job, *record, qid);
+      } else {  // more to come, or the job ended meanwhile (done 0)
+        if (done == 0) config.slab_tasks->drop_tasks(id);  // blocks stored just after it ended
+        forget_running(qid);
+        queue->ack(qid);
+        finished_cv.notify_all();
+      }
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::cancelled) {
+        if (!api::error_kind(e.code()).client_message) spdlog::error("slab task {}: {}", qid, log_safe(e.what()));
+        fail_shared(*record, failure_of(e), qid);
+      } else if (job->stopped_by_shutdown) {
+        forget_running(qid);
+        queue->release(qid);  // another replica makes it
+        finished_cv.notify_all();
+      } else {  // a client cancelled (or deleted) the job
+        JobSnapshot s = *record;
+        s.state = JobState::cancelled;
+        end_shared(std::move(s), {JobState::running}, qid);
+      }
+    } catch (const StorageFull& e) {
+      spdlog::error("job {}: cannot store its result: {}", id, e.what());
+      fail_shared(*record, JobFailure{"storage-full", "The service's storage is full",
+                                      "the result could not be stored: " + std::string(e.what()) + "; retry later"},
+                  qid);
+    } catch (const BackendUnavailable& e) {
+      warn_backend(e);
+      forget_running(qid);
+      queue->release(qid);
+      finished_cv.notify_all();
+    } catch (const std::exception& e) {
+      const std::optional<JobSnapshot> now = records->load(id);
+      if (now && now->state == JobState::running) {
+        spdlog::error("slab task {}: internal error: {}", qid, log_safe(e.what()));
+        fail_shared(*record, JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"}, qid);
+      } else {  // a second worker putting the job together found it ended by the first
+        forget_running(qid);
+        queue->ack(qid);
+        finished_cv.notify_all();
+      }
+    }
+  }
+
+  // A split job's upload read back and prepared again (as at admission), in
+  // the table under its task's queue id with its memory reserved; nullopt
+  // when it will not run here (then ended, or handed back).
+  std::optional<PreparedVoxelJob> prepare_shared(const std::shared_ptr<Job>& job, const JobSnapshot& record,
+                                                 const std::string& qid, bool with_analyses) {
+    std::optional<SharedJobRecords::Input> input = records->load_input(record.id);
+    if (!input) {
+      fail_shared(record, input_expired(), qid);
+      return std::nullopt;
+    }
+    PreparedVoxelJob prepared = prepare_voxel_job(input->bytes, input->name_hint, *record.job, job_limits(false));
+    input.reset();
+    if (prepared.slab_layers < 1)  // this replica would make it in memory: its tasks stream all the same
+      prepared.slab_layers = streamed_job_slab_layers(prepared.grid, prepared.params, job_limits(false).stream_slab_bytes);
+    std::uint64_t need = mesh_memory(prepared.mesh);
+    need += with_analyses ? analyses_memory(*record.job, prepared)
+                          : estimate_streamed_job_memory(prepared.grid, prepared.slab_layers, prepared.triangles);
+    if (!reserve_shared(*job, need, qid)) return std::nullopt;
+    std::lock_guard lock(mutex);
+    jobs[qid] = job;
+    return prepared;
+  }
+
+  // The last task of a split job counted done: the job's RLE put together
+  // from its tasks' blocks (head, blocks in z order, tail: the whole job's
+  // bytes), its report and analyses made as run() makes them, its end
+  // recorded. A second worker doing the same (a task made twice) keeps the
+  // first one's volume and finds the job ended.
+  void assemble(const std::shared_ptr<Job>& job, const JobSnapshot& record, const std::string& qid) {
+    const std::string id = record.id;
+    const std::int64_t tasks = config.slab_tasks->state(id).value_or(SharedSlabTasks::State{}).plan.tasks;
+    std::optional<PreparedVoxelJob> prepared = prepare_shared(job, record, qid, /*with_analyses=*/true);
+    if (!prepared) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Grid grid = prepared->grid;
+    store->write_volume(id, [&](ByteSink& sink) {
+      write_rle_head(grid, sink);
+      for (std::int64_t i = 0; i < tasks; ++i) {
+        job->control.check_cancelled();
+        if (!config.slab_tasks->read_blocks(id, i, sink))
+          throw std::runtime_error("the blocks of slab task " + std::to_string(i) + " are gone");
+      }
+      write_rle_tail(grid, sink);
+    });
+    const double assembly = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    JobOutput output;
+    output.rle = store->volume_rle(id);
+    const std::vector<api::AnalysisRequest> analyses = prepared->params.analyses;
+    VoxelJobResult r = describe_voxel_job(std::move(*prepared));
+    r.filled = config.slab_tasks->filled(id);
+    r.timings.add("assemble", assembly);
+    nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
+    JobSnapshot done = record;
+    record_success(done, r, analyses.empty() ? std::nullopt : std::optional(std::move(analyses_done)));
+    job->memory.release();
+    spdlog::info("job {} put together from {} slab tasks ({} s)", id, tasks, assembly);
+    end_shared(std::move(done), {JobState::running}, qid);
   }
 
   // A job taken from the queue becomes running only once its record says
@@ -377,6 +584,10 @@ struct JobManager::Impl {
           continue;
         }
         if (from_shared) {
+          if (const std::optional<SlabTaskRef> task = parse_slab_task_id(taken->id)) {
+            run_slab_task(*taken, *task);
+            continue;
+          }
           job = adopt(*taken, prepared);
           if (!job) continue;
         }
@@ -424,6 +635,7 @@ struct JobManager::Impl {
       }
       deliver();
       try {
+        if (job->shared && split(*job, prepared)) continue;
         run(job.get(), std::move(prepared), from);
       } catch (const std::exception& e) {
         // run() records every failure of the job itself; this is the
@@ -433,6 +645,20 @@ struct JobManager::Impl {
         if (job->shared) forget_running(id);
       }
     }
+  }
+
+  // A job's record once it succeeded with `r`.
+  static void record_success(JobSnapshot& s, const VoxelJobResult& r, std::optional<nlohmann::json> analyses_done) {
+    if (analyses_done) s.analyses = std::move(*analyses_done);
+    s.state = JobState::succeeded;
+    s.progress = 1.0;
+    s.mesh = r.report;
+    s.mesh_mass = r.mesh_mass;
+    for (auto& t : r.timings.stages)
+      if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
+        s.timings.push_back(t);
+    s.filled_voxels = r.filled;
+    s.values = r.values_info.is_null() ? nlohmann::json(nullptr) : r.values_info;
   }
 
   // Requires no lock: drops a shared job this process ran from the table.
@@ -492,16 +718,7 @@ struct JobManager::Impl {
       nlohmann::json analyses_done = prepare_analyses(*job, analyses, r, output);
       std::lock_guard lock(mutex);
       JobSnapshot& s = job->snap;
-      if (!analyses.empty()) s.analyses = std::move(analyses_done);
-      s.state = JobState::succeeded;
-      s.progress = 1.0;
-      s.mesh = r.report;
-      s.mesh_mass = r.mesh_mass;
-      for (auto& t : r.timings.stages)
-        if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
-          s.timings.push_back(t);
-      s.filled_voxels = r.filled;
-      s.values = r.values_info.is_null() ? nlohmann::json(nullptr) : r.values_info;
+      record_success(s, r, analyses.empty() ? std::nullopt : std::optional(std::move(analyses_done)));
       if (job->ephemeral) {
         job->result = output;
       } else {
@@ -597,14 +814,22 @@ struct JobManager::Impl {
       {
         std::lock_guard lock(mutex);
         for (const auto& [id, job] : jobs)
-          if (job->shared && job->snap.state == JobState::running) running.emplace_back(id, job->control.progress());
+          if (job->shared && job->snap.state == JobState::running) {
+            // A slab task reports for its job, leaving its progress to the
+            // tasks' count.
+            if (job->task_of.empty()) running.emplace_back(id, job->control.progress());
+            else running.emplace_back(job->task_of, -1.0);
+          }
       }
       try {
         const std::vector<std::string> cancel = records->report_running(running);
         backend_ok = true;
         std::lock_guard lock(mutex);
-        for (const std::string& id : cancel)
+        for (const std::string& id : cancel) {
           if (auto it = jobs.find(id); it != jobs.end()) it->second->control.request_cancel();
+          for (const auto& [key, job] : jobs)
+            if (job->task_of == id) job->control.request_cancel();
+        }
       } catch (const std::exception& e) {
         warn_backend(e);
       }

@@ -99,6 +99,7 @@ struct JobOutput {
 class JobQueue;          // server/jobs/job_queue.h
 class JobStore;          // server/jobs/job_store.h
 class SharedJobRecords;  // server/jobs/shared_records.h
+class SharedSlabTasks;  // server/jobs/slab_tasks.h
 
 struct JobManagerConfig {
   // Where jobs wait and where they are kept: null = the embedded ones (an
@@ -110,6 +111,12 @@ struct JobManagerConfig {
   // there, not in this process; queue and store are then the backend's.
   // Synchronous jobs (run_sync) still run in this process only.
   std::shared_ptr<SharedJobRecords> records;
+  // Set (with records) when the backend keeps a huge job's slab tasks
+  // (server/jobs/slab_tasks.h): a streamed job of bits whose grid holds more
+  // than slab_task_bytes of bits is split into tasks of about that many, so
+  // that every replica's workers make it together. 0 = never split.
+  std::shared_ptr<SharedSlabTasks> slab_tasks;
+  std::uint64_t slab_task_bytes = std::uint64_t{256} << 20;
   // A shared job handed out this many times without finishing (its workers'
   // replicas died on it) fails with "redelivery-limit" instead of looping.
   int max_deliveries = 3;

@@ -11,6 +11,7 @@
 #include <deque>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,16 @@ class JobQueue {
   // Keeps the leases of the jobs taken here alive; the engine calls it about
   // every 100 ms. Nothing to do in-process.
   virtual void renew_leases() {}
+  // Replaces the job taken here by `tasks` (a huge job's slab tasks,
+  // server/jobs/slab_tasks.h) in one step: the tasks are queued, past the
+  // capacity (their job was admitted already), and the job's own entry
+  // ends. A job is split once: for one split already (its entry handed out
+  // twice), only the entry ends. Throws BackendUnavailable; only a shared
+  // queue splits (std::logic_error here).
+  virtual void split(const std::string& id, const std::vector<std::string>& tasks) {
+    (void)tasks;
+    throw std::logic_error("job " + id + ": only a shared queue splits jobs");
+  }
   // Removes a job that waits; false when it is not waiting (taken, unknown).
   virtual bool cancel(const std::string& id) = 0;
   // Jobs waiting.

@@ -47,7 +47,8 @@ class SharedJobRecords {
 
   // Asks whichever replica runs the job to stop it (it polls, ~100 ms).
   virtual void request_cancel(const std::string& id) const = 0;
-  // This replica's running jobs and their progress, reported every ~100 ms:
+  // This replica's running jobs and their progress (negative: left as it
+  // is, for a job whose tasks run here), reported every ~100 ms:
   // the progress others show, the replica's heartbeat. Returns the ids
   // whose cancellation was asked (or whose record was deleted).
   virtual std::vector<std::string> report_running(const std::vector<std::pair<std::string, double>>& running) const = 0;

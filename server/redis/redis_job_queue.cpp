@@ -34,6 +34,19 @@ end
 return kept
 )lua";
 
+// KEYS: stream, job. ARGV: group, the job's entry, its tasks... Queues the
+// tasks once per job (the record's "split" says it was) and ends the job's
+// entry, in one step: a replica that dies before it changed nothing, one
+// that dies after left nothing to redo but the tasks.
+constexpr const char* kSplit = R"lua(
+if redis.call('EXISTS', KEYS[2]) == 1 and redis.call('HSETNX', KEYS[2], 'split', '1') == 1 then
+  for i = 3, #ARGV do redis.call('XADD', KEYS[1], '*', 'job', ARGV[i]) end
+end
+redis.call('XACK', KEYS[1], ARGV[1], ARGV[2])
+redis.call('XDEL', KEYS[1], ARGV[2])
+return 1
+)lua";
+
 // The job id in a stream entry [id, [field, value, ...]].
 std::string job_of(const RedisReply& entry) {
   const RedisReply fields = entry.at(1);
@@ -195,6 +208,21 @@ void RedisJobQueue::renew_leases() {
   if (entries.empty()) return;
   for (const std::string& e : entries) args.push_back(e);
   pool_->command(args);
+}
+
+void RedisJobQueue::split(const std::string& id, const std::vector<std::string>& tasks) {
+  std::string entry;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(id);
+    if (it == entries_.end()) throw std::logic_error("job " + id + " is split without being taken here");
+    entry = it->second;
+  }
+  const std::string job = job_key(id);  // RedisArgs are views: kept alive here
+  RedisArgs args{"EVAL", kSplit, "2", stream_, job, group_, entry};
+  for (const std::string& t : tasks) args.push_back(t);
+  pool_->command(args);
+  forget(id);
 }
 
 bool RedisJobQueue::cancel(const std::string& id) {

@@ -39,6 +39,7 @@ class RedisJobQueue final : public JobQueue {
   void ack(const std::string& id) override;
   void release(const std::string& id) override;
   void renew_leases() override;
+  void split(const std::string& id, const std::vector<std::string>& tasks) override;
   bool cancel(const std::string& id) override;
   std::size_t depth() const override;
   std::vector<std::string> close() override;

@@ -123,13 +123,14 @@ redis.call('PEXPIRE', KEYS[2], ARGV[5])
 return 1
 )lua";
 
-// KEYS: the running jobs' records. ARGV: their progress. Returns per job
+// KEYS: the running jobs' records. ARGV: their progress ("" to leave it:
+// a split job's moves as its tasks finish). Returns per job
 // "1" when its cancellation was asked, "gone" when it was deleted, "" else.
 constexpr const char* kReportRunning = R"lua(
 local out = {}
 for i, k in ipairs(KEYS) do
   if redis.call('EXISTS', k) == 1 then
-    redis.call('HSET', k, 'progress', ARGV[i])
+    if ARGV[i] ~= '' then redis.call('HSET', k, 'progress', ARGV[i]) end
     out[i] = redis.call('HGET', k, 'cancel') or ''
   else
     out[i] = 'gone'
@@ -145,6 +146,42 @@ if redis.call('HGET', KEYS[1], 'state') == 'running' then
   return 1
 end
 return 0
+)lua";
+
+// KEYS: job. ARGV: tasks, task layers. The plan of a job still there.
+constexpr const char* kSavePlan = R"lua(
+if redis.call('EXISTS', KEYS[1]) == 0 then return 0 end
+redis.call('HSET', KEYS[1], 'tasks', ARGV[1], 'task_layers', ARGV[2])
+return 1
+)lua";
+
+// KEYS: job, tasks hash, keys set. ARGV: index, voxels, tasks, ttl. Counts
+// a task of a running job done (once) and moves its progress; the number
+// of its tasks done, 0 when it is no longer running.
+constexpr const char* kFinishTask = R"lua(
+if redis.call('HGET', KEYS[1], 'state') ~= 'running' then return 0 end
+redis.call('HSETNX', KEYS[2], ARGV[1], ARGV[2])
+redis.call('SADD', KEYS[3], KEYS[2])
+if redis.call('PTTL', KEYS[2]) < 0 then redis.call('PEXPIRE', KEYS[2], ARGV[4]) end
+if redis.call('PTTL', KEYS[3]) < 0 then redis.call('PEXPIRE', KEYS[3], ARGV[4]) end
+local done = redis.call('HLEN', KEYS[2])
+redis.call('HSET', KEYS[1], 'progress', tostring(0.95 * done / tonumber(ARGV[3])))
+return done
+)lua";
+
+// KEYS: keys set. ARGV: key prefixes. Deletes the job's keys that start
+// with one of them.
+constexpr const char* kDropPrefixed = R"lua(
+for _, k in ipairs(redis.call('SMEMBERS', KEYS[1])) do
+  for i = 1, #ARGV do
+    if string.sub(k, 1, #ARGV[i]) == ARGV[i] then
+      redis.call('DEL', k)
+      redis.call('SREM', KEYS[1], k)
+      break
+    end
+  end
+end
+return 1
 )lua";
 
 // Streams a blob into chunks of chunk_bytes, each stored as it fills.
@@ -477,7 +514,7 @@ std::vector<std::string> RedisJobStore::report_running(const std::vector<std::pa
   progress.reserve(running.size());
   for (const auto& [id, p] : running) {
     keys.push_back(key("job", id));
-    progress.push_back(std::to_string(p));
+    progress.push_back(p < 0 ? std::string() : std::to_string(p));
   }
   const std::string n = std::to_string(keys.size());
   if (!keys.empty()) {
@@ -530,6 +567,62 @@ void RedisJobStore::prune() const {
     first -= static_cast<long long>(gone.size());
     if (ids.size() < static_cast<std::size_t>(kPage)) return;
   }
+}
+
+}  // namespace voxd::server
+
+namespace voxd::server {
+
+namespace {
+std::string blocks_name(std::int64_t index) { return "slab:" + std::to_string(index); }
+}  // namespace
+
+void RedisJobStore::save_plan(const std::string& id, const SlabTaskPlan& plan) const {
+  pool_->command({"EVAL", kSavePlan, "1", key("job", id), std::to_string(plan.tasks), std::to_string(plan.task_layers)});
+}
+
+std::optional<SharedSlabTasks::State> RedisJobStore::state(const std::string& id) const {
+  const RedisReply r = pool_->command({"HMGET", key("job", id), "tasks", "task_layers", "cancel"});
+  if (r.at(0).is_nil() || r.at(1).is_nil()) return std::nullopt;
+  State s;
+  s.plan.tasks = parse_number<std::int64_t>(r.at(0).text()).value_or(0);
+  s.plan.task_layers = parse_number<std::int64_t>(r.at(1).text()).value_or(0);
+  if (s.plan.tasks < 1 || s.plan.task_layers < 1) return std::nullopt;
+  s.cancel_requested = !r.at(2).is_nil();
+  return s;
+}
+
+bool RedisJobStore::task_done(const std::string& id, std::int64_t index) const {
+  return pool_->command({"HEXISTS", key("tasks", id), std::to_string(index)}).integer() == 1;
+}
+
+void RedisJobStore::write_blocks(const std::string& id, std::int64_t index,
+                                 const std::function<void(ByteSink&)>& write) const {
+  write_blob(id, blocks_name(index), write);
+}
+
+bool RedisJobStore::read_blocks(const std::string& id, std::int64_t index, ByteSink& sink) const {
+  return read_chunks(id, blocks_name(index), [&](std::string_view c) { sink.write(c.data(), c.size()); });
+}
+
+std::int64_t RedisJobStore::finish_task(const std::string& id, std::int64_t index, std::uint64_t filled,
+                                        std::int64_t tasks) const {
+  return pool_
+      ->command({"EVAL", kFinishTask, "3", key("job", id), key("tasks", id), key("keys", id), std::to_string(index),
+                 std::to_string(filled), std::to_string(tasks), ms_text(options_.inflight_ttl)})
+      .integer();
+}
+
+std::uint64_t RedisJobStore::filled(const std::string& id) const {
+  const RedisReply r = pool_->command({"HVALS", key("tasks", id)});
+  std::uint64_t total = 0;
+  for (std::size_t i = 0; i < r.size(); ++i) total += parse_number<std::uint64_t>(r.at(i).text()).value_or(0);
+  return total;
+}
+
+void RedisJobStore::drop_tasks(const std::string& id) const {
+  const std::string blobs = blob_key(id, "slab:"), chunks = key("chunk", id) + ":slab:", tasks = key("tasks", id);
+  pool_->command({"EVAL", kDropPrefixed, "1", key("keys", id), blobs, chunks, tasks});
 }
 
 }  // namespace voxd::server

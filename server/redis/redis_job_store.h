@@ -12,6 +12,10 @@
 //   PREFIX keys:ID       set: every blob and chunk key of the job, so that
 //                        deleting or expiring a job reaches all of them
 //   PREFIX replicas      sorted set: replicas by their last heartbeat
+//   PREFIX tasks:ID      hash: task index -> voxels, of a split job's tasks
+//                        done (server/jobs/slab_tasks.h; the plan is in
+//                        job:ID as tasks, task_layers, split; each task's
+//                        blocks are the blob "slab:I")
 // A blob is written chunk by chunk under a fresh generation and becomes
 // visible at once when its manifest is created; a second writer of the same
 // blob (a job run twice) finds the manifest there and drops its own chunks,
@@ -26,6 +30,7 @@
 
 #include "server/jobs/job_store.h"
 #include "server/jobs/shared_records.h"
+#include "server/jobs/slab_tasks.h"
 #include "server/redis/redis_client.h"
 
 namespace voxd::server {
@@ -46,7 +51,7 @@ struct RedisBackendOptions {
   std::string replica_id;  // this process, in the heartbeat set
 };
 
-class RedisJobStore final : public JobStore, public SharedJobRecords {
+class RedisJobStore final : public JobStore, public SharedJobRecords, public SharedSlabTasks {
  public:
   RedisJobStore(std::shared_ptr<RedisPool> pool, RedisBackendOptions options);
 
@@ -81,6 +86,18 @@ class RedisJobStore final : public JobStore, public SharedJobRecords {
   bool reachable() const override;
   std::size_t live_replicas() const override;
   void prune() const override;
+
+  // SharedSlabTasks
+  void save_plan(const std::string& id, const SlabTaskPlan& plan) const override;
+  std::optional<State> state(const std::string& id) const override;
+  bool task_done(const std::string& id, std::int64_t index) const override;
+  void write_blocks(const std::string& id, std::int64_t index,
+                    const std::function<void(ByteSink&)>& write) const override;
+  bool read_blocks(const std::string& id, std::int64_t index, ByteSink& sink) const override;
+  std::int64_t finish_task(const std::string& id, std::int64_t index, std::uint64_t filled,
+                           std::int64_t tasks) const override;
+  std::uint64_t filled(const std::string& id) const override;
+  void drop_tasks(const std::string& id) const override;
 
   // A blob as stored, whole; nullopt when there is none (or it expired while
   // being read). Exposed for the tests of the chunking.

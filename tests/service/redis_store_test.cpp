@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <set>
 #include <thread>
 
 #include "server/jobs/job_record.h"
@@ -165,6 +166,111 @@ TEST_F(RedisStoreTest, TheQueueIsBoundedAndALapsedLeaseIsClaimedWithItsDeliveryC
   b.ack("q2");
   EXPECT_EQ(a.depth(), 0u);
   EXPECT_EQ(pool_->command({"XLEN", "voxd:queue"}).integer(), 0) << "acknowledged entries are deleted";
+}
+
+// A job's plan: tasks of about the bytes asked (whole slabs when a task
+// holds one or more), at most kMaxSlabTasks, none for a job of one task;
+// the ranges tile the grid. Task ids go to the queue and back.
+TEST(SlabTaskPlan, TasksTileTheGridInWholeSlabsUpToTheCap) {
+  Grid grid;
+  grid.voxel_size = 1.0;
+  grid.dims = {1000, 1000, 1001};  // 128000 bytes of bits a layer (rows of whole words)
+  EXPECT_FALSE(plan_slab_tasks(grid, 16, 0)) << "0: never split";
+  EXPECT_FALSE(plan_slab_tasks(grid, 16, 200'000'000)) << "one task holds the grid";
+  const std::optional<SlabTaskPlan> plan = plan_slab_tasks(grid, 16, 128000 * 100);
+  ASSERT_TRUE(plan);
+  EXPECT_EQ(plan->task_layers, 96) << "100 layers, in whole slabs of 16";
+  EXPECT_EQ(plan->tasks, 11);
+  std::int64_t next = 0;
+  for (std::int64_t i = 0; i < plan->tasks; ++i) {
+    const LayerRange r = plan->range(i, grid.dims.z);
+    EXPECT_EQ(r.begin, next);
+    EXPECT_GT(r.end, r.begin);
+    next = r.end;
+  }
+  EXPECT_EQ(next, grid.dims.z);
+  const std::optional<SlabTaskPlan> small = plan_slab_tasks(grid, 64, 128000 * 5);
+  ASSERT_TRUE(small);
+  EXPECT_EQ(small->task_layers, 5) << "a task smaller than a slab is not made a slab";
+  grid.dims.z = 100000;
+  const std::optional<SlabTaskPlan> capped = plan_slab_tasks(grid, 1, 1);
+  ASSERT_TRUE(capped);
+  EXPECT_LE(capped->tasks, kMaxSlabTasks);
+  EXPECT_GE(capped->tasks * capped->task_layers, grid.dims.z);
+
+  EXPECT_EQ(slab_task_id("0123abcd", 7), "0123abcd/slab/7");
+  const std::optional<SlabTaskRef> ref = parse_slab_task_id("0123abcd/slab/7");
+  ASSERT_TRUE(ref);
+  EXPECT_EQ(ref->job_id, "0123abcd");
+  EXPECT_EQ(ref->index, 7);
+  for (const char* not_a_task : {"0123abcd", "/slab/1", "0123abcd/slab/", "0123abcd/slab/-1", "0123abcd/slab/1x"})
+    EXPECT_FALSE(parse_slab_task_id(not_a_task)) << not_a_task;
+}
+
+// A split on the queue: the tasks are queued once (past the capacity) and
+// the job's entry ends with it, even when its entry was handed out twice;
+// each task's blocks are kept once, counted once, and dropped with the plan.
+TEST_F(RedisStoreTest, AJobIsSplitOnceAndItsTasksAreCountedAndDroppedOnce) {
+  RedisQueueOptions o;
+  o.capacity = 1;
+  o.lease = std::chrono::milliseconds(200);
+  o.consumer = "a";
+  RedisJobQueue a(pool_, o);
+  o.consumer = "b";
+  RedisJobQueue b(pool_, o);
+  store_->save(record("big", JobState::queued));
+  ASSERT_TRUE(a.submit("big"));
+  ASSERT_TRUE(a.take(std::chrono::milliseconds(100)));
+  // a's lease lapses: b takes the same entry; both split it.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto again = b.take(std::chrono::milliseconds(100));
+  ASSERT_TRUE(again);
+  ASSERT_EQ(again->id, "big");
+  const SlabTaskPlan plan{3, 10};
+  store_->save_plan("big", plan);
+  const std::vector<std::string> tasks = {slab_task_id("big", 0), slab_task_id("big", 1), slab_task_id("big", 2)};
+  b.split("big", tasks);
+  a.split("big", tasks);
+  EXPECT_EQ(pool_->command({"XLEN", "voxd:queue"}).integer(), 3) << "three tasks, past the capacity of one";
+  std::set<std::string> taken;
+  while (auto t = a.take(std::chrono::milliseconds(50))) taken.insert(t->id);
+  EXPECT_EQ(taken, std::set<std::string>(tasks.begin(), tasks.end()));
+  const std::optional<SharedSlabTasks::State> state = store_->state("big");
+  ASSERT_TRUE(state);
+  EXPECT_EQ(state->plan.tasks, 3);
+  EXPECT_EQ(state->plan.task_layers, 10);
+  EXPECT_FALSE(state->cancel_requested);
+
+  EXPECT_EQ(store_->finish_task("big", 0, 5, 3), 0) << "a job not running counts no task";
+  JobSnapshot running = record("big", JobState::running);
+  ASSERT_TRUE(store_->transition(running, {JobState::queued}));
+  for (std::int64_t i = 0; i < 3; ++i) {
+    store_->write_blocks("big", i, [&](ByteSink& sink) { sink.write("abcd", 4); });
+    // A task made twice keeps its first blocks.
+    store_->write_blocks("big", i, [&](ByteSink& sink) { sink.write("wxyz", 4); });
+  }
+  EXPECT_FALSE(store_->task_done("big", 1));
+  EXPECT_EQ(store_->finish_task("big", 1, 100, 3), 1);
+  EXPECT_EQ(store_->finish_task("big", 1, 999, 3), 1) << "counted once, with its first count";
+  EXPECT_TRUE(store_->task_done("big", 1));
+  EXPECT_NEAR(store_->load("big")->progress, 0.95 / 3, 1e-6);
+  EXPECT_EQ(store_->finish_task("big", 0, 20, 3), 2);
+  EXPECT_EQ(store_->finish_task("big", 2, 3, 3), 3);
+  EXPECT_EQ(store_->filled("big"), 123u);
+  VectorSink joined;
+  for (std::int64_t i = 0; i < 3; ++i) ASSERT_TRUE(store_->read_blocks("big", i, joined));
+  EXPECT_EQ(std::string(joined.data.begin(), joined.data.end()), "abcdabcdabcd");
+  store_->request_cancel("big");
+  EXPECT_TRUE(store_->state("big")->cancel_requested);
+
+  store_->drop_tasks("big");
+  VectorSink none;
+  EXPECT_FALSE(store_->read_blocks("big", 0, none));
+  EXPECT_FALSE(store_->task_done("big", 1));
+  EXPECT_EQ(store_->filled("big"), 0u);
+  EXPECT_TRUE(store_->load("big")) << "the job itself stays";
+  store_->remove("big");
+  EXPECT_EQ(keys(), 1) << "only the queue stream is left";
 }
 
 }  // namespace

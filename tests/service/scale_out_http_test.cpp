@@ -6,6 +6,8 @@
 
 #include "support/http_fixture.h"
 #include "support/redis_process.h"
+#include "support/run_process.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::test {
 namespace {
@@ -97,6 +99,17 @@ class ScaleOutTest : public HttpServiceTest {
     if (!res) return {};
     EXPECT_EQ(res->status, 200) << res->body;
     return res->body;
+  }
+
+  // The Redis keys matching `pattern`, as redis-cli lists them.
+  std::string redis_keys(const std::string& pattern) const {
+    return run_process("redis-cli -p " + std::to_string(redis_->port()) + " --scan --pattern '" + pattern + "'").out;
+  }
+  // Slab tasks of job `id` each replica's log says it made.
+  std::vector<std::size_t> tasks_done(const std::string& id) const {
+    std::vector<std::size_t> done;
+    for (const auto& r : replicas_) done.push_back(occurrences(r->log(), "slab task " + id + "/slab/"));
+    return done;
   }
 
   std::unique_ptr<RedisProcess> redis_;
@@ -303,6 +316,114 @@ TEST_F(ScaleOutTest, CachedResultsArtifactsCancellationAndMetricsAreShared) {
   EXPECT_NE(metrics->body.find("voxd_queue_depth"), std::string::npos);
   for (const std::string& id : long_jobs) at(1).Delete(("/v1/jobs/" + id).c_str());
   for (const std::string& id : long_jobs) EXPECT_EQ(wait_for_job(at(1), id, 30).at("state"), "cancelled");
+}
+
+// One huge job split into slab tasks over three replicas: every replica
+// makes some of them, and the volume, put together by whichever made the
+// last, is the CLI's bytes on one machine. Then a replica is killed while it
+// holds a task: it loses only that task, which another replica redoes, and
+// the volume is again the CLI's bytes.
+TEST_F(ScaleOutTest, AHugeJobSplitIntoSlabTasksIsTheCliBytesAlsoWithAReplicaKilledMidJob) {
+  // Tasks of 3 layers of bits (64 KiB), so that the job is dozens of them.
+  start_replicas(3, {"--slab-task-bytes", "65536", "--max-result-bytes", "0"});
+  // Many triangles: every task decodes and bins them all, so a task lasts
+  // long enough to be caught running.
+  const auto mesh = to_binary_stl(make_torus({0, 0, 0}, 10, 4, 640, 320));
+  const std::string params = R"({"grid":{"resolution":400},"streaming":"on"})";
+  const std::string id =
+      expect_json(post_multipart(at(0), "/v1/jobs", mesh, "torus.stl", params), 202, "JobStatus").at("id");
+  const json done = wait_for_job(at(1), id, 180);
+  ASSERT_EQ(done.at("state"), "succeeded") << done.dump();
+  schemas_->add("JobStatus", done.dump());
+  const std::string expected = cli_volume(mesh, "torus.stl", params);
+  // (Compared as a whole: a dump of megabytes on a failure says nothing.)
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_TRUE(volume_from(i, id) == expected) << "from replica " << i;
+  const BitVolume voxels = read_rle_bits(std::span(reinterpret_cast<const std::uint8_t*>(expected.data()), expected.size()));
+  EXPECT_EQ(done.at("filled_voxels").get<std::uint64_t>(), voxels.count());
+  std::string logs;
+  for (const auto& r : replicas_) logs += r->log();
+  const std::size_t at_split = logs.find("job " + id + " split into ");
+  ASSERT_NE(at_split, std::string::npos) << logs;
+  const int tasks = std::stoi(logs.substr(at_split + ("job " + id + " split into ").size()));
+  EXPECT_GT(tasks, 20);
+  std::size_t made = 0, makers = 0;
+  for (const std::size_t n : tasks_done(id)) {
+    made += n;
+    makers += n > 0 ? 1 : 0;
+  }
+  EXPECT_EQ(made, 2u * static_cast<std::size_t>(tasks)) << "each task logged running and done once";
+  EXPECT_GE(makers, 2u) << "the replicas share the tasks";
+  EXPECT_EQ(occurrences(logs, "job " + id + " put together from"), 1u);
+  EXPECT_EQ(redis_keys("voxd:*" + id + ":slab:*"), "") << "the tasks' blocks are dropped once the job ends";
+  EXPECT_EQ(redis_keys("voxd:tasks:" + id), "");
+
+  // The same job a voxel larger: a replica is stopped still while it holds
+  // a task it has not finished, then killed.
+  const std::string params2 = R"({"grid":{"resolution":401},"streaming":"on"})";
+  const std::string id2 =
+      expect_json(post_multipart(at(0), "/v1/jobs", mesh, "torus.stl", params2), 202, "JobStatus").at("id");
+  std::string lost;  // the task the killed replica held
+  int victim = -1;
+  for (int attempt = 0; attempt < 2000 && lost.empty(); ++attempt) {
+    for (std::size_t i = 0; i < 3 && lost.empty(); ++i) {
+      ServerProcess& r = *replicas_[i];
+      r.freeze(true);
+      const std::string log = r.log();
+      for (auto at = log.find("slab task " + id2 + "/slab/"); at != std::string::npos;
+           at = log.find("slab task " + id2 + "/slab/", at + 1)) {
+        const std::size_t name_end = log.find(' ', at + 10);
+        const std::string task = log.substr(at + 10, name_end - at - 10);
+        if (log.compare(name_end, 9, " running ") == 0 && log.find("slab task " + task + " done") == std::string::npos)
+          lost = task;
+      }
+      if (!lost.empty()) {
+        r.kill_hard();
+        victim = static_cast<int>(i);
+      } else {
+        r.freeze(false);
+      }
+    }
+    if (lost.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_FALSE(lost.empty()) << "no replica was caught holding a task";
+  const std::size_t survivor = static_cast<std::size_t>(victim + 1) % 3;
+  const json done2 = wait_for_job(at(survivor), id2, 180);
+  ASSERT_EQ(done2.at("state"), "succeeded") << done2.dump();
+  const std::string expected2 = cli_volume(mesh, "torus.stl", params2);
+  EXPECT_TRUE(volume_from(survivor, id2) == expected2);
+  std::string survivors;
+  for (const auto& r : replicas_)
+    if (r->running()) survivors += r->log();
+  EXPECT_NE(survivors.find("job " + lost + " was left by its worker"), std::string::npos) << lost << "\n" << survivors;
+  EXPECT_NE(survivors.find("slab task " + lost + " done"), std::string::npos) << lost;
+}
+
+// DELETE of a split job while its tasks run on both replicas: every task
+// stops or is skipped, the job ends cancelled, and its tasks' blocks are
+// dropped.
+TEST_F(ScaleOutTest, DeletingASplitJobStopsItsTasksEverywhere) {
+  start_replicas(2, {"--slab-task-bytes", "65536", "--max-result-bytes", "0"});
+  const auto mesh = to_binary_stl(make_torus({0, 0, 0}, 10, 4, 640, 320));
+  const std::string id = expect_json(post_multipart(at(0), "/v1/jobs", mesh, "torus.stl",
+                                                    R"({"grid":{"resolution":400},"streaming":"on"})"),
+                                     202, "JobStatus")
+                             .at("id");
+  for (int i = 0; i < 500; ++i) {
+    const auto done = tasks_done(id);
+    if (done[0] + done[1] >= 4) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  expect_json(at(1).Delete(("/v1/jobs/" + id).c_str()), 202, "JobStatus");
+  const json done = wait_for_job(at(0), id, 30);
+  EXPECT_EQ(done.at("state"), "cancelled") << done.dump();
+  // No task is made after the cancellation is seen: the logs stop growing.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const auto after = tasks_done(id);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_EQ(tasks_done(id), after);
+  EXPECT_EQ(redis_keys("voxd:*" + id + ":slab:*"), "");
+  EXPECT_EQ(redis_keys("voxd:tasks:" + id), "");
+  EXPECT_EQ(expect_json(at(1).Get("/v1/jobs"), 200, "JobList").at("total"), 1);
 }
 
 }  // namespace

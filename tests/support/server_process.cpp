@@ -91,6 +91,10 @@ void ServerProcess::kill_hard() {
   pid_ = -1;
 }
 
+void ServerProcess::freeze(bool frozen) {
+  if (pid_ > 0) ::kill(pid_, frozen ? SIGSTOP : SIGCONT);
+}
+
 std::string ServerProcess::log() const {
   std::ifstream in(log_path_);
   std::ostringstream s;

@@ -33,6 +33,9 @@ class ServerProcess {
   std::uint64_t peak_rss() const;
   // SIGKILL, as a crash or the OOM killer would end it.
   void kill_hard();
+  // SIGSTOP (true) or SIGCONT: the process stands still, as it is, until
+  // thawed or killed (to look at what it holds at one instant).
+  void freeze(bool frozen);
 
  private:
   pid_t pid_ = -1;
