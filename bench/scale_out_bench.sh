@@ -2,7 +2,8 @@
 # Scale-out benchmark on loopback: the async small-job flow (POST /v1/jobs,
 # poll, GET volume, DELETE; 10k triangles at 64^3) against the embedded
 # service, one replica on Redis (the shared queue's cost per job) and three
-# replicas on the same Redis (connections spread over them).
+# replicas on the same Redis (connections spread over them). Then one huge
+# job: embedded, and split into slab tasks over one and over three replicas.
 #   bench/scale_out_bench.sh [BUILD_DIR] [SECONDS] [CONNECTIONS]
 set -euo pipefail
 build="${1:-build}"
@@ -69,3 +70,38 @@ echo "== three replicas on Redis (workers = cores each), connections spread over
 ports=$(serve --redis "redis://127.0.0.1:$redis_port"),$(serve --redis "redis://127.0.0.1:$redis_port"),$(serve --redis "redis://127.0.0.1:$redis_port")
 load --port "$ports" --connections 3 --seconds 3 > /dev/null
 load --port "$ports" --connections "$connections"
+stop_voxd
+
+# One huge job (the benchmark torus, 1.1 M triangles, at 3000 voxels along
+# its longest axis: 12 G voxels, 1.5 GB of bits, made slab by slab):
+# seconds from POST to succeeded, then its RLE fetched and compared with
+# the first run's.
+"$build/bench/write_bench_mesh" "$work/big.stl"
+huge_params='{"grid":{"resolution":3000},"streaming":"on"}'
+huge() {  # PORT LABEL
+  local t0 id state
+  t0=$(date +%s.%N)
+  id=$(curl -sf -F "mesh=@$work/big.stl" -F "params=$huge_params" "http://127.0.0.1:$1/v1/jobs" | python3 -c 'import json,sys; print(json.load(sys.stdin)["id"])')
+  while :; do
+    state=$(curl -sf "http://127.0.0.1:$1/v1/jobs/$id" | python3 -c 'import json,sys; print(json.load(sys.stdin)["state"])')
+    [[ "$state" == queued || "$state" == running ]] || break
+    sleep 0.05
+  done
+  printf '%s: %s in %s s' "$2" "$state" "$(python3 -c "print(round($(date +%s.%N) - $t0, 2))")"
+  curl -sf -o "$work/huge-$2.rle" "http://127.0.0.1:$1/v1/jobs/$id/volume"
+  if [[ -f "$work/huge-first.rle" ]]; then
+    cmp -s "$work/huge-first.rle" "$work/huge-$2.rle" && echo " (same bytes)" || echo " (DIFFERENT BYTES)"
+  else
+    mv "$work/huge-$2.rle" "$work/huge-first.rle"
+    echo " ($(stat -c %s "$work/huge-first.rle") bytes of RLE)"
+  fi
+}
+echo "== one huge job: 1.1 M triangles at resolution 3000, streamed; split into slab tasks of 1 GiB of bits (the default) with Redis"
+huge "$(serve)" embedded
+stop_voxd
+redis="redis://127.0.0.1:$redis_port"
+huge "$(serve --redis "$redis" --max-result-bytes 0)" one-replica
+stop_voxd
+ports=("$(serve --redis "$redis" --max-result-bytes 0)" "$(serve --redis "$redis" --max-result-bytes 0)" "$(serve --redis "$redis" --max-result-bytes 0)")
+huge "${ports[0]}" three-replicas
+echo "slab tasks made per replica: $(for f in "$work"/voxd-*.log; do grep -c 'slab task .* done' "$f" || true; done | tr '\n' ' ')"

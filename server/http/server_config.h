@@ -41,7 +41,7 @@ struct ServeConfig {
   int redis_lease = 15;  // seconds
   int max_deliveries = 3;
   std::uint64_t max_result_bytes = std::uint64_t{1} << 30;  // with --redis only
-  std::uint64_t slab_task_bytes = std::uint64_t{256} << 20;  // with --redis only
+  std::uint64_t slab_task_bytes = std::uint64_t{1} << 30;  // with --redis only
 };
 
 // Parses argv[first..] over the environment over the defaults. Throws

@@ -116,7 +116,7 @@ struct JobManagerConfig {
   // than slab_task_bytes of bits is split into tasks of about that many, so
   // that every replica's workers make it together. 0 = never split.
   std::shared_ptr<SharedSlabTasks> slab_tasks;
-  std::uint64_t slab_task_bytes = std::uint64_t{256} << 20;
+  std::uint64_t slab_task_bytes = std::uint64_t{1} << 30;
   // A shared job handed out this many times without finishing (its workers'
   // replicas died on it) fails with "redelivery-limit" instead of looping.
   int max_deliveries = 3;
