@@ -73,7 +73,8 @@ load --port "$ports" --connections "$connections"
 stop_voxd
 
 # One huge job (the benchmark torus, 1.1 M triangles, at 3000 voxels along
-# its longest axis: 12 G voxels, 1.5 GB of bits, made slab by slab):
+# its longest axis: 3000 x 2902 x 2271, 19.8 G voxels, 2.5 GB of bits, made
+# slab by slab):
 # seconds from POST to succeeded, then its RLE fetched and compared with
 # the first run's.
 "$build/bench/write_bench_mesh" "$work/big.stl"
