@@ -399,6 +399,21 @@ struct JobManager::Impl {
     job->snap = *record;
     job->shared = true;
     job->task_of = id;
+    {
+      // In the table from now on: a cancellation reaches it while it
+      // prepares, and stops it before it makes a voxel.
+      std::lock_guard lock(mutex);
+      jobs[qid] = job;
+    }
+    // And out of it however the task ends (a shutdown waits for it).
+    struct LeaveTable {
+      Impl& m;
+      const std::string& qid;
+      ~LeaveTable() {
+        m.forget_running(qid);
+        m.finished_cv.notify_all();
+      }
+    } leave{*this, qid};
     const std::int64_t tasks = state->plan.tasks;
     try {
       std::int64_t done = 0;

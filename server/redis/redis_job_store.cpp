@@ -125,11 +125,15 @@ return 1
 
 // KEYS: the running jobs' records. ARGV: their progress ("" to leave it:
 // a split job's moves as its tasks finish). Returns per job
-// "1" when its cancellation was asked, "gone" when it was deleted, "" else.
+// "1" when its cancellation was asked, "gone" when it was deleted, "ended"
+// when it ended already (a slab task of a job another task ended), "" else.
 constexpr const char* kReportRunning = R"lua(
 local out = {}
 for i, k in ipairs(KEYS) do
-  if redis.call('EXISTS', k) == 1 then
+  local state = redis.call('HGET', k, 'state')
+  if state ~= false and state ~= 'running' then
+    out[i] = 'ended'
+  elseif state then
     if ARGV[i] ~= '' then redis.call('HSET', k, 'progress', ARGV[i]) end
     out[i] = redis.call('HGET', k, 'cancel') or ''
   else
