@@ -249,14 +249,18 @@ struct JobManager::Impl {
   // Ends a shared job by compare-and-set (unless another replica or a client
   // ended it first) and acknowledges the queue entry `qid` it was ended
   // from: the job's own, or one of its slab tasks'.
+  // Recorded before it leaves the table: a client never sees the job gone or
+  // back to "running" from the backend after seeing its end here.
   void end_shared(JobSnapshot s, std::initializer_list<JobState> from, const std::string& qid) {
-    s.finished_at = format_time(Clock::now());
+    if (s.finished_at.empty()) s.finished_at = format_time(Clock::now());
     if (records->transition(s, from)) {
+      {
+        std::lock_guard lock(mutex);
+        ++finished_here[s.state == JobState::succeeded ? 0 : s.state == JobState::failed ? 1 : 2];
+        announce(s);
+      }
       records->drop_input(s.id);
       if (qid != s.id && config.slab_tasks) config.slab_tasks->drop_tasks(s.id);
-      std::lock_guard lock(mutex);
-      ++finished_here[s.state == JobState::succeeded ? 0 : s.state == JobState::failed ? 1 : 2];
-      announce(s);
     }
     forget_running(qid);
     queue->ack(qid);
@@ -436,21 +440,17 @@ struct JobManager::Impl {
         spdlog::info("slab task {} done ({} of {} tasks)", qid, done, tasks);
       }
       if (done == tasks) {
-        assemble(job, *record, qid);
+        assemble(job, *record, qid, tasks);
       } else {  // more to come, or the job ended meanwhile (done 0)
         if (done == 0) config.slab_tasks->drop_tasks(id);  // blocks stored just after it ended
-        forget_running(qid);
         queue->ack(qid);
-        finished_cv.notify_all();
       }
     } catch (const Error& e) {
       if (e.code() != ErrorCode::cancelled) {
         if (!api::error_kind(e.code()).client_message) spdlog::error("slab task {}: {}", qid, log_safe(e.what()));
         fail_shared(*record, failure_of(e), qid);
       } else if (job->stopped_by_shutdown) {
-        forget_running(qid);
         queue->release(qid);  // another replica makes it
-        finished_cv.notify_all();
       } else {  // a client cancelled (or deleted) the job
         JobSnapshot s = *record;
         s.state = JobState::cancelled;
@@ -463,18 +463,14 @@ struct JobManager::Impl {
                   qid);
     } catch (const BackendUnavailable& e) {
       warn_backend(e);
-      forget_running(qid);
       queue->release(qid);
-      finished_cv.notify_all();
     } catch (const std::exception& e) {
       const std::optional<JobSnapshot> now = records->load(id);
       if (now && now->state == JobState::running) {
         spdlog::error("slab task {}: internal error: {}", qid, log_safe(e.what()));
         fail_shared(*record, JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"}, qid);
       } else {  // a second worker putting the job together found it ended by the first
-        forget_running(qid);
         queue->ack(qid);
-        finished_cv.notify_all();
       }
     }
   }
@@ -507,9 +503,9 @@ struct JobManager::Impl {
   // bytes), its report and analyses made as run() makes them, its end
   // recorded. A second worker doing the same (a task made twice) keeps the
   // first one's volume and finds the job ended.
-  void assemble(const std::shared_ptr<Job>& job, const JobSnapshot& record, const std::string& qid) {
+  void assemble(const std::shared_ptr<Job>& job, const JobSnapshot& record, const std::string& qid,
+                std::int64_t tasks) {
     const std::string id = record.id;
-    const std::int64_t tasks = config.slab_tasks->state(id).value_or(SharedSlabTasks::State{}).plan.tasks;
     std::optional<PreparedVoxelJob> prepared = prepare_shared(job, record, qid, /*with_analyses=*/true);
     if (!prepared) return;
     const auto t0 = std::chrono::steady_clock::now();
@@ -795,29 +791,18 @@ struct JobManager::Impl {
   // A shared job's end: written by compare-and-set (a job run twice ends
   // once), its upload dropped, its queue entry acknowledged. A job this
   // process stops, or whose end cannot be written, is handed back instead.
-  void finish_shared(Job& job, JobSnapshot& done, bool backend_lost) {
+  void finish_shared(Job& job, const JobSnapshot& done, bool backend_lost) {
     const std::string id = done.id;
-    if (backend_lost || job.stopped_by_shutdown) {
-      forget_running(id);
-      queue->release(id);  // another replica runs it again
-      return;
-    }
-    try {
-      // Recorded before it leaves the table: a client never sees the job
-      // gone or back to "running" from the backend after seeing its end here.
-      if (records->transition(done, {JobState::running})) {
-        std::lock_guard lock(mutex);
-        ++finished_here[done.state == JobState::succeeded ? 0 : done.state == JobState::failed ? 1 : 2];
-        announce(done);
+    if (!backend_lost && !job.stopped_by_shutdown) {
+      try {
+        end_shared(done, {JobState::running}, id);
+        return;
+      } catch (const BackendUnavailable& e) {
+        warn_backend(e);
       }
-      forget_running(id);
-      records->drop_input(id);
-      queue->ack(id);
-    } catch (const BackendUnavailable& e) {
-      warn_backend(e);
-      forget_running(id);
-      queue->release(id);
     }
+    forget_running(id);
+    queue->release(id);  // another replica runs it again
   }
 
   // Shared backend: every ~100 ms, the running jobs' progress and this

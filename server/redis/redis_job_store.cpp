@@ -74,19 +74,6 @@ if redis.call('PTTL', KEYS[3]) < ttl then redis.call('PEXPIRE', KEYS[3], ttl) en
 return 1
 )lua";
 
-// KEYS: manifest, keys set. ARGV: the blob's chunk key prefix (any generation).
-constexpr const char* kDropBlob = R"lua(
-for _, k in ipairs(redis.call('SMEMBERS', KEYS[2])) do
-  if string.sub(k, 1, #ARGV[1]) == ARGV[1] then
-    redis.call('DEL', k)
-    redis.call('SREM', KEYS[2], k)
-  end
-end
-redis.call('DEL', KEYS[1])
-redis.call('SREM', KEYS[2], KEYS[1])
-return 1
-)lua";
-
 // KEYS: job, index, keys set. ARGV: id, hash index key prefix.
 constexpr const char* kRemoveJob = R"lua(
 local h = redis.call('HGET', KEYS[1], 'hash')
@@ -174,7 +161,7 @@ return done
 )lua";
 
 // KEYS: keys set. ARGV: key prefixes. Deletes the job's keys that start
-// with one of them.
+// with one of them (a blob: its manifest and its chunks of any generation).
 constexpr const char* kDropPrefixed = R"lua(
 for _, k in ipairs(redis.call('SMEMBERS', KEYS[1])) do
   for i = 1, #ARGV do
@@ -497,7 +484,8 @@ std::optional<SharedJobRecords::Input> RedisJobStore::load_input(const std::stri
 }
 
 void RedisJobStore::drop_input(const std::string& id) const {
-  pool_->command({"EVAL", kDropBlob, "2", blob_key(id, "input"), key("keys", id), key("chunk", id) + ":input:"});
+  // No other blob's name starts with "input".
+  pool_->command({"EVAL", kDropPrefixed, "1", key("keys", id), blob_key(id, "input"), key("chunk", id) + ":input:"});
 }
 
 std::optional<std::string> RedisJobStore::succeeded_with_hash(const std::string& hash) const {
