@@ -13,6 +13,7 @@
 #include "voxd/analysis/distance_transform.h"
 #include "voxd/grid.h"
 #include "voxd/analysis/local_thickness.h"
+#include "voxd/analysis/wall_thickness.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd::bench {
@@ -46,7 +47,18 @@ void BM_LocalThickness(benchmark::State& state) {
 }
 BENCHMARK(BM_LocalThickness)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-void BM_LocalThicknessPart(benchmark::State& state, const char* file) {
+void BM_WallThickness(benchmark::State& state) {
+  const BitVolume v = solid_at(state.range(0));
+  for (auto _ : state) {
+    auto t = wall_thickness(v);
+    benchmark::DoNotOptimize(t.values().data());
+  }
+  state.counters["filled"] = static_cast<double>(v.count());
+}
+BENCHMARK(BM_WallThickness)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+template <bool kWall>
+void BM_ThicknessPart(benchmark::State& state, const char* file) {
   const std::filesystem::path path = std::filesystem::path(VOXD_SHARED_MESHES) / file;
   if (!std::filesystem::exists(path)) {
     state.SkipWithError("shared/meshes not found");
@@ -59,13 +71,17 @@ void BM_LocalThicknessPart(benchmark::State& state, const char* file) {
   r.padding = 1;
   const BitVolume v = voxelize_parity(m, resolve_grid(r, bounds(m)), 0, 0, nullptr);
   for (auto _ : state) {
-    auto t = local_thickness(v);
+    auto t = kWall ? wall_thickness(v) : local_thickness(v);
     benchmark::DoNotOptimize(t.values().data());
   }
   state.counters["filled"] = static_cast<double>(v.count());
 }
+void BM_LocalThicknessPart(benchmark::State& state, const char* file) { BM_ThicknessPart<false>(state, file); }
+void BM_WallThicknessPart(benchmark::State& state, const char* file) { BM_ThicknessPart<true>(state, file); }
 BENCHMARK_CAPTURE(BM_LocalThicknessPart, hex_nut, "M3_hex_nut.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_LocalThicknessPart, screw, "M3x10_screw.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_WallThicknessPart, hex_nut, "M3_hex_nut.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_WallThicknessPart, screw, "M3x10_screw.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace voxd::bench

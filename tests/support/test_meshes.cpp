@@ -92,6 +92,85 @@ Mesh make_torus(glm::dvec3 center, double R, double r, int nu, int nv) {
   return m;
 }
 
+Mesh make_extrusion(const std::vector<glm::dvec2>& outline, double y0, double y1) {
+  Mesh m;
+  const auto n = static_cast<std::uint32_t>(outline.size());
+  for (const glm::dvec2& p : outline) add_vertex(m, {p.x, y0, p.y});
+  for (const glm::dvec2& p : outline) add_vertex(m, {p.x, y1, p.y});
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    m.triangles.push_back({i, j, j + n});
+    m.triangles.push_back({i, j + n, i + n});
+  }
+  // Ear clipping of the outline, oriented counter-clockwise first.
+  double area = 0.0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const glm::dvec2 a = outline[i], b = outline[(i + 1) % n];
+    area += a.x * b.y - b.x * a.y;
+  }
+  std::vector<std::uint32_t> left(n);
+  for (std::uint32_t i = 0; i < n; ++i) left[i] = area > 0 ? i : n - 1 - i;
+  auto cross = [](glm::dvec2 o, glm::dvec2 a, glm::dvec2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); };
+  while (left.size() > 3) {
+    bool clipped = false;
+    for (std::size_t k = 0; k < left.size() && !clipped; ++k) {
+      const std::uint32_t ia = left[(k + left.size() - 1) % left.size()], ib = left[k], ic = left[(k + 1) % left.size()];
+      const glm::dvec2 a = outline[ia], b = outline[ib], c = outline[ic];
+      if (cross(a, b, c) <= 0) continue;  // reflex
+      bool empty = true;
+      for (std::uint32_t other : left) {
+        if (other == ia || other == ib || other == ic) continue;
+        const glm::dvec2 p = outline[other];
+        if (cross(a, b, p) >= 0 && cross(b, c, p) >= 0 && cross(c, a, p) >= 0) empty = false;
+      }
+      if (!empty) continue;
+      m.triangles.push_back({ia, ic, ib});
+      m.triangles.push_back({ia + n, ib + n, ic + n});
+      left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
+      clipped = true;
+    }
+    if (!clipped) throw std::invalid_argument("make_extrusion: outline is not a simple polygon");
+  }
+  m.triangles.push_back({left[0], left[2], left[1]});
+  m.triangles.push_back({left[0] + n, left[1] + n, left[2] + n});
+  return m;
+}
+
+Mesh make_tube(double R, double r, double z0, double z1, int segments) {
+  Mesh m;
+  const double pi = 3.14159265358979323846;
+  for (int i = 0; i < segments; ++i) {
+    const double a = 2.0 * pi * i / segments;
+    const double c = std::cos(a), s = std::sin(a);
+    add_vertex(m, {R * c, R * s, z0});
+    add_vertex(m, {R * c, R * s, z1});
+    add_vertex(m, {r * c, r * s, z0});
+    add_vertex(m, {r * c, r * s, z1});
+  }
+  for (int i = 0; i < segments; ++i) {
+    const auto b = static_cast<std::uint32_t>(4 * i), e = static_cast<std::uint32_t>(4 * ((i + 1) % segments));
+    auto quad = [&](std::uint32_t p, std::uint32_t q, std::uint32_t r2, std::uint32_t s2) {
+      m.triangles.push_back({p, q, r2});
+      m.triangles.push_back({p, r2, s2});
+    };
+    quad(b, e, e + 1, b + 1);          // outer wall
+    quad(b + 2, b + 3, e + 3, e + 2);  // inner wall
+    quad(b + 1, e + 1, e + 3, b + 3);  // top
+    quad(b, b + 2, e + 2, e);          // bottom
+  }
+  return m;
+}
+
+Mesh rotated(Mesh mesh, double degrees_x, double degrees_y) {
+  const double ax = degrees_x * 3.14159265358979323846 / 180.0, ay = degrees_y * 3.14159265358979323846 / 180.0;
+  for (auto& v : mesh.vertices) {
+    const glm::dvec3 p(v);
+    const glm::dvec3 q{p.x, p.y * std::cos(ax) - p.z * std::sin(ax), p.y * std::sin(ax) + p.z * std::cos(ax)};
+    v = glm::vec3(glm::dvec3{q.x * std::cos(ay) + q.z * std::sin(ay), q.y, -q.x * std::sin(ay) + q.z * std::cos(ay)});
+  }
+  return mesh;
+}
+
 Mesh concat(const std::vector<Mesh>& parts) {
   Mesh out;
   for (const auto& p : parts) {

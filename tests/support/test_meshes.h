@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "voxd/grid.h"
@@ -32,6 +33,15 @@ inline Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz, glm::dv
 Mesh make_icosphere(glm::dvec3 center, double radius, int level);
 // Torus around z: major radius R, minor radius r, with nu x nv quads.
 Mesh make_torus(glm::dvec3 center, double R, double r, int nu, int nv);
+// A prism: the simple polygon `outline` (points (x, z), either winding) in
+// the x-z plane, extruded along y from y0 to y1. Closed; caps by ear clipping.
+Mesh make_extrusion(const std::vector<glm::dvec2>& outline, double y0, double y1);
+// A tube around z: outer radius R, inner radius r, from z0 to z1, with
+// `segments` facets around (closed, annular caps).
+Mesh make_tube(double R, double r, double z0, double z1, int segments);
+// Every vertex rotated by `degrees_x` about the x axis, then `degrees_y`
+// about the y axis, about the origin.
+Mesh rotated(Mesh mesh, double degrees_x, double degrees_y);
 // Union of meshes (no welding).
 Mesh concat(const std::vector<Mesh>& parts);
 // Reverses every triangle (inside-out), e.g. the inner wall of a hollow sphere.

@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <functional>
 
+#include <glm/vec3.hpp>
+
 #include "analysis/progress_span.h"
 #include "voxd/bit_volume.h"
 #include "voxd/dense_volume.h"
@@ -45,5 +47,37 @@ std::int64_t paint_balls_largest_first(const BitVolume& solid, DenseVolume<float
 std::int64_t isqrt(std::int64_t n);
 // ceil(sqrt(n)).
 std::int64_t ceil_sqrt(std::int64_t n);
+
+// Whether the ball at (x, y, z) with squared radius r2 lies inside the ball of
+// one of its 26 neighbours. The ball at c + e (squared radius R') contains it
+// when sqrt(R') >= sqrt(r2) + |e|, i.e. R' >= r2 + |e|^2 + 2 sqrt(r2 |e|^2)
+// (the continuous containment, sufficient for the lattice balls). Such a ball
+// is larger, so it was painted earlier and already covered every voxel of
+// this one: skipping it is exact. On walls along the grid axes this drops
+// nearly every ball but the mid-plane's; on tilted walls few, as the radius
+// seldom grows by a whole step per neighbour.
+// `r2_at(i, j, k)` is the squared radius of the ball centred at voxel
+// (i, j, k), 0 where there is none; `d` the grid's dims.
+template <typename RadiusAt>
+bool inside_a_neighbour(const glm::i64vec3& d, std::int64_t x, std::int64_t y, std::int64_t z, std::int64_t r2,
+                        const RadiusAt& r2_at) {
+  std::int64_t need[4] = {0, 0, 0, 0};
+  for (std::int64_t e2 = 1; e2 <= 3; ++e2) need[e2] = r2 + e2 + ceil_sqrt(4 * r2 * e2);
+  for (int dz = -1; dz <= 1; ++dz) {
+    const std::int64_t k = z + dz;
+    if (k < 0 || k >= d.z) continue;
+    for (int dy = -1; dy <= 1; ++dy) {
+      const std::int64_t j = y + dy;
+      if (j < 0 || j >= d.y) continue;
+      for (int dx = -1; dx <= 1; ++dx) {
+        const std::int64_t i = x + dx;
+        const int e2 = dx * dx + dy * dy + dz * dz;
+        if (e2 == 0 || i < 0 || i >= d.x) continue;
+        if (r2_at(i, j, k) >= need[e2]) return true;
+      }
+    }
+  }
+  return false;
+}
 
 }  // namespace voxd::detail

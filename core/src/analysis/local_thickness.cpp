@@ -21,40 +21,9 @@
 namespace voxd {
 namespace {
 
-using detail::ceil_sqrt;
+using detail::inside_a_neighbour;
 
 inline float thickness_of(std::int64_t r2) { return static_cast<float>(2.0 * std::sqrt(static_cast<double>(r2))); }
-
-// Whether the ball at (x, y, z) with squared radius r2 lies inside the ball of
-// one of its 26 neighbours. The ball at c + e (squared radius R') contains it
-// when sqrt(R') >= sqrt(r2) + |e|, i.e. R' >= r2 + |e|^2 + 2 sqrt(r2 |e|^2)
-// (the continuous containment, sufficient for the lattice balls). Such a ball
-// is larger, so it was painted earlier and already covered every voxel of
-// this one: skipping it is exact. On walls along the grid axes this drops
-// nearly every ball but the mid-plane's; on tilted walls few, as the radius
-// seldom grows by a whole step per neighbour.
-bool inside_a_neighbour(const DenseVolume<std::uint32_t>& edt, std::int64_t x, std::int64_t y, std::int64_t z,
-                        std::int64_t r2) {
-  const glm::i64vec3 d = edt.grid().dims;
-  std::int64_t need[4] = {0, 0, 0, 0};
-  for (std::int64_t e2 = 1; e2 <= 3; ++e2) need[e2] = r2 + e2 + ceil_sqrt(4 * r2 * e2);
-  for (int dz = -1; dz <= 1; ++dz) {
-    const std::int64_t k = z + dz;
-    if (k < 0 || k >= d.z) continue;
-    for (int dy = -1; dy <= 1; ++dy) {
-      const std::int64_t j = y + dy;
-      if (j < 0 || j >= d.y) continue;
-      const std::uint32_t* row = edt.slab(k) + j * d.x;
-      for (int dx = -1; dx <= 1; ++dx) {
-        const std::int64_t i = x + dx;
-        const int e2 = dx * dx + dy * dy + dz * dz;
-        if (e2 == 0 || i < 0 || i >= d.x) continue;
-        if (row[i] >= need[e2]) return true;
-      }
-    }
-  }
-  return false;
-}
 
 // Every filled voxel is a ball centre, handed out largest squared radius
 // first. Most of the time only the largest few percent are ever needed (the
@@ -174,7 +143,9 @@ DenseVolume<float> local_thickness(const BitVolume& solid, int threads, JobContr
     return true;
   };
   const detail::BallContained contained = [&](std::int64_t x, std::int64_t y, std::int64_t z, std::int64_t r2) {
-    return inside_a_neighbour(edt, x, y, z, r2);
+    return inside_a_neighbour(grid.dims, x, y, z, r2, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      return static_cast<std::int64_t>(edt.slab(k)[j * grid.dims.x + i]);
+    });
   };
   detail::paint_balls_largest_first(solid, out, balls, contained, {tuning.sparse_from, tuning.reach_rebuild_queries},
                                     nthreads, progress.part(0.3, 1.0));

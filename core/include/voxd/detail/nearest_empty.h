@@ -1,0 +1,52 @@
+#pragma once
+// The feature transform of a binary volume: for every filled voxel, the
+// nearest EMPTY voxel centre (Euclidean, in voxels), as the distance
+// transform (voxd/analysis/distance_transform.h) measures it, but which one
+// rather than how far. Everything outside the grid counts as empty, as
+// there. Wall thickness needs it: the two surfaces a wall lies between are
+// told apart by where each voxel's nearest empty voxel is.
+//
+// Not part of the engine's API (for wall thickness and its tests).
+//
+// Same separable method as the distance transform (Meijster et al. 2000),
+// carrying the nearest site along instead of only its distance; integer
+// arithmetic throughout, so the distance to the voxel given is exactly the
+// distance transform's (ties may pick either voxel).
+//
+// Memory: one uint32 per voxel. Indices are of the grid padded by one empty
+// layer on every side, so outside voxels have one too; grids whose padded
+// voxel count exceeds 2^32 (about 1600^3) are refused.
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+#include "voxd/bit_volume.h"
+#include "voxd/dense_volume.h"
+#include "voxd/progress.h"
+
+namespace voxd::detail {
+
+// Indices of the grid padded by one layer on every side: voxel (x, y, z),
+// -1 <= x <= nx, ... has index (x + 1) + px ((y + 1) + py (z + 1)).
+struct PaddedIndex {
+  std::int64_t px = 0, py = 0, pz = 0;
+  explicit PaddedIndex(const Grid& grid)
+      : px(grid.dims.x + 2), py(grid.dims.y + 2), pz(grid.dims.z + 2) {}
+  std::uint32_t of(std::int64_t x, std::int64_t y, std::int64_t z) const {
+    return static_cast<std::uint32_t>((x + 1) + px * ((y + 1) + py * (z + 1)));
+  }
+  glm::i64vec3 at(std::uint32_t index) const {
+    const auto i = static_cast<std::int64_t>(index);
+    return {i % px - 1, (i / px) % py - 1, i / (px * py) - 1};
+  }
+};
+
+// For a filled voxel, the padded index of its nearest empty voxel; for an
+// empty one, its own. `threads` 0 = all cores; `control` may be null (then
+// progress and cancellation are not reported). Throws Error(limit_exceeded)
+// for a grid of more than 2^32 padded voxels.
+DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int threads = 0,
+                                                JobControl* control = nullptr, double progress_from = 0.0,
+                                                double progress_to = 1.0);
+
+}  // namespace voxd::detail

@@ -1,0 +1,169 @@
+// Wall thickness against parts built in code with known walls, and the
+// feature transform it rests on against brute force.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "support/test_meshes.h"
+#include "voxd/analysis/distance_transform.h"
+#include "voxd/analysis/wall_thickness.h"
+#include "voxd/detail/nearest_empty.h"
+#include "voxd/voxelize/voxelize.h"
+
+namespace voxd {
+namespace {
+
+BitVolume solid_of(const Mesh& mesh, double voxel) {
+  GridRequest r;
+  r.kind = GridRequest::Kind::voxel_size;
+  r.voxel_size = voxel;
+  r.padding = 2;
+  return voxelize_parity(mesh, resolve_grid(r, bounds(mesh)), 0, 0, nullptr);
+}
+
+struct Range {
+  double min = 1e30, max = 0.0;
+  std::uint64_t voxels = 0;
+};
+// Over the filled voxels whose centre satisfies `where` (model units).
+template <typename Where>
+Range range_of(const BitVolume& solid, const DenseVolume<float>& t, Where where) {
+  Range r;
+  const Grid& g = solid.grid();
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; ++i) {
+        if (!solid.get(i, j, k)) continue;
+        if (!where(g.origin + (glm::dvec3(i, j, k) + 0.5) * g.voxel_size)) continue;
+        const double v = t.at(i, j, k) * g.voxel_size;
+        r.min = std::min(r.min, v);
+        r.max = std::max(r.max, v);
+        ++r.voxels;
+      }
+  return r;
+}
+Range range_of(const BitVolume& solid, const DenseVolume<float>& t) {
+  return range_of(solid, t, [](const glm::dvec3&) { return true; });
+}
+
+// A plate T thick (z), W wide (x), D deep (y), centred on the origin, its
+// two long edges chamfered by c at 45° (0: sharp). Its ends stay sharp.
+Mesh plate(double T, double W, double D, double c) {
+  std::vector<glm::dvec2> o;
+  if (c > 0) {
+    o = {{c, 0}, {W - c, 0}, {W, c}, {W, T - c}, {W - c, T}, {c, T}, {0, T - c}, {0, c}};
+  } else {
+    o = {{0, 0}, {W, 0}, {W, T}, {0, T}};
+  }
+  Mesh m = test::make_extrusion(o, 0, D);
+  for (auto& v : m.vertices) v -= glm::vec3(static_cast<float>(W / 2), static_cast<float>(D / 2), static_cast<float>(T / 2));
+  return m;
+}
+
+TEST(NearestEmpty, IsAnEmptyVoxelAtTheDistanceTransformsDistance) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 6; ++trial) {
+    const Grid g = test::unit_grid(13 + trial, 11, 9 + trial % 3);
+    BitVolume v(g);
+    std::bernoulli_distribution fill(trial % 2 ? 0.9 : 0.7);
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i) v.set(i, j, k, fill(rng));
+    const auto nearest = detail::nearest_empty_voxels(v, 1 + trial % 2);
+    const auto d2 = squared_distance_transform(v, 1);
+    const detail::PaddedIndex padded(g);
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i) {
+          const glm::i64vec3 f = padded.at(nearest.at(i, j, k));
+          if (!v.get(i, j, k)) {
+            ASSERT_EQ(f, glm::i64vec3(i, j, k));
+            continue;
+          }
+          const bool outside = f.x < 0 || f.y < 0 || f.z < 0 || f.x >= g.dims.x || f.y >= g.dims.y || f.z >= g.dims.z;
+          ASSERT_TRUE(outside || !v.get(f.x, f.y, f.z)) << i << " " << j << " " << k;
+          const glm::i64vec3 e = f - glm::i64vec3(i, j, k);
+          ASSERT_EQ(static_cast<std::uint32_t>(e.x * e.x + e.y * e.y + e.z * e.z), d2.at(i, j, k)) << i << " " << j << " " << k;
+        }
+  }
+}
+
+TEST(WallThickness, AxisAlignedPlateIsExactlyItsVoxelCount) {
+  // 1.0 / 0.1 = 10 voxels, 1.0 / 0.2 = 5, 1.0 / 0.13 = 7.7 -> 8 voxels once
+  // voxelized: the report is the voxel model's wall, sharp or chamfered.
+  for (double voxel : {0.1, 0.13, 0.2})
+    for (double chamfer : {0.0, 0.3}) {
+      const BitVolume v = solid_of(plate(1.0, 6, 5, chamfer), voxel);
+      const Range r = range_of(v, wall_thickness(v, 2));
+      const double n = std::round(1.0 / voxel) * voxel;
+      EXPECT_NEAR(r.min, n, 1e-5) << voxel << " " << chamfer;
+      EXPECT_NEAR(r.max, n, 1e-5) << voxel << " " << chamfer;
+    }
+}
+
+TEST(WallThickness, TiltedPlateIsWithinAVoxelEverywhere) {
+  // Rotated 30° about x and y: every voxel, edges and corners included,
+  // within one voxel of the plate's thickness; no edge reads as thin.
+  for (double voxel : {0.1, 0.13, 0.2})
+    for (double chamfer : {0.0, 0.3}) {
+      const BitVolume v = solid_of(test::rotated(plate(1.0, 6, 5, chamfer), 30, 30), voxel);
+      const Range r = range_of(v, wall_thickness(v, 2));
+      EXPECT_GT(r.min, 1.0 - voxel) << voxel << " " << chamfer;
+      EXPECT_LT(r.max, 1.0 + voxel) << voxel << " " << chamfer;
+    }
+}
+
+TEST(WallThickness, TubeAndSphericalShellAreRMinusREverywhere) {
+  const double h = 0.1;
+  const BitVolume tube = solid_of(test::make_tube(3, 2.2, 0, 5, 256), h);
+  const Range t = range_of(tube, wall_thickness(tube, 2));
+  EXPECT_GT(t.min, 0.8 - h);
+  EXPECT_LT(t.max, 0.8 + h);
+  const BitVolume shell = solid_of(
+      test::concat({test::make_icosphere({0, 0, 0}, 3, 5), test::flipped(test::make_icosphere({0, 0, 0}, 2.3, 5))}), h);
+  const Range s = range_of(shell, wall_thickness(shell, 2));
+  EXPECT_GT(s.min, 0.7 - h);
+  EXPECT_LT(s.max, 0.7 + h);
+}
+
+TEST(WallThickness, LBracketFinIsThinAndTheWallsAreNot) {
+  // Base 3 mm (z), upright 2 mm (x), a 0.6 mm fin on the base at x 12..12.6,
+  // 5 mm tall, all 15 mm deep (y). Away from the part's ends (see the
+  // closing note of #16: the fin's root still reads thin within 0.3 mm of
+  // an end face), the fin is 0.6 and everything else its own wall.
+  const double h = 0.1;
+  const Mesh l = test::make_extrusion(
+      {{0, 0}, {20, 0}, {20, 3}, {12.6, 3}, {12.6, 8}, {12, 8}, {12, 3}, {2, 3}, {2, 20}, {0, 20}}, 0, 15);
+  const BitVolume v = solid_of(l, h);
+  const DenseVolume<float> w = wall_thickness(v, 2);
+  const Range all = range_of(v, w);
+  EXPECT_NEAR(all.max, 3.0, h);
+  auto middle = [](const glm::dvec3& p) { return p.y > 1 && p.y < 14; };
+  const Range fin = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z > 3.1; });
+  const Range fin_only = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z > 3.1 && p.x > 11 && p.x < 13.6; });
+  EXPECT_NEAR(fin_only.min, 0.6, h);
+  EXPECT_NEAR(fin_only.max, 0.6, h);
+  // Above the base, the upright (2 mm) and the fin only.
+  EXPECT_GT(fin.min, 0.6 - h);
+  const Range upright = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z > 3.1 && p.x < 2 && p.z < 19; });
+  EXPECT_NEAR(upright.min, 2.0, h);
+  EXPECT_NEAR(upright.max, 2.0, h);
+  // The base, right up to the fin's root: 3 mm, not the fin's 0.6.
+  const Range base = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z < 3 && p.x > 2.5; });
+  EXPECT_NEAR(base.min, 3.0, h);
+  EXPECT_NEAR(base.max, 3.0, h);
+}
+
+TEST(WallThickness, SameResultOnOneThreadAndMany) {
+  const BitVolume v = solid_of(test::rotated(plate(1.0, 4, 3, 0.3), 30, 30), 0.1);
+  EXPECT_TRUE(wall_thickness(v, 1).values() == wall_thickness(v, 3).values());
+}
+
+TEST(WallThickness, ErrorStatementGivesVoxelsAndModelUnits) {
+  const std::string s = wall_thickness_error_statement(0.25);
+  EXPECT_NE(s.find("-1 to +1 voxels (-0.25 to +0.25 model units)"), std::string::npos) << s;
+}
+
+}  // namespace
+}  // namespace voxd
