@@ -5,6 +5,8 @@
 #include <cmath>
 #include <random>
 
+#include <glm/common.hpp>
+
 #include "support/test_meshes.h"
 #include "voxd/analysis/distance_transform.h"
 #include "voxd/analysis/wall_thickness.h"
@@ -129,9 +131,8 @@ TEST(WallThickness, TubeAndSphericalShellAreRMinusREverywhere) {
 
 TEST(WallThickness, LBracketFinIsThinAndTheWallsAreNot) {
   // Base 3 mm (z), upright 2 mm (x), a 0.6 mm fin on the base at x 12..12.6,
-  // 5 mm tall, all 15 mm deep (y). Away from the part's ends (see the
-  // closing note of #16: the fin's root still reads thin within 0.3 mm of
-  // an end face), the fin is 0.6 and everything else its own wall.
+  // 5 mm tall, all 15 mm deep (y). The fin is 0.6 and everything else its
+  // own wall, right up to the part's end faces.
   const double h = 0.1;
   const Mesh l = test::make_extrusion(
       {{0, 0}, {20, 0}, {20, 3}, {12.6, 3}, {12.6, 8}, {12, 8}, {12, 3}, {2, 3}, {2, 20}, {0, 20}}, 0, 15);
@@ -139,20 +140,37 @@ TEST(WallThickness, LBracketFinIsThinAndTheWallsAreNot) {
   const DenseVolume<float> w = wall_thickness(v, 2);
   const Range all = range_of(v, w);
   EXPECT_NEAR(all.max, 3.0, h);
-  auto middle = [](const glm::dvec3& p) { return p.y > 1 && p.y < 14; };
-  const Range fin = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z > 3.1; });
-  const Range fin_only = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z > 3.1 && p.x > 11 && p.x < 13.6; });
+  const Range fin = range_of(v, w, [&](const glm::dvec3& p) { return p.z > 3.1; });
+  const Range fin_only = range_of(v, w, [&](const glm::dvec3& p) { return p.z > 3.1 && p.x > 11 && p.x < 13.6; });
   EXPECT_NEAR(fin_only.min, 0.6, h);
   EXPECT_NEAR(fin_only.max, 0.6, h);
-  // Above the base, the upright (2 mm) and the fin only.
+  // Above the base, the upright (2 mm) and the fin only. Where the upright
+  // stands on the base, within 0.5 mm of an end face, the junction's
+  // fringe reads the base's 3 mm for up to 0.35 mm above the base (the
+  // thicker wall owns the root).
   EXPECT_GT(fin.min, 0.6 - h);
-  const Range upright = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z > 3.1 && p.x < 2 && p.z < 19; });
+  const Range upright = range_of(v, w, [&](const glm::dvec3& p) { return p.z > 3.4 && p.x < 2 && p.z < 19; });
   EXPECT_NEAR(upright.min, 2.0, h);
   EXPECT_NEAR(upright.max, 2.0, h);
-  // The base, right up to the fin's root: 3 mm, not the fin's 0.6.
-  const Range base = range_of(v, w, [&](const glm::dvec3& p) { return middle(p) && p.z < 3 && p.x > 2.5; });
+  // The base, up to the voxel under the fin's root: 3 mm, not the fin's 0.6.
+  const Range base = range_of(v, w, [&](const glm::dvec3& p) { return p.z < 3 - h && p.x > 2.5; });
   EXPECT_NEAR(base.min, 3.0, h);
   EXPECT_NEAR(base.max, 3.0, h);
+  // What is under 0.8 mm is the fin: its box within a voxel of the fin's.
+  const Grid& g = v.grid();
+  glm::dvec3 lo(1e30), hi(-1e30);
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; ++i) {
+        if (!v.get(i, j, k) || w.at(i, j, k) * h >= 0.8) continue;
+        lo = glm::min(lo, g.origin + glm::dvec3(i, j, k) * h);
+        hi = glm::max(hi, g.origin + (glm::dvec3(i, j, k) + 1.0) * h);
+      }
+  const glm::dvec3 fin_lo(12, 0, 3), fin_hi(12.6, 15, 8);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(lo[a], fin_lo[a], h + 1e-9) << a;
+    EXPECT_NEAR(hi[a], fin_hi[a], h + 1e-9) << a;
+  }
 }
 
 TEST(WallThickness, SameResultOnOneThreadAndMany) {

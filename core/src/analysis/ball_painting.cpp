@@ -38,7 +38,8 @@ constexpr std::int64_t kSparseRowsPerVoxel = 32;
 // every ball's part in their slabs, so no two threads write the same voxel.
 class RowPainter {
  public:
-  RowPainter(const BitVolume& solid, DenseVolume<float>& out) : bits_(solid.clone()), out_(out) {
+  RowPainter(const BitVolume& solid, DenseVolume<float>& out, const BallAccepts& accepts)
+      : bits_(solid.clone()), out_(out), accepts_(accepts) {
     const Grid& g = solid.grid();
     nx_ = g.dims.x;
     ny_ = g.dims.y;
@@ -64,8 +65,10 @@ class RowPainter {
 
   // Paints the ball (c, r2) within slabs [k0, k1); returns the voxels painted
   // and adds the rows looked at to `rows`.
-  std::int64_t paint(std::int64_t cx, std::int64_t cy, std::int64_t cz, std::int64_t r2, float value,
-                     std::int64_t k0, std::int64_t k1, std::int64_t& rows) {
+  std::int64_t paint(const Ball& ball, std::int64_t cx, std::int64_t cy, std::int64_t cz, std::int64_t k0,
+                     std::int64_t k1, std::int64_t& rows) {
+    const std::int64_t r2 = ball.r2;
+    const float value = ball.value;
     const std::int64_t rz = isqrt(r2);
     const std::int64_t zlo = std::max(k0, cz - rz), zhi = std::min(k1 - 1, cz + rz);
     std::int64_t painted = 0;
@@ -87,6 +90,12 @@ class RowPainter {
           if (w == xlo >> 6) mask &= ~std::uint64_t{0} << (xlo & 63);
           if (w == xhi >> 6 && (xhi & 63) != 63) mask &= (std::uint64_t{1} << ((xhi & 63) + 1)) - 1;
           std::uint64_t hit = bits[w] & mask;
+          if (hit != 0 && accepts_) {
+            for (std::uint64_t m = hit; m != 0; m &= m - 1) {
+              const int b = std::countr_zero(m);
+              if (!accepts_(ball, (w << 6) + b, y, z)) hit &= ~(std::uint64_t{1} << b);
+            }
+          }
           if (hit == 0) continue;
           bits[w] &= ~hit;
           const auto n = static_cast<std::uint32_t>(std::popcount(hit));
@@ -102,6 +111,7 @@ class RowPainter {
  private:
   BitVolume bits_;
   DenseVolume<float>& out_;
+  const BallAccepts& accepts_;
   std::int64_t nx_ = 0, ny_ = 0;
   std::vector<std::uint32_t> row_count_;
   std::int64_t remaining_ = 0;
@@ -126,11 +136,11 @@ class LeftoverTree {
   std::int64_t remaining() const { return nodes_.empty() ? 0 : nodes_[0].count; }
   const std::vector<Point>& points() const { return points_; }
 
-  // Paints every leftover voxel in the ball (c, r2) with `value`.
-  std::int64_t paint(std::int64_t cx, std::int64_t cy, std::int64_t cz, std::int64_t r2, float value,
+  // Paints every leftover voxel in the ball centred at c that it accepts.
+  std::int64_t paint(const Ball& ball, std::int64_t cx, std::int64_t cy, std::int64_t cz, const BallAccepts& accepts,
                      DenseVolume<float>& out) {
     if (nodes_.empty()) return 0;
-    return visit(0, cx, cy, cz, r2, value, out);
+    return visit(0, ball, cx, cy, cz, accepts, out);
   }
 
  private:
@@ -176,8 +186,9 @@ class LeftoverTree {
     return id;
   }
 
-  std::int64_t visit(std::uint32_t id, std::int64_t cx, std::int64_t cy, std::int64_t cz, std::int64_t r2, float value,
-                     DenseVolume<float>& out) {
+  std::int64_t visit(std::uint32_t id, const Ball& ball, std::int64_t cx, std::int64_t cy, std::int64_t cz,
+                     const BallAccepts& accepts, DenseVolume<float>& out) {
+    const std::int64_t r2 = ball.r2;
     Node& n = nodes_[id];
     if (n.count == 0) return 0;
     auto gap = [](std::int64_t c, std::int64_t lo, std::int64_t hi) { return c < lo ? lo - c : c > hi ? c - hi : 0; };
@@ -190,13 +201,14 @@ class LeftoverTree {
         if (p.unpainted == 0) continue;
         const std::int64_t dx = p.x - cx, dy = p.y - cy, dz = p.z - cz;
         if (dx * dx + dy * dy + dz * dz > r2) continue;
+        if (accepts && !accepts(ball, p.x, p.y, p.z)) continue;
         p.unpainted = 0;
-        out.at(p.x, p.y, p.z) = value;
+        out.at(p.x, p.y, p.z) = ball.value;
         ++painted;
       }
     } else {
       const std::uint32_t right = n.right;
-      painted = visit(id + 1, cx, cy, cz, r2, value, out) + visit(right, cx, cy, cz, r2, value, out);
+      painted = visit(id + 1, ball, cx, cy, cz, accepts, out) + visit(right, ball, cx, cy, cz, accepts, out);
     }
     nodes_[id].count -= static_cast<std::uint32_t>(painted);
     return painted;
@@ -260,7 +272,7 @@ class LeftoverReach {
 
 std::int64_t paint_balls_largest_first(const BitVolume& solid, DenseVolume<float>& out, const BallSource& balls,
                                        const BallContained& contained, const BallPaintingTuning& tuning, int threads,
-                                       const ProgressSpan& progress) {
+                                       const ProgressSpan& progress, const BallAccepts& accepts) {
   const Grid& grid = solid.grid();
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
   const int nthreads = threads;
@@ -270,7 +282,7 @@ std::int64_t paint_balls_largest_first(const BitVolume& solid, DenseVolume<float
     z = static_cast<std::int64_t>(v / static_cast<std::uint64_t>(nx * ny));
   };
 
-  RowPainter rows(solid, out);
+  RowPainter rows(solid, out, accepts);
   const std::int64_t filled = rows.remaining();
   const auto voxels = static_cast<std::int64_t>(grid.voxel_count());
   // The sparse phase starts once the leftovers fit a small tree: from then on
@@ -309,7 +321,7 @@ std::int64_t paint_balls_largest_first(const BitVolume& solid, DenseVolume<float
       for (std::size_t i = 0; i < batch.size() && left > 0; ++i) {
         std::int64_t x, y, z;
         coordinates(batch[i].index, x, y, z);
-        const std::int64_t n = rows.paint(x, y, z, batch[i].r2, batch[i].value, k0, k1, visited);
+        const std::int64_t n = rows.paint(batch[i], x, y, z, k0, k1, visited);
         painted += n;
         left -= n;
         if ((i & 1023) == 0) progress.check_cancelled();
@@ -376,7 +388,7 @@ std::int64_t paint_balls_largest_first(const BitVolume& solid, DenseVolume<float
           for (std::size_t i = 0; i < batch.size() && tree.remaining() > 0; ++i) {
             std::int64_t x, y, z;
             coordinates(batch[i].index, x, y, z);
-            tree.paint(x, y, z, batch[i].r2, batch[i].value, out);
+            tree.paint(batch[i], x, y, z, accepts, out);
           }
         }
       });

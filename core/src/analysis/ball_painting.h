@@ -22,6 +22,7 @@ struct Ball {
   std::uint64_t index = 0;  // linear voxel index of the centre
   std::uint32_t r2 = 0;     // squared radius, in voxels
   float value = 0.0f;       // what the ball paints
+  std::uint32_t tag = 0;    // the source's own, for BallAccepts
 };
 
 // Hands out balls by non-increasing r2; false when there is none left.
@@ -31,6 +32,10 @@ using BallSource = std::function<bool(Ball&)>;
 // it would paint nothing: skipped without walking it.
 using BallContained = std::function<bool(std::int64_t x, std::int64_t y, std::int64_t z, std::int64_t r2)>;
 
+// Whether the ball may paint the filled voxel (x, y, z) inside it; a voxel it
+// refuses stays for later balls. Empty: every voxel inside is painted.
+using BallAccepts = std::function<bool(const Ball& ball, std::int64_t x, std::int64_t y, std::int64_t z)>;
+
 struct BallPaintingTuning {
   std::int64_t sparse_from = -1;              // leftovers that start the sparse phase; -1: max(4096, voxels / 256)
   std::int64_t reach_rebuild_queries = 4096;  // tree walks before the reach bound may be rebuilt
@@ -38,10 +43,12 @@ struct BallPaintingTuning {
 
 // Paints `out` (same grid as `solid`, 0 where unpainted). Returns the filled
 // voxels no ball reached, which keep their value in `out`. `progress` goes
-// from 0 to 1 as the filled voxels get their values.
+// from 0 to 1 as the filled voxels get their values. With `accepts`, a
+// ball skipped by `contained` is taken to accept nothing its container
+// refused: the skip stays a bound on work, not an exact test.
 std::int64_t paint_balls_largest_first(const BitVolume& solid, DenseVolume<float>& out, const BallSource& balls,
                                        const BallContained& contained, const BallPaintingTuning& tuning, int threads,
-                                       const ProgressSpan& progress);
+                                       const ProgressSpan& progress, const BallAccepts& accepts = {});
 
 // floor(sqrt(n)), exact for every n < 2^52.
 std::int64_t isqrt(std::int64_t n);

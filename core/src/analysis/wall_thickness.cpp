@@ -296,7 +296,8 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
   std::size_t next = 0;
   const detail::BallSource source = [&](Ball& ball) {
     if (next == medial.size()) return false;
-    ball = medial[next++].ball;
+    ball = medial[next].ball;
+    ball.tag = static_cast<std::uint32_t>(next++);
     return true;
   };
   const detail::BallContained contained = [&](std::int64_t x, std::int64_t y, std::int64_t z, std::int64_t r2) {
@@ -305,8 +306,66 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
       return norm2(padded.at(nearest.at(i, j, k)) - glm::i64vec3{i, j, k});
     });
   };
-  detail::paint_balls_largest_first(solid, out, source, contained, {}, nthreads, progress.part(0.5, 0.9));
+  // A wall's ball paints only the voxels between the wall's two faces:
+  // those whose projection on its chord lies between the chord's ends.
+  // Where a thin rib stands on a thick wall near the wall's end face, the
+  // wall's balls do not reach the wall's edge voxels beside the rib's root,
+  // and the rib's balls (or its edge voxels, filled from their neighbours)
+  // would give them the rib's value; they lie outside the rib's faces.
+  const detail::BallAccepts between_faces = [&](const Ball& ball, std::int64_t x, std::int64_t y, std::int64_t z) {
+    const Chord& chord = medial[ball.tag].chord;
+    const glm::i64vec3 from = padded.at(chord.from);
+    const glm::i64vec3 span = padded.at(chord.to) - from;
+    const glm::i64vec3 v = glm::i64vec3{x, y, z} - from;
+    const std::int64_t along = v.x * span.x + v.y * span.y + v.z * span.z;
+    return along >= 0 && along <= norm2(span);
+  };
+  // And only voxels nearer the surface than the ball's radius, or medial
+  // voxels themselves: within a wall, only its medial voxels are as deep
+  // as its balls are wide. A voxel as deep or deeper belongs to a thicker
+  // wall whose balls missed it (under a rib's root, near the end face of
+  // the wall it stands on). The wall's own voxels this misses on the
+  // lattice are painted by the grown balls below, with the same values.
+  const detail::BallAccepts in_the_wall = [&](const Ball& ball, std::int64_t x, std::int64_t y, std::int64_t z) {
+    return (centres.get(x, y, z) ||
+            norm2(padded.at(nearest.at(x, y, z)) - glm::i64vec3{x, y, z}) < static_cast<std::int64_t>(ball.r2)) &&
+           between_faces(ball, x, y, z);
+  };
+  detail::paint_balls_largest_first(solid, out, source, contained, {}, nthreads, progress.part(0.5, 0.8),
+                                    in_the_wall);
   paint_chords(solid, medial, out);
+  // The edges and corners of walls, which no medial ball reaches: the ball
+  // at a wall's end is r from the end face, and the edge's corner lies up
+  // to sqrt(3) r from it (a cube's corner). Each such voxel takes the
+  // largest wall whose ball, grown by sqrt(3) and a voxel, reaches it and
+  // whose faces it lies between. These voxels are few, so the engine goes
+  // straight to its sparse phase.
+  BitVolume edges(grid);
+  std::int64_t edge_voxels = 0;
+  for (std::int64_t k = 0; k < d.z; ++k)
+    for (std::int64_t j = 0; j < d.y; ++j)
+      detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
+        const float* row = out.slab(k) + j * d.x;
+        for (std::int64_t i = a; i < b; ++i)
+          if (row[i] == 0.0f) {
+            edges.set(i, j, k, true);
+            ++edge_voxels;
+          }
+      });
+  if (edge_voxels > 0) {
+    next = 0;
+    const detail::BallSource grown = [&](Ball& ball) {
+      if (!source(ball)) return false;
+      const auto r2 = static_cast<std::int64_t>(ball.r2);
+      ball.r2 = static_cast<std::uint32_t>(std::min<std::int64_t>(3 * r2 + 2 * detail::ceil_sqrt(3 * r2) + 1, UINT32_MAX));
+      return true;
+    };
+    detail::BallPaintingTuning sparse_only;
+    sparse_only.sparse_from = INT64_MAX;
+    detail::paint_balls_largest_first(
+        edges, out, grown, [](std::int64_t, std::int64_t, std::int64_t, std::int64_t) { return false; }, sparse_only,
+        nthreads, progress.part(0.8, 0.95), between_faces);
+  }
   fill_unreached(solid, nearest, out);
   progress.report(1.0);
   return out;
