@@ -202,17 +202,19 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
 }
 
 // Each medial voxel's value along its chord, the segment across the wall
-// through it, over the balls' values: a voxel takes the thickness of its
-// own cross-section of the wall. The balls alone would give a voxel of a
-// tapering wall the value of a thicker section nearby (a ball reaches half
-// its diameter along the wall), which moves where a thin region starts by
-// half the threshold. Voxels on no chord (round parts away from their axis,
-// the sides of curved walls between chords) keep the balls' value. Largest
-// ball first, the first chord to reach a voxel sets it.
-void paint_chords(const BitVolume& solid, const std::vector<Medial>& medial, DenseVolume<float>& out) {
+// through it: a voxel takes the thickness of its own cross-section of the
+// wall. Balls alone would give a voxel of a tapering wall the value of a
+// thicker section nearby (a ball reaches half its diameter along the wall),
+// which moves where a thin region starts by half the threshold. Largest
+// ball first, the first chord to reach a voxel sets it. Returns the filled
+// voxels no chord reached, left to the balls: the sides of curved walls
+// between chords, the ends and edges of walls. On a flat wall the chords
+// cover nearly all of it, and its balls, the costliest part to paint (a
+// plate T voxels thick has T^2 rows per ball), have little left to do.
+BitVolume paint_chords(const BitVolume& solid, const std::vector<Medial>& medial, DenseVolume<float>& out) {
   const glm::i64vec3 d = solid.grid().dims;
   const PaddedIndex padded(solid.grid());
-  BitVolume done(solid.grid());
+  BitVolume left = solid.clone();
   for (const Medial& m : medial) {
     const glm::dvec3 a(padded.at(m.chord.from)), b(padded.at(m.chord.to));
     const glm::dvec3 span = b - a;
@@ -223,11 +225,12 @@ void paint_chords(const BitVolume& solid, const std::vector<Medial>& medial, Den
       const auto i = static_cast<std::int64_t>(std::lround(at.x)), j = static_cast<std::int64_t>(std::lround(at.y)),
                  k = static_cast<std::int64_t>(std::lround(at.z));
       if (i < 0 || j < 0 || k < 0 || i >= d.x || j >= d.y || k >= d.z) continue;
-      if (!solid.get(i, j, k) || done.get(i, j, k)) continue;
-      done.set(i, j, k, true);
+      if (!left.get(i, j, k)) continue;
+      left.set(i, j, k, false);
       out.at(i, j, k) = m.ball.value;
     }
   }
+  return left;
 }
 
 // The filled voxels no medial ball reached take, layer by layer outwards
@@ -331,9 +334,11 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
             norm2(padded.at(nearest.at(x, y, z)) - glm::i64vec3{x, y, z}) < static_cast<std::int64_t>(ball.r2)) &&
            between_faces(ball, x, y, z);
   };
-  detail::paint_balls_largest_first(solid, out, source, contained, {}, nthreads, progress.part(0.5, 0.8),
+  // Chords first: a voxel on a chord takes the chord's value whatever
+  // ball contains it, so the balls paint only what the chords left.
+  const BitVolume off_chords = paint_chords(solid, medial, out);
+  detail::paint_balls_largest_first(off_chords, out, source, contained, {}, nthreads, progress.part(0.5, 0.8),
                                     in_the_wall);
-  paint_chords(solid, medial, out);
   // The edges and corners of walls, which no medial ball reaches: the ball
   // at a wall's end is r from the end face, and the edge's corner lies up
   // to sqrt(3) r from it (a cube's corner). Each such voxel takes the
