@@ -104,7 +104,18 @@ double wall_between(const BitVolume& solid, const glm::i64vec3& p, const glm::i6
     return -1.0;
   const glm::i64vec3 u = fp - p, w = fq - q;
   const std::int64_t u2 = norm2(u), w2 = norm2(w);
-  if (u2 < 4 || w2 < 4) return -1.0;
+  if (u2 < 16 || w2 < 16) return -1.0;
+  // Only where a fit is not to be trusted: at a concave edge the fitted
+  // normal is the corner's bisector, far from the direction to the voxel.
+  // Where both fits agree with their directions (within 30°) the surfaces
+  // are what the fits say, and they do not face each other: a thread's
+  // flanks near its flat crest, whose lattice directions are off by 15°.
+  auto agrees = [](const SurfaceFit& fit, const glm::i64vec3& v, std::int64_t v2) {
+    const double c = -(fit.normal.x * static_cast<double>(v.x) + fit.normal.y * static_cast<double>(v.y) +
+                       fit.normal.z * static_cast<double>(v.z)) / std::sqrt(static_cast<double>(v2));
+    return c >= 0.866;
+  };
+  if (agrees(a, u, u2) && agrees(b, w, w2)) return -1.0;
   const auto dot = static_cast<double>(u.x * w.x + u.y * w.y + u.z * w.z);
   if (dot > cos_separation * std::sqrt(static_cast<double>(u2) * static_cast<double>(w2))) return -1.0;
   return std::sqrt(static_cast<double>(norm2(fq - fp))) - 1.0;
