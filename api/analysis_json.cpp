@@ -100,15 +100,18 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
                          {"centroid", vec(grid.origin + (r.centroid + glm::dvec3(0.5)) * h)},
                          {"bbox_min", vec(grid.origin + glm::dvec3(r.bbox_min) * h)},
                          {"bbox_max", vec(grid.origin + glm::dvec3(r.bbox_max + glm::i64vec3(1)) * h)},
-                         {extreme, static_cast<double>(r.extreme_thickness) * h}});
+                         {extreme, static_cast<double>(r.extreme_thickness) * h},
+                         {"mean_thickness", static_cast<double>(r.mean_thickness) * h}});
       }
       return json{{"count", list.size()}, {"items", items}};
     };
     json histogram = json::array();
     for (std::uint64_t n : t.stats.histogram) histogram.push_back(n);
     thickness = {
-        {"method", "local thickness (Hildebrand & Ruegsegger 1997): diameter of the largest inscribed sphere containing each voxel"},
-        {"error_bound", thickness_error_statement(h)},
+        {"measure", "wall"},
+        {"method", "wall thickness: the distance between the wall's two faces, from a theta-medial axis (Foskey, Lin & "
+                   "Manocha 2003; faces at least 150 degrees apart); edges and corners take the wall they end"},
+        {"error_bound", wall_thickness_error_statement(h)},
         {"voxels", t.stats.voxel_count},
         {"mean", t.stats.mean * h},
         {"std", t.stats.std_dev * h},

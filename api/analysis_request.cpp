@@ -145,7 +145,8 @@ AnalysisRequest parse_analysis_request(AnalysisKind kind, const Fields& given, c
       r.colour = in.choice("colour", {"none", "thickness", "distance"}, "none");
       break;
     case AnalysisKind::thickness:
-      in.allowed = {"format", "unit"};
+      in.allowed = {"measure", "format", "unit"};
+      r.thickness_measure = in.choice("measure", kThicknessMeasureNames, ThicknessMeasure::wall);
       r.format = in.choice("format", {"nrrd", "raw", "rle"}, "nrrd");
       r.unit = in.choice("unit", {"model", "voxels"}, "model");
       break;
@@ -177,7 +178,8 @@ std::string AnalysisRequest::query() const {
       return "axis=" + a + (index ? "&index=" + std::to_string(*index) : "&coordinate=" + number_text(*coordinate)) +
              "&colour=" + colour + peel_query();
     case AnalysisKind::preview: return "view=" + std::string(view[0] == '+' ? "%2B" : "-") + view.substr(1) + "&colour=" + colour;
-    case AnalysisKind::thickness: return "format=" + format + "&unit=" + unit;
+    case AnalysisKind::thickness:
+      return "measure=" + std::string(to_string(thickness_measure)) + "&format=" + format + "&unit=" + unit;
   }
   return {};
 }
@@ -276,7 +278,9 @@ nlohmann::json to_json(const AnalysisRequest& r) {
       j["peel_metric"] = to_string(r.peel_metric);
       break;
     case AnalysisKind::preview: j.update({{"view", r.view}, {"colour", r.colour}}); break;
-    case AnalysisKind::thickness: j.update({{"format", r.format}, {"unit", r.unit}}); break;
+    case AnalysisKind::thickness:
+      j.update({{"measure", to_string(r.thickness_measure)}, {"format", r.format}, {"unit", r.unit}});
+      break;
   }
   return j;
 }

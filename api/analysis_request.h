@@ -17,6 +17,14 @@
 
 namespace voxd::api {
 
+// Which thickness a thickness volume holds: the wall thickness (the report's,
+// voxd/analysis/wall_thickness.h) or BoneJ's local thickness
+// (voxd/analysis/local_thickness.h).
+enum class ThicknessMeasure { wall, local };
+inline constexpr EnumNames<ThicknessMeasure, 2> kThicknessMeasureNames{
+    {{ThicknessMeasure::wall, "wall"}, {ThicknessMeasure::local, "local"}}};
+inline const char* to_string(ThicknessMeasure m) noexcept { return name_of(kThicknessMeasureNames, m); }
+
 enum class AnalysisKind { analysis, radiography, section, preview, thickness };
 inline constexpr EnumNames<AnalysisKind, 5> kAnalysisKindNames{{
     {AnalysisKind::analysis, "analysis"}, {AnalysisKind::radiography, "radiography"},
@@ -25,7 +33,7 @@ inline const char* to_string(AnalysisKind kind) noexcept { return name_of(kAnaly
 
 struct AnalysisRequest {
   AnalysisKind kind = AnalysisKind::analysis;
-  // analysis: clean-up before measuring, local thickness on/off, thin- and
+  // analysis: clean-up before measuring, wall thickness on/off, thin- and
   // thick-wall thresholds in model units.
   std::string cleanup = "none";  // none | debris | sheets
   bool thickness = true;
@@ -36,8 +44,10 @@ struct AnalysisRequest {
   // radiography, section: the axis (0 = x).
   int axis = 2;
   // radiography: the measure; format png16 | png | json; unit voxels | model.
-  // thickness: format raw | rle | nrrd; unit model | voxels.
+  // thickness: the measure (thickness_measure), format raw | rle | nrrd;
+  // unit model | voxels.
   RadiographyMeasure measure = RadiographyMeasure::max;
+  ThicknessMeasure thickness_measure = ThicknessMeasure::wall;
   std::string format;
   std::string unit;
   // section: exactly one of a voxel layer index or a model coordinate.
@@ -47,7 +57,7 @@ struct AnalysisRequest {
   // the model after `peel` layers of skin removal (0 = as voxelized).
   PeelMetric peel_metric = PeelMetric::faces;
   std::int64_t peel = 0;
-  // section, preview: none | thickness (colour by local thickness); section
+  // section, preview: none | thickness (colour by wall thickness); section
   // also distance (a distance field's diverging map).
   std::string colour = "none";
   // preview: +x | -x | +y | -y | +z | -z.

@@ -20,7 +20,7 @@
 #include "voxd/analysis/analysis_images.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
-#include "voxd/analysis/local_thickness.h"
+#include "voxd/analysis/wall_thickness.h"
 #include "voxd/analysis/preview.h"
 #include "voxd/analysis/sdf_render.h"
 #include "voxd/analysis/value_images.h"
@@ -37,15 +37,15 @@ writes into DIR what the HTTP API serves for a job:
   analysis.json          mass properties from the mesh (when it is closed) and
                          from the voxels side by side, connected parts,
                          enclosed voids, skin removal layers and hot spots,
-                         local wall thickness with thin and thick regions
+                         wall thickness with thin and thick regions
   radiography-{x,y,z}-{min,max,total}.png
                          16-bit, one pixel value = one voxel (scale in tEXt)
   radiography-{x,y,z}-max-colour.png   false colour with a legend
   section-{x,y,z}.png    the middle layer; section-*-thickness.png coloured
-                         by local thickness
+                         by wall thickness
   preview-from{+x,-x,+y,-y,+z,-z}.png  shaded views; preview-*-thickness.png
-                         coloured by local thickness
-  thickness.nrrd         the local-thickness volume (float32, model units)
+                         coloured by wall thickness
+  thickness.nrrd         the wall-thickness volume (float32, model units)
   with a mode of values, their middle sections and previews:
                          section-{x,y,z}-coverage.png (grey levels),
                          section-{x,y,z}-distance.png (diverging map) and
@@ -55,7 +55,7 @@ writes into DIR what the HTTP API serves for a job:
                          the other files measure the solid
   analyses/KEY.EXT       each entry of the job JSON's "analyses" array, the
                          bytes its /v1/jobs/{id}/KIND route answers
-Lengths are in the mesh's model units. The thickness files need the local
+Lengths are in the mesh's model units. The thickness files need the wall
 thickness (not with --no-thickness or --cleanup*).
 
   --params JSON|@FILE    job parameters, as for voxd voxelize and the HTTP API
@@ -64,7 +64,7 @@ thickness (not with --no-thickness or --cleanup*).
   --min-wall T           report regions thinner than T (model units): thin walls
   --max-wall T           report regions thicker than T (model units): hot spots
   --min-region N         ignore thin/thick regions under N voxels (default 1)
-  --no-thickness         skip local wall thickness (the slowest step)
+  --no-thickness         skip wall thickness (the slowest step)
   --cleanup              remove isolated voxels and one-voxel lines first
   --cleanup-sheets       also remove one-voxel-thick sheets
   --threads N            worker threads (default: all cores)
@@ -112,10 +112,10 @@ int analyze_command(int argc, char** argv) {
     options.min_region_voxels = *voxels;
   }
   if (args.has("cleanup") || args.has("cleanup-sheets")) options.cleanup = CleanupOptions{true, true, args.has("cleanup-sheets")};
-  // One local thickness map for the report, the images and the volume.
+  // One wall thickness map for the report, the images and the volume.
   std::optional<DenseVolume<float>> map;
   if (options.thickness && !options.cleanup) {
-    map = local_thickness(result.volume, threads);
+    map = wall_thickness(result.volume, threads);
     options.thickness_map = &*map;
   }
   const AnalysisReport report = analyze_volume(result.volume, options);
@@ -190,7 +190,7 @@ int analyze_command(int argc, char** argv) {
     for (float& v : model_units.values()) v *= static_cast<float>(result.grid.voxel_size);
     const std::string file = *out_dir + "/thickness.nrrd";
     FileSink sink(file + ".partial");
-    write_nrrd(model_units, "local thickness (model units)", sink);
+    write_nrrd(model_units, "wall thickness (model units)", sink);
     sink.close();
     std::filesystem::rename(file + ".partial", file);
   }
@@ -199,7 +199,7 @@ int analyze_command(int argc, char** argv) {
   if (!params.analyses.empty()) {
     std::map<std::string, std::string> kept;
     if (map && !options.cleanup) {
-      kept["thickness-map.f32"] = std::string(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float));
+      kept[server::thickness_map_key(api::ThicknessMeasure::wall)] = std::string(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float));
     }
     const server::ArtifactAccess artifacts{
         "cli", [&kept](const std::string& key) -> std::optional<std::string> {

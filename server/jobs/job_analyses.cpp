@@ -38,7 +38,6 @@ using nlohmann::json;
 using api::AnalysisKind;
 using api::AnalysisRequest;
 
-constexpr const char* kThicknessMapKey = "thickness-map.f32";
 
 // One mutex per (scope, key) being computed, dropped when nobody holds it.
 class KeyLocks {
@@ -233,14 +232,16 @@ std::optional<std::string> value_job_section(const AnalysisRequest& r, const Job
 
 std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, const ArtifactAccess& artifacts,
                              JobControl* control) {
-  const DenseVolume<float> map = thickness_in(job_thickness_map(volume, artifacts, control), r.unit);
+  const DenseVolume<float> map =
+      thickness_in(job_thickness_map(volume, artifacts, control, r.thickness_measure), r.unit);
   VectorSink out;
   if (r.format == "rle") {
     write_rle(map, out);
   } else if (r.format == "raw") {
     write_raw(map, out);
   } else {
-    write_nrrd(map, r.unit == "model" ? "local thickness (model units)" : "local thickness (voxels)", out);
+    write_nrrd(map, std::string(to_string(r.thickness_measure)) + " thickness (" + (r.unit == "model" ? "model units" : "voxels") + ")",
+               out);
   }
   return to_bytes(out.data);
 }
@@ -277,13 +278,13 @@ std::string whole_grid_refusal(const AnalysisRequest& r, const Grid& grid, std::
   std::string what;
   switch (r.kind) {
     case AnalysisKind::analysis:
-      what = r.thickness ? "local thickness" : r.skin ? "skin removal" : "clean-up";
+      what = r.thickness ? "wall thickness" : r.skin ? "skin removal" : "clean-up";
       what += " (in the analysis)";
       break;
     case AnalysisKind::radiography: what = "a radiography of the peeled model (peel)"; break;
-    case AnalysisKind::section: what = r.peel > 0 ? "a section of the peeled model (peel)" : "a section coloured by local thickness"; break;
-    case AnalysisKind::preview: what = "a preview coloured by local thickness"; break;
-    case AnalysisKind::thickness: what = "the local thickness volume"; break;
+    case AnalysisKind::section: what = r.peel > 0 ? "a section of the peeled model (peel)" : "a section coloured by wall thickness"; break;
+    case AnalysisKind::preview: what = "a preview coloured by wall thickness"; break;
+    case AnalysisKind::thickness: what = std::string("the ") + to_string(r.thickness_measure) + " thickness volume"; break;
   }
   return what + " needs the whole grid in memory, about " + std::to_string(whole_grid_memory(r, grid) >> 20) +
          " MiB for this job's " + std::to_string(grid.dims.x) + " x " + std::to_string(grid.dims.y) + " x " +
@@ -337,19 +338,28 @@ ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id) {
           [&jobs, id](const std::string& key, const std::string& bytes) { jobs.save_artifact(id, key, bytes); }};
 }
 
-DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control) {
-  const auto lock = key_lock(artifacts, kThicknessMapKey);
+// One kept map per measure; the names changed when the report moved from
+// local to wall thickness, so a map kept by an older replica is never read
+// as the other measure.
+const char* thickness_map_key(api::ThicknessMeasure m) {
+  return m == api::ThicknessMeasure::wall ? "wall-thickness-map.f32" : "local-thickness-map.f32";
+}
+
+DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control,
+                                     api::ThicknessMeasure measure) {
+  const char* key = thickness_map_key(measure);
+  const auto lock = key_lock(artifacts, key);
   std::lock_guard guard(*lock);
   DenseVolume<float> map(volume.grid(), 0.0f);
-  if (auto kept = artifacts.load(kThicknessMapKey); kept && kept->size() == map.values().size() * sizeof(float)) {
+  if (auto kept = artifacts.load(key); kept && kept->size() == map.values().size() * sizeof(float)) {
     std::memcpy(map.values().data(), kept->data(), kept->size());
     return map;
   }
   const auto t0 = std::chrono::steady_clock::now();
-  map = local_thickness(volume, 0, control);
-  spdlog::info("job {}: local thickness computed in {:.3f} s", artifacts.scope,
+  map = measure == api::ThicknessMeasure::wall ? wall_thickness(volume, 0, control) : local_thickness(volume, 0, control);
+  spdlog::info("job {}: {} thickness computed in {:.3f} s", artifacts.scope, to_string(measure),
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  artifacts.save(kThicknessMapKey, std::string(reinterpret_cast<const char*>(map.values().data()),
+  artifacts.save(key, std::string(reinterpret_cast<const char*>(map.values().data()),
                                                map.values().size() * sizeof(float)));
   return map;
 }

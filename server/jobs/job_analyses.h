@@ -55,7 +55,9 @@ AnalysisResult job_analysis(const api::AnalysisRequest& request, const JobSnapsh
 // Bytes a request may take at its peak, beyond the job's volumes, for the
 // memory budget. Measured (docs/security.md): local thickness and the
 // analysis that uses it about 14 bytes a voxel at 256^3, the thickness
-// volume route about 23; the factors below hold a margin over those.
+// volume route about 23; wall thickness is in the same range (the feature
+// transform's 4 bytes a voxel and the float map, bits, and the leftovers of
+// its painting); the factors below hold a margin over those.
 // `over_slabs`: answered slab by slab (streams_over_slabs on a streamed
 // job): its images and one slab, whatever the grid.
 std::uint64_t estimate_analysis_memory(const api::AnalysisRequest& request, const Grid& grid, bool over_slabs = false);
@@ -90,7 +92,12 @@ std::string analysis_url(const api::AnalysisRequest& request, const std::string&
 // The status entries of a job's requested analyses, all in `state`.
 nlohmann::json analyses_status(const std::vector<api::AnalysisRequest>& requests, const std::string& id, const char* state);
 
-// The job's local thickness map (voxels), computed once and kept.
-DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control);
+// The artifact key a job's thickness map of `measure` is kept under.
+const char* thickness_map_key(api::ThicknessMeasure measure);
+
+// The job's thickness map (voxels) of `measure`, computed once and kept: the
+// wall thickness for the report, sections and previews.
+DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control,
+                                     api::ThicknessMeasure measure = api::ThicknessMeasure::wall);
 
 }  // namespace voxd::server

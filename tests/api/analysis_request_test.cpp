@@ -33,7 +33,9 @@ TEST(AnalysisRequest, DefaultsAreSpelledOutInTheCanonicalQuery) {
   EXPECT_EQ(parse_analysis_request(AnalysisKind::radiography, {}, "").query(), "axis=z&measure=max&format=png16&unit=voxels");
   EXPECT_EQ(parse_analysis_request(AnalysisKind::analysis, {}, "").query(), "cleanup=none&thickness=true");
   EXPECT_EQ(parse_analysis_request(AnalysisKind::preview, {}, "").query(), "view=%2Bz&colour=none");
-  EXPECT_EQ(parse_analysis_request(AnalysisKind::thickness, {}, "").query(), "format=nrrd&unit=model");
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::thickness, {}, "").query(), "measure=wall&format=nrrd&unit=model");
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::thickness, {{"measure", "local"}}, "").query(),
+            "measure=local&format=nrrd&unit=model");
   EXPECT_EQ(parse_analysis_request(AnalysisKind::section, {{"index", "7"}, {"axis", "x"}}, "").query(),
             "axis=x&index=7&colour=none");
   EXPECT_EQ(parse_analysis_request(AnalysisKind::analysis, {{"max_wall", "2.50"}, {"min_wall", "0.8"}}, "").query(),

@@ -407,21 +407,35 @@ TEST(ThicknessRegions, ThickRegionIsTheBlockCore) {
   EXPECT_DOUBLE_EQ(r.centroid.z, 13.5);
 }
 
-TEST(ThicknessRegions, OrderIsSizeThenPosition) {
-  // Three separate thin bars: two of 8 voxels, one of 12.
+TEST(ThicknessRegions, OrderIsSeverityThenSizeThenPosition) {
+  // Thin bars: A, 8 voxels of 2; B, 12 voxels of 2 and 2.5 in turn; C, 5
+  // voxels of 2, then a thick voxel, then 2 voxels of 1.
   DenseVolume<float> t(unit_grid(20, 10, 3), 0.0f);
   for (std::int64_t i = 0; i < 8; ++i) t.at(i, 1, 1) = 2;
-  for (std::int64_t i = 0; i < 12; ++i) t.at(i, 5, 1) = 2;
-  for (std::int64_t i = 10; i < 18; ++i) t.at(i, 1, 1) = 2;
-  t.at(15, 1, 1) = 8;  // thick: splits the last bar into 5 + 2
+  for (std::int64_t i = 0; i < 12; ++i) t.at(i, 5, 1) = i % 2 ? 2.5f : 2.0f;
+  for (std::int64_t i = 10; i < 15; ++i) t.at(i, 1, 1) = 2;
+  t.at(15, 1, 1) = 8;
+  t.at(16, 1, 1) = t.at(17, 1, 1) = 1;
   const auto r = find_thickness_regions(t, ThicknessRegionKind::thin, 3.0f, 2);
   ASSERT_EQ(r.size(), 4u);
-  EXPECT_EQ(r[0].voxel_count, 12u);
-  EXPECT_EQ(r[1].voxel_count, 8u);
-  EXPECT_EQ(r[1].bbox_min, glm::i64vec3(0, 1, 1));
-  EXPECT_EQ(r[2].voxel_count, 5u);
-  EXPECT_EQ(r[3].voxel_count, 2u);
-  EXPECT_EQ(r[3].bbox_min, glm::i64vec3(16, 1, 1));
+  // The thinnest first, then equal minima largest first, then scan order.
+  EXPECT_EQ(r[0].bbox_min, glm::i64vec3(16, 1, 1));
+  EXPECT_EQ(r[0].extreme_thickness, 1.0f);
+  EXPECT_EQ(r[1].voxel_count, 12u);
+  EXPECT_FLOAT_EQ(r[1].mean_thickness, 2.25f);
+  EXPECT_EQ(r[1].extreme_thickness, 2.0f);
+  EXPECT_EQ(r[2].voxel_count, 8u);
+  EXPECT_EQ(r[2].bbox_min, glm::i64vec3(0, 1, 1));
+  EXPECT_EQ(r[3].voxel_count, 5u);
+  EXPECT_EQ(r[3].mean_thickness, 2.0f);
+  // Thick regions: the thickest first.
+  DenseVolume<float> k(unit_grid(20, 4, 3), 0.0f);
+  for (std::int64_t i = 0; i < 6; ++i) k.at(i, 1, 1) = 10;
+  for (std::int64_t i = 10; i < 12; ++i) k.at(i, 1, 1) = 12;
+  const auto thick = find_thickness_regions(k, ThicknessRegionKind::thick, 5.0f, 1);
+  ASSERT_EQ(thick.size(), 2u);
+  EXPECT_EQ(thick[0].extreme_thickness, 12.0f);
+  EXPECT_EQ(thick[1].voxel_count, 6u);
   // Diagonal contact joins (26-connectivity).
   DenseVolume<float> d(unit_grid(4, 4, 4), 0.0f);
   d.at(0, 0, 0) = 2;

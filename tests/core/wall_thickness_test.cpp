@@ -8,7 +8,9 @@
 #include <glm/common.hpp>
 
 #include "support/test_meshes.h"
+#include "voxd/analysis/analysis.h"
 #include "voxd/analysis/distance_transform.h"
+#include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/analysis/wall_thickness.h"
 #include "voxd/detail/nearest_empty.h"
 #include "voxd/voxelize/voxelize.h"
@@ -181,6 +183,82 @@ TEST(WallThickness, SameResultOnOneThreadAndMany) {
 TEST(WallThickness, ErrorStatementGivesVoxelsAndModelUnits) {
   const std::string s = wall_thickness_error_statement(0.25);
   EXPECT_NE(s.find("-1 to +1 voxels (-0.25 to +0.25 model units)"), std::string::npos) << s;
+}
+
+// The report: thin regions of the wall thickness, as the service and the
+// CLI give them.
+ThicknessAnalysis thin_walls(const BitVolume& v, double min_wall) {
+  AnalysisOptions o;
+  o.skin = false;
+  o.threads = 2;
+  o.min_wall_voxels = min_wall / v.grid().voxel_size;
+  return *analyze_volume(v, o).thickness;
+}
+
+TEST(ThinWallReport, APlateOfAnyOrientationHasNoThinRegionAndIsOneWhenThinnerThanMinWall) {
+  // No thin region while T >= min_wall + 1 voxel (the bound: a wall reads
+  // within a voxel of T); the whole plate one region once min_wall > T + 1 voxel.
+  for (double voxel : {0.1, 0.2})
+    for (double chamfer : {0.0, 0.3})
+      for (bool tilted : {false, true}) {
+        const Mesh m = plate(1.0, 6, 5, chamfer);
+        const BitVolume v = solid_of(tilted ? test::rotated(m, 30, 30) : m, voxel);
+        const ThicknessAnalysis pass = thin_walls(v, 1.0 - voxel);
+        EXPECT_TRUE(pass.thin_regions.empty()) << voxel << " " << chamfer << " " << tilted;
+        EXPECT_NEAR(pass.stats.min * voxel, 1.0, voxel);
+        const ThicknessAnalysis fail = thin_walls(v, 1.0 + 1.5 * voxel);
+        ASSERT_EQ(fail.thin_regions.size(), 1u) << voxel << " " << chamfer << " " << tilted;
+        EXPECT_EQ(fail.thin_regions[0].voxel_count, v.count());
+      }
+}
+
+TEST(ThinWallReport, TheLBracketsOnlyThinRegionIsTheFin) {
+  const double h = 0.1;
+  const BitVolume v = solid_of(test::make_extrusion({{0, 0}, {20, 0}, {20, 3}, {12.6, 3}, {12.6, 8}, {12, 8}, {12, 3},
+                                                     {2, 3}, {2, 20}, {0, 20}},
+                                                    0, 15),
+                               h);
+  const ThicknessAnalysis t = thin_walls(v, 0.8);
+  EXPECT_NEAR(t.stats.max * h, 3.0, h);
+  ASSERT_EQ(t.thin_regions.size(), 1u);
+  const ThicknessRegion& fin = t.thin_regions[0];
+  EXPECT_NEAR(fin.extreme_thickness * h, 0.6, h);
+  EXPECT_NEAR(fin.mean_thickness * h, 0.6, h);
+  const Grid& g = v.grid();
+  const glm::dvec3 lo = g.origin + glm::dvec3(fin.bbox_min) * h, hi = g.origin + glm::dvec3(fin.bbox_max + glm::i64vec3(1)) * h;
+  const glm::dvec3 fin_lo(12, 0, 3), fin_hi(12.6, 15, 8);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(lo[a], fin_lo[a], h + 1e-9) << a;
+    EXPECT_NEAR(hi[a], fin_hi[a], h + 1e-9) << a;
+  }
+}
+
+Mesh shared_mesh(const std::string& name) {
+  return decode_mesh(test::read_file(std::string(VOXD_SHARED_MESHES) + "/" + name), name);
+}
+
+TEST(ThinWallReport, RealPartsHaveNoThinRegionFromTheirEdges) {
+  // The hex nut (a plate 1.8 mm thick, chamfered) at 0.02 mm voxels with
+  // min_wall 0.5 failed with 17 "thin" regions under local thickness: its
+  // edges. Its wall is 1.8 everywhere.
+  const BitVolume nut = solid_of(shared_mesh("M3_hex_nut.stl"), 0.02);
+  const ThicknessAnalysis n = thin_walls(nut, 0.5);
+  EXPECT_TRUE(n.thin_regions.empty());
+  EXPECT_NEAR(n.stats.min * 0.02, 1.8, 0.02);
+  EXPECT_NEAR(n.stats.max * 0.02, 1.8, 0.02);
+  // The M3 screw: its thread's crests and flanks are edges of the core, not
+  // walls (flanks 60° apart).
+  const BitVolume screw = solid_of(shared_mesh("M3x10_screw.stl"), 0.04);
+  const ThicknessAnalysis s = thin_walls(screw, 0.5);
+  EXPECT_TRUE(s.thin_regions.empty()) << s.thin_regions.size();
+  // The torus, a round bar 5.5 mm across: its diameter at most, and never
+  // thin. A bar has no parallel faces: with 27 voxels across, chords a
+  // little off its centre read up to 3 voxels short (0.1 mm at 0.02 mm).
+  const BitVolume torus = solid_of(shared_mesh("torus.stl"), 0.2);
+  const ThicknessAnalysis r = thin_walls(torus, 0.5);
+  EXPECT_TRUE(r.thin_regions.empty());
+  EXPECT_GT(r.stats.min * 0.2, 5.5 - 3 * 0.2);
+  EXPECT_LT(r.stats.max * 0.2, 5.5 + 0.2);
 }
 
 }  // namespace

@@ -107,7 +107,7 @@ TEST_F(AnalyzeCli, WritesPreviewsTheThicknessVolumeAndTheRequestedAnalyses) {
   EXPECT_EQ(v, 0.0f);
   // The requested analyses, named by their keys: the raw thickness equals
   // the NRRD's data, and the radiography statistics see the 4-voxel plate.
-  const auto raw = test::read_file(dir_ + "/out/analyses/thickness_format-raw__unit-voxels.raw");
+  const auto raw = test::read_file(dir_ + "/out/analyses/thickness_measure-wall__format-raw__unit-voxels.raw");
   EXPECT_EQ(raw, std::vector<std::uint8_t>(nrrd.begin() + static_cast<std::ptrdiff_t>(data), nrrd.end()));
   EXPECT_TRUE(std::filesystem::exists(dir_ + "/out/analyses/preview_view-my__colour-none.png"));
   std::ifstream stats_file(dir_ + "/out/analyses/radiography_axis-z__measure-max__format-json__unit-voxels.json");

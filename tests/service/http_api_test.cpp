@@ -708,7 +708,7 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
     for (int j = 0; j < 20; ++j)
       for (int i = 0; i < 20; ++i) {
         const bool in = i >= 1 && i <= 18 && j >= 1 && j <= 18 && k >= 1 && k <= 4;
-        // Voxels within 2 of the rim are still covered by a centred ball.
+        // The wall between the plate's faces, 4 voxels, rim and corners included.
         ASSERT_EQ(values[voxel(i, j, k)], in ? 2.0f : 0.0f) << i << "," << j << "," << k;
       }
   EXPECT_EQ(http().Get(("/v1/jobs/" + id + "/thickness").c_str())->get_header_value("X-Voxd-Cache"), "hit");
@@ -725,6 +725,18 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   ASSERT_EQ(decoded.exit_code, 0) << decoded.err;
   EXPECT_EQ(text_of(read_file(dir_ + "/t.f32")), nrrd.data);
   expect_problem(http().Get(("/v1/jobs/" + id + "/thickness?format=vtk").c_str()), 400, "invalid-query");
+  expect_problem(http().Get(("/v1/jobs/" + id + "/thickness?measure=bonej").c_str()), 400, "invalid-query");
+  // BoneJ's local thickness stays as a named measure, computed and kept
+  // apart from the wall thickness.
+  auto local = http().Get(("/v1/jobs/" + id + "/thickness?measure=local").c_str());
+  ASSERT_EQ(local->status, 200) << local->body;
+  const Nrrd local_nrrd = parse_nrrd(local->body);
+  EXPECT_EQ(local_nrrd.fields.at("content"), "local thickness (model units)");
+  const std::vector<float> local_values = floats_of(local_nrrd.data);
+  ASSERT_EQ(local_values.size(), values.size());
+  EXPECT_EQ(local_values[voxel(9, 9, 2)], 2.0f);
+  EXPECT_NE(server_->log().find("job " + id + ": local thickness computed"), std::string::npos);
+  EXPECT_EQ(nrrd.fields.at("content"), "wall thickness (model units)");
 
   // Preview from +z ('+' escaped, and unescaped, which a query decodes to a
   // space): the plate's footprint, shaded, on white.
@@ -755,7 +767,7 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   expect_problem(http().Get(("/v1/jobs/" + id + "/preview?angle=30").c_str()), 400, "invalid-query");
 
   // A front end asking for three thickness images of a fresh job at once
-  // gets them all from one local-thickness computation.
+  // gets them all from one wall-thickness computation.
   const std::string id2 = submit(to_binary_stl(make_box({0.5, 0.5, 0.5}, {9.5, 9.5, 2.5})),
                                  R"({"grid":{"voxel_size":0.5,"origin":[0,0,0],"dims":[20,20,7]}})")
                               .at("id");
@@ -774,8 +786,8 @@ TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   EXPECT_EQ(ok.load(), 4);
   const std::string log = server_->log();
   std::size_t computed = 0;
-  for (std::size_t at = log.find("job " + id2 + ": local thickness computed"); at != std::string::npos;
-       at = log.find("job " + id2 + ": local thickness computed", at + 1))
+  for (std::size_t at = log.find("job " + id2 + ": wall thickness computed"); at != std::string::npos;
+       at = log.find("job " + id2 + ": wall thickness computed", at + 1))
     ++computed;
   EXPECT_EQ(computed, 1u) << log;
 

@@ -171,7 +171,7 @@ TEST_F(StreamedJobsHttpTest, PastThePerJobMemoryAJobStreamsAndWholeGridAnalysesA
     EXPECT_NE(png.find(std::string("voxd:view") + '\0' + view), std::string::npos) << view;
   }
 
-  // Local thickness, skin removal and thickness colours need the whole grid.
+  // Wall thickness, skin removal and thickness colours need the whole grid.
   for (const char* route : {"thickness", "analysis", "analysis?thickness=false", "preview?colour=thickness",
                             "radiography?peel=2"}) {
     const json p = expect_problem(http().Get(("/v1/jobs/" + id + "/" + route).c_str()), 422, "limit-exceeded");
@@ -184,7 +184,7 @@ TEST_F(StreamedJobsHttpTest, PastThePerJobMemoryAJobStreamsAndWholeGridAnalysesA
   const json refused = expect_problem(
       post_multipart(http(), "/v1/jobs", mesh, "bunny.stl", R"({"grid":{"resolution":700},"analyses":[{"kind":"thickness"}]})"),
       422, "limit-exceeded");
-  EXPECT_NE(refused.at("detail").get<std::string>().find("local thickness volume needs the whole grid"), std::string::npos)
+  EXPECT_NE(refused.at("detail").get<std::string>().find("the wall thickness volume needs the whole grid"), std::string::npos)
       << refused.dump();
   // While one that streams is prepared with the volume.
   const json prepared = submit(mesh, R"({"grid":{"resolution":700},"analyses":[{"kind":"radiography","axis":"x"}]})");

@@ -42,6 +42,7 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
     r.bbox_max = {-1, -1, -1};
     r.extreme_thickness = t[seed];
     glm::dvec3 sum{0.0};
+    double thickness_sum = 0.0;
     stack.assign(1, seed);
     while (!stack.empty()) {
       const std::size_t idx = stack.back();
@@ -50,6 +51,7 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
       const auto j = static_cast<std::int64_t>((idx / sx) % static_cast<std::size_t>(d.y));
       const auto k = static_cast<std::int64_t>(idx / sxy);
       ++r.voxel_count;
+      thickness_sum += t[idx];
       sum += glm::dvec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
       r.bbox_min = glm::min(r.bbox_min, glm::i64vec3(i, j, k));
       r.bbox_max = glm::max(r.bbox_max, glm::i64vec3(i, j, k));
@@ -72,9 +74,15 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
     }
     if (r.voxel_count < min_voxels) continue;
     r.centroid = sum / static_cast<double>(r.voxel_count);
+    r.mean_thickness = static_cast<float>(thickness_sum / static_cast<double>(r.voxel_count));
     found.push_back({r, seed});
   }
-  std::stable_sort(found.begin(), found.end(), [](const Found& a, const Found& b) {
+  // Most severe first: the thinnest (thickest) extreme, then the larger
+  // region, then scan order.
+  std::stable_sort(found.begin(), found.end(), [kind](const Found& a, const Found& b) {
+    if (a.region.extreme_thickness != b.region.extreme_thickness)
+      return kind == ThicknessRegionKind::thin ? a.region.extreme_thickness < b.region.extreme_thickness
+                                               : a.region.extreme_thickness > b.region.extreme_thickness;
     if (a.region.voxel_count != b.region.voxel_count) return a.region.voxel_count > b.region.voxel_count;
     return a.first < b.first;
   });

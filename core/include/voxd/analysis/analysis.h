@@ -8,15 +8,16 @@
 #include "voxd/analysis/components.h"
 #include "voxd/analysis/mass_properties.h"
 #include "voxd/progress.h"
-#include "voxd/analysis/local_thickness.h"
 #include "voxd/analysis/skin_removal.h"
 #include "voxd/analysis/thickness_regions.h"
+#include "voxd/analysis/local_thickness.h"  // ThicknessStatistics
+#include "voxd/analysis/wall_thickness.h"
 
 namespace voxd {
 
 struct AnalysisOptions {
   std::optional<CleanupOptions> cleanup;  // none: analyse the volume as voxelized
-  bool thickness = true;                  // local wall thickness (the costliest step)
+  bool thickness = true;                  // wall thickness (the costliest step)
   bool skin = true;                       // skin removal layers (needs the whole grid)
   PeelMetric peel = PeelMetric::faces;    // skin removal layers
   // Thin- and thick-wall thresholds in voxels (0 = not checked), and the
@@ -26,7 +27,7 @@ struct AnalysisOptions {
   std::uint64_t min_region_voxels = 1;
   int histogram_bins = 32;
   int threads = 0;
-  // The local thickness of `volume` when the caller has it already (the
+  // The wall thickness of `volume` when the caller has it already (the
   // service keeps one per job); ignored with clean-up, which changes the
   // volume and so its thickness.
   const DenseVolume<float>* thickness_map = nullptr;
@@ -35,7 +36,7 @@ struct AnalysisOptions {
 struct ThicknessAnalysis {
   ThicknessStatistics stats;  // in voxels
   double min_wall_voxels = 0.0, max_wall_voxels = 0.0;
-  std::vector<ThicknessRegion> thin_regions, thick_regions;  // largest first
+  std::vector<ThicknessRegion> thin_regions, thick_regions;  // most severe first
 };
 
 struct AnalysisReport {

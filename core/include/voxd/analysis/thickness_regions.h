@@ -1,5 +1,6 @@
 #pragma once
-// Thin and thick regions of a local thickness map (voxd/analysis/local_thickness.h):
+// Thin and thick regions of a thickness map (the report's is the wall
+// thickness, voxd/analysis/wall_thickness.h; any map in voxels will do):
 // the connected sets of filled voxels whose thickness is below (thin) or above
 // (thick) a threshold, the places a design review has to look at.
 //
@@ -30,11 +31,13 @@ struct ThicknessRegion {
   // The region's extreme thickness, in voxels: the minimum for a thin region,
   // the maximum for a thick one.
   float extreme_thickness = 0.0f;
+  float mean_thickness = 0.0f;  // over the region's voxels, in voxels
 };
 
-// Regions of at least `min_voxels` voxels, largest first, equal sizes in
-// order of their first voxel (z, then y, then x): the same input always gives
-// the same list.
+// Regions of at least `min_voxels` voxels, most severe first: a thin region
+// by its minimum ascending, a thick one by its maximum descending; ties by
+// size (largest first), then by their first voxel (z, then y, then x): the
+// same input always gives the same list.
 std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
                                                     float threshold_voxels, std::uint64_t min_voxels);
 
