@@ -6,50 +6,51 @@
 // small at every convex edge and corner by definition) does not measure.
 //
 // Definition (a θ-medial axis, after Foskey, Lin & Manocha 2003). A point
-// of the solid lies on the wall's medial surface when it has two nearest
-// surface points that FACE EACH OTHER: the directions from the point to them
-// are at least kWallSeparationDegrees (135°) apart. Between the two faces of
-// a wall (plate, shell, tube, rib, a wedge narrower than 45°) the directions
-// are 180° apart; at a convex edge they are 180° minus the edge's dihedral
-// angle apart (a box edge 90°, a chamfer 45°, a 60° thread crest 120°), so
-// edges and corners have no medial point of their own: they are not walls,
-// they are the ends of walls. The wall thickness at a medial point is the
-// distance between its two surface points; every voxel takes the thickness
-// of the largest medial ball containing it (the thickest wall it is part
-// of: where a thin rib meets a thick wall, the root belongs to the wall),
-// and the voxels no medial ball reaches (the corners of sharp edges, the
-// outer parts of thread crests) take the largest value of the nearest
-// voxels that have one.
+// of the solid lies on a wall's medial surface when its two nearest surface
+// points lie on surfaces that FACE EACH OTHER: their normals at least
+// kWallSeparationDegrees (150°) apart. Between the two faces of a wall
+// (plate, shell, tube, rib) they are 180° apart; at a convex edge they are
+// 180° minus the edge's dihedral angle apart (a box edge 90°, a chamfer
+// 45°, a 60° thread's flanks 120°), so edges, corners and thread teeth have
+// no medial point of their own: they are the ends of walls, not walls. The
+// wall's thickness at a medial point is the distance between its two
+// faces; every voxel of the wall takes it, and the edges and corners take
+// the value of the wall they end.
 //
-// On voxels. The surfaces are where filled voxel centres meet empty ones;
-// each filled voxel's nearest empty voxel centre comes from an exact feature
-// transform. Two face-adjacent filled voxels p, q whose nearest empty voxels
-// f(p), f(q) lie in directions at least 135° apart straddle the medial
-// surface; the wall there is |f(p) - f(q)| - 1 voxels (the empty centres lie
-// half a voxel beyond each surface on a wall along a grid axis), and p and q
-// are centres of balls of squared radius |p - f(p)|^2 and |q - f(q)|^2. A
-// filled voxel between two empty ones along an axis is a wall 1 voxel thick.
-// The painting is local thickness's own exact engine (analysis/ball_painting.h)
-// with these centres and values.
+// On voxels (wall_thickness.cpp):
+//  - an exact feature transform gives each filled voxel its nearest empty
+//    voxel; two face-adjacent filled voxels whose nearest empty voxels
+//    differ straddle a medial surface when planes fitted to the surface
+//    around those empty voxels (5^3 windows) face each other (150°); where a
+//    fit cannot be trusted (at a concave edge, where a rib meets a wall, the
+//    fitted normal is the corner's bisector) the lattice directions decide;
+//  - the thickness is the distance between the two fitted planes, each
+//    placed from the window's filled-voxel count, so a wall along the grid
+//    axes N voxels thick reads exactly N;
+//  - each medial voxel paints its chord (the segment across the wall through
+//    it), then its ball (largest first, the painting engine of local
+//    thickness, analysis/ball_painting.h) the rest, both only between the
+//    wall's two faces and only voxels no deeper than the ball; edges and
+//    corners then take the largest wall whose ball, grown by sqrt(3),
+//    reaches them between its faces, and the last few their neighbours'.
 //
-// Exactness and error bound (see wall_thickness_error_bound()):
-//  - a wall along the grid axes N voxels thick reports exactly N voxels;
-//    the voxelization puts a wall of true thickness T into N voxels with N
-//    within (T - 1, T + 1), so against the mesh the report is within one
-//    voxel;
-//  - tilted walls: the nearest empty centres lie between 0 and 1 voxel
-//    beyond each surface, so |f(p) - f(q)| - 1 lies within (T - 1, T + 1)
-//    as well (tests: plates rotated 30° about two axes, tubes, spherical
-//    shells, at several voxel sizes);
-//  - every voxel of a wall, including its surface voxels and the corners of
-//    its edges, reports that wall's value: thin walls are found at their
-//    full extent and nowhere else.
+// Error bound (wall_thickness_error_bound()): within one voxel of the
+// distance between the faces for walls with parallel or gently curved faces
+// at any orientation: the voxelization itself puts a face anywhere within a
+// voxel. Exact (the voxel count) for walls along the grid axes. Tested on
+// plates (sharp, chamfered, rotated 30° about two axes, three voxel sizes),
+// tubes, spherical shells and an L-bracket with a thin fin. So a wall at
+// least min_wall + 1 voxel thick is never reported thin. Limits: a round
+// bar (no parallel faces) reads up to a few voxels under its diameter off
+// its centre when it is under about 30 voxels across; a wall tapering by
+// less than a voxel per 5 voxels along the grid is a staircase in the voxel
+// model, and reads as the staircase's steps.
 //
 // Cost: the feature transform (about twice the distance transform's), one
-// pass over the voxels for the medial pairs, and the painting of medial
-// balls only (a surface's worth of centres, not a volume's). Memory: one
-// uint32 per voxel (the feature transform), the float result, a bit per
-// voxel, and 16 bytes per medial voxel.
+// pass over the voxels for the medial pairs, and the painting. Memory: one
+// uint32 per voxel (the feature transform), the float result, a few bits
+// per voxel, 16 bytes per medial voxel and per voxel left to the balls'
+// sparse phase.
 #include <string>
 
 #include "voxd/bit_volume.h"
