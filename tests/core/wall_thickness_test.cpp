@@ -65,6 +65,26 @@ Mesh plate(double T, double W, double D, double c) {
   return m;
 }
 
+TEST(PaddedIndex, DecodesEveryIndexItMakesUpToThe32BitLimit) {
+  // The decode divides by multiplying; it must be exact for every 32-bit
+  // index, so grids of small, odd, power-of-two and the largest accepted
+  // sizes, at their corners and at random voxels.
+  std::mt19937_64 rng(3);
+  for (const glm::i64vec3 dims : {glm::i64vec3{1, 1, 1}, glm::i64vec3{62, 30, 7}, glm::i64vec3{126, 254, 510},
+                                  glm::i64vec3{1620, 1620, 1630}, glm::i64vec3{65533, 21843, 1}}) {
+    const detail::PaddedIndex padded(test::unit_grid(dims));
+    ASSERT_LE(static_cast<double>(padded.px) * padded.py * padded.pz, 4294967296.0);
+    std::vector<glm::i64vec3> points;
+    for (int c = 0; c < 8; ++c)
+      points.push_back({c & 1 ? dims.x : -1, c & 2 ? dims.y : -1, c & 4 ? dims.z : -1});
+    for (int n = 0; n < 100000; ++n)
+      points.push_back({static_cast<std::int64_t>(rng() % (dims.x + 2)) - 1,
+                        static_cast<std::int64_t>(rng() % (dims.y + 2)) - 1,
+                        static_cast<std::int64_t>(rng() % (dims.z + 2)) - 1});
+    for (const glm::i64vec3& p : points) ASSERT_EQ(padded.at(padded.of(p.x, p.y, p.z)), p) << dims.x << " " << p.x;
+  }
+}
+
 TEST(NearestEmpty, IsAnEmptyVoxelAtTheDistanceTransformsDistance) {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 6; ++trial) {
@@ -89,6 +109,49 @@ TEST(NearestEmpty, IsAnEmptyVoxelAtTheDistanceTransformsDistance) {
           ASSERT_TRUE(outside || !v.get(f.x, f.y, f.z)) << i << " " << j << " " << k;
           const glm::i64vec3 e = f - glm::i64vec3(i, j, k);
           ASSERT_EQ(static_cast<std::uint32_t>(e.x * e.x + e.y * e.y + e.z * e.z), d2.at(i, j, k)) << i << " " << j << " " << k;
+        }
+  }
+}
+
+TEST(NearestMarked, IsAMarkedVoxelAtTheBruteForceDistanceAndNoneWithoutOne) {
+  // Sparse and dense marks, and a grid with none: the outside is never a
+  // mark, so a voxel's nearest mark may lie far across the grid.
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 6; ++trial) {
+    const Grid g = test::unit_grid(12 + trial, 9, 7 + trial % 3);
+    BitVolume marked(g);
+    std::bernoulli_distribution mark(trial == 0 ? 0.0 : trial % 2 ? 0.02 : 0.3);
+    std::vector<glm::i64vec3> marks;
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i)
+          if (mark(rng)) {
+            marked.set(i, j, k, true);
+            marks.push_back({i, j, k});
+          }
+    // Written over a volume that held something else.
+    DenseVolume<std::uint32_t> nearest(g, 12345u);
+    detail::nearest_marked_voxels(marked, nearest, 1 + trial % 2);
+    const detail::PaddedIndex padded(g);
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i) {
+          const glm::i64vec3 p{i, j, k};
+          if (marks.empty()) {
+            ASSERT_EQ(nearest.at(i, j, k), detail::kNoNearestVoxel);
+            continue;
+          }
+          std::int64_t best = INT64_MAX;
+          for (const glm::i64vec3& m : marks) {
+            const glm::i64vec3 e = m - p;
+            best = std::min(best, e.x * e.x + e.y * e.y + e.z * e.z);
+          }
+          ASSERT_NE(nearest.at(i, j, k), detail::kNoNearestVoxel);
+          const glm::i64vec3 f = padded.at(nearest.at(i, j, k));
+          ASSERT_TRUE(f.x >= 0 && f.y >= 0 && f.z >= 0 && f.x < g.dims.x && f.y < g.dims.y && f.z < g.dims.z);
+          ASSERT_TRUE(marked.get(f.x, f.y, f.z)) << i << " " << j << " " << k;
+          const glm::i64vec3 e = f - p;
+          ASSERT_EQ(e.x * e.x + e.y * e.y + e.z * e.z, best) << trial << ": " << i << " " << j << " " << k;
         }
   }
 }

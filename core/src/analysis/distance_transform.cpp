@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "analysis/distance_transform_impl.h"
+#include "analysis/lower_envelope.h"
 #include "voxd/parallel.h"
 
 namespace voxd {
@@ -35,44 +36,6 @@ namespace detail {
 namespace {
 
 constexpr std::int64_t kBlock = 16;  // uint32 lines gathered together: one cache line
-
-// floor(a / b) for b > 0 (C++ division truncates towards zero).
-inline std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  const std::int64_t q = a / b;
-  return (a % b != 0 && a < 0) ? q - 1 : q;
-}
-
-// Lower envelope of the parabolas (u - p)^2 + g[p] over p in [0, m), evaluated
-// at every u (Meijster phase 2). s: sites of the envelope, t: the first u
-// where each site wins. Scratch s and t hold m entries.
-void lower_envelope(const std::uint32_t* g, int m, std::uint32_t* dt, int* s, int* t) {
-  auto f = [g](std::int64_t x, std::int64_t i) { return (x - i) * (x - i) + static_cast<std::int64_t>(g[i]); };
-  auto sep = [g](std::int64_t i, std::int64_t u) {
-    return floor_div(u * u - i * i + static_cast<std::int64_t>(g[u]) - static_cast<std::int64_t>(g[i]),
-                     2 * (u - i));
-  };
-  int q = 0;
-  s[0] = 0;
-  t[0] = 0;
-  for (int u = 1; u < m; ++u) {
-    while (q >= 0 && f(t[q], s[q]) > f(t[q], u)) --q;
-    if (q < 0) {
-      q = 0;
-      s[0] = u;
-    } else {
-      const std::int64_t w = 1 + sep(s[q], u);
-      if (w < m) {
-        ++q;
-        s[q] = u;
-        t[q] = static_cast<int>(w);
-      }
-    }
-  }
-  for (int u = m - 1; u >= 0; --u) {
-    dt[u] = static_cast<std::uint32_t>(f(u, s[q]));
-    if (u == t[q]) --q;
-  }
-}
 
 // Solves one padded line in place: line[0] and line[n + 1] are 0 (the outside),
 // line[1..n] the values of the previous pass. Each run of non-zeros is solved
@@ -93,7 +56,11 @@ struct LineSolver {
       while (line[i] != 0) ++i;  // line[n + 1] == 0 stops it
       const std::int64_t b = i;
       const int m = static_cast<int>(b - a + 2);
-      lower_envelope(line + a - 1, m, dt.data(), s.data(), t.data());
+      const std::uint32_t* g = line + a - 1;
+      lower_envelope<false>(g, m, s.data(), t.data(), 0, [&](int u, int site) {
+        const std::int64_t d = u - site;
+        dt[static_cast<std::size_t>(u)] = static_cast<std::uint32_t>(d * d + static_cast<std::int64_t>(g[site]));
+      });
       std::copy(dt.begin() + 1, dt.begin() + m - 1, line + a);
     }
   }

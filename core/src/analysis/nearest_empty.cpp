@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "analysis/lower_envelope.h"
 #include "analysis/progress_span.h"
 #include "analysis/row_runs.h"
 #include "voxd/error.h"
@@ -24,43 +25,14 @@ namespace {
 
 constexpr std::int64_t kBlock = 16;  // uint32 lines gathered together: one cache line
 
-inline std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  const std::int64_t q = a / b;
-  return (a % b != 0 && a < 0) ? q - 1 : q;
-}
+// g of a voxel with no site in reach yet: its parabola is left out.
+constexpr std::int64_t kNoSite = std::int64_t{1} << 60;
 
-// Lower envelope of (u - i)^2 + g[i] over sites i in [0, m); site[u] gets
-// the winning i for every u in [0, m). Scratch s and t hold m entries.
-void envelope_sites(const std::int64_t* g, int m, int* site, int* s, int* t) {
-  auto f = [g](std::int64_t x, std::int64_t i) { return (x - i) * (x - i) + g[i]; };
-  auto sep = [g](std::int64_t i, std::int64_t u) { return floor_div(u * u - i * i + g[u] - g[i], 2 * (u - i)); };
-  int q = 0;
-  s[0] = 0;
-  t[0] = 0;
-  for (int u = 1; u < m; ++u) {
-    while (q >= 0 && f(t[q], s[q]) > f(t[q], u)) --q;
-    if (q < 0) {
-      q = 0;
-      s[0] = u;
-    } else {
-      const std::int64_t w = 1 + sep(s[q], u);
-      if (w < m) {
-        ++q;
-        s[q] = u;
-        t[q] = static_cast<int>(w);
-      }
-    }
-  }
-  for (int u = m - 1; u >= 0; --u) {
-    site[u] = s[q];
-    if (u == t[q]) --q;
-  }
-}
-
-}  // namespace
-
-DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int threads, JobControl* control,
-                                                double progress_from, double progress_to) {
+// The feature transform of the sites: the set bits of `bits` if
+// `sites_are_set`, else its clear bits, and with `outside_is_site`
+// everything outside the grid. Voxels with no site get kNoNearestVoxel.
+void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_site, DenseVolume<std::uint32_t>& out,
+                   int threads, JobControl* control, double progress_from, double progress_to) {
   const Grid& grid = solid.grid();
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
   const PaddedIndex padded(grid);
@@ -71,8 +43,8 @@ DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int thre
                 "this grid is " + std::to_string(nx) + " x " + std::to_string(ny) + " x " + std::to_string(nz) +
                     ": use a larger voxel size");
   }
-  DenseVolume<std::uint32_t> out(grid, 0u);
-  if (grid.voxel_count() == 0) return out;
+  if (out.grid().dims != grid.dims) out = DenseVolume<std::uint32_t>(grid, 0u);
+  if (grid.voxel_count() == 0) return;
   const int nthreads = threads > 0 ? threads : default_thread_count();
   const ProgressSpan progress{control, progress_from, progress_to};
   std::uint32_t* data = out.values().data();
@@ -87,8 +59,12 @@ DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int thre
       const std::int64_t j = r % ny, k = r / ny;
       std::uint32_t* line = data + static_cast<std::size_t>(k) * slab + static_cast<std::size_t>(j * nx);
       for (std::int64_t i = 0; i < nx; ++i) line[i] = padded.of(i, j, k);
-      for_each_row_run(solid.row(j, k), solid.row_words(), nx, false, [&](std::int64_t a, std::int64_t b) {
-        for (std::int64_t i = a; i < b; ++i) line[i] = padded.of(i - a + 1 <= b - i ? a - 1 : b, j, k);
+      for_each_row_run(solid.row(j, k), solid.row_words(), nx, sites_are_set, [&](std::int64_t a, std::int64_t b) {
+        const bool before = outside_is_site || a > 0, after = outside_is_site || b < nx;
+        for (std::int64_t i = a; i < b; ++i) {
+          const bool take_before = before && (!after || i - a + 1 <= b - i);
+          line[i] = take_before ? padded.of(a - 1, j, k) : after ? padded.of(b, j, k) : kNoNearestVoxel;
+        }
       });
     }
   });
@@ -130,12 +106,30 @@ DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int thre
           };
           line[0] = padded.of(point(-1).x, point(-1).y, point(-1).z);
           line[n + 1] = padded.of(point(n).x, point(n).y, point(n).z);
-          g[0] = 0;
-          g[static_cast<std::size_t>(n + 1)] = 0;
-          for (std::int64_t p = 0; p < n; ++p) {
-            const glm::i64vec3 d = padded.at(line[p + 1]) - point(p);
+          // Outside: a site at distance 0, or none.
+          g[0] = outside_is_site ? 0 : kNoSite;
+          g[static_cast<std::size_t>(n + 1)] = g[0];
+          // A voxel that is its own site costs no decode; a line with no
+          // site anywhere (outside or in) stays as it is.
+          const glm::i64vec3 first = point(0);
+          const std::int64_t step = axis == 1 ? padded.px : padded.px * padded.py;
+          std::int64_t own = padded.of(first.x, first.y, first.z);
+          bool any_site = outside_is_site;
+          for (std::int64_t p = 0; p < n; ++p, own += step) {
+            const std::uint32_t at = line[p + 1];
+            if (at == kNoNearestVoxel) {
+              g[static_cast<std::size_t>(p + 1)] = kNoSite;
+              continue;
+            }
+            any_site = true;
+            if (at == static_cast<std::uint32_t>(own)) {
+              g[static_cast<std::size_t>(p + 1)] = 0;
+              continue;
+            }
+            const glm::i64vec3 d = padded.at(at) - point(p);
             g[static_cast<std::size_t>(p + 1)] = d.x * d.x + d.y * d.y + d.z * d.z;
           }
+          if (!any_site) continue;
           std::int64_t i = 1;
           while (i <= n) {
             if (g[static_cast<std::size_t>(i)] == 0) {
@@ -143,12 +137,13 @@ DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int thre
               continue;
             }
             const std::int64_t a = i;
-            while (g[static_cast<std::size_t>(i)] != 0) ++i;
+            while (i <= n && g[static_cast<std::size_t>(i)] != 0) ++i;
             const std::int64_t b = i;
             const int m = static_cast<int>(b - a + 2);
-            envelope_sites(g.data() + a - 1, m, site.data(), s.data(), t.data());
+            lower_envelope<true>(g.data() + a - 1, m, s.data(), t.data(), kNoSite, [&](int u, int i) { site[u] = i; });
             // Winners read from the sites before any is overwritten.
-            for (int u = 1; u < m - 1; ++u) won[static_cast<std::size_t>(u)] = line[a - 1 + site[u]];
+            for (int u = 1; u < m - 1; ++u)
+              won[static_cast<std::size_t>(u)] = site[u] < 0 ? kNoNearestVoxel : line[a - 1 + site[u]];
             for (int u = 1; u < m - 1; ++u) line[a - 1 + u] = won[static_cast<std::size_t>(u)];
           }
         }
@@ -163,7 +158,20 @@ DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int thre
   strided_pass(1, ny, static_cast<std::size_t>(nx), nz,
                [&](std::int64_t k) { return static_cast<std::size_t>(k) * slab; }, 1);
   strided_pass(2, nz, slab, ny, [&](std::int64_t j) { return static_cast<std::size_t>(j * nx); }, 2);
+}
+
+}  // namespace
+
+DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int threads, JobControl* control,
+                                                double progress_from, double progress_to) {
+  DenseVolume<std::uint32_t> out;
+  nearest_sites(solid, false, true, out, threads, control, progress_from, progress_to);
   return out;
+}
+
+void nearest_marked_voxels(const BitVolume& marked, DenseVolume<std::uint32_t>& out, int threads, JobControl* control,
+                           double progress_from, double progress_to) {
+  nearest_sites(marked, true, false, out, threads, control, progress_from, progress_to);
 }
 
 }  // namespace voxd::detail

@@ -1,0 +1,56 @@
+#pragma once
+// The lower envelope of the parabolas (u - i)^2 + g[i] over the sites i of
+// one line (Meijster, Roerdink & Hesselink 2000, phase 2), in integers with
+// floor division, so exact. The distance transform (which wants the
+// envelope's value at every u) and the feature transform (which wants the
+// winning site) both solve their passes with it.
+#include <cstdint>
+
+namespace voxd::detail {
+
+// floor(a / b) for b > 0 (C++ division truncates towards zero).
+inline std::int64_t floor_div(std::int64_t a, std::int64_t b) {
+  const std::int64_t q = a / b;
+  return (a % b != 0 && a < 0) ? q - 1 : q;
+}
+
+// Calls won(u, i) for every u in [0, m), from m - 1 down to 0, with the
+// site i whose parabola is lowest at u. Scratch s and t hold m entries.
+// With kSomeFar, an entry with g[i] >= far is no site and is left out, and
+// won(u, -1) is called for every u when no entry is a site.
+template <bool kSomeFar, typename G, typename Won>
+void lower_envelope(const G* g, int m, int* s, int* t, std::int64_t far, Won&& won) {
+  auto f = [g](std::int64_t x, std::int64_t i) { return (x - i) * (x - i) + static_cast<std::int64_t>(g[i]); };
+  auto sep = [g](std::int64_t i, std::int64_t u) {
+    return floor_div(u * u - i * i + static_cast<std::int64_t>(g[u]) - static_cast<std::int64_t>(g[i]), 2 * (u - i));
+  };
+  int q = -1;
+  for (int u = 0; u < m; ++u) {
+    if constexpr (kSomeFar) {
+      if (static_cast<std::int64_t>(g[u]) >= far) continue;
+    }
+    while (q >= 0 && f(t[q], s[q]) > f(t[q], u)) --q;
+    if (q < 0) {
+      q = 0;
+      s[0] = u;
+      t[0] = 0;
+    } else {
+      const std::int64_t w = 1 + sep(s[q], u);
+      if (w < m) {
+        ++q;
+        s[q] = u;
+        t[q] = static_cast<int>(w);
+      }
+    }
+  }
+  if (kSomeFar && q < 0) {
+    for (int u = m - 1; u >= 0; --u) won(u, -1);
+    return;
+  }
+  for (int u = m - 1; u >= 0; --u) {
+    won(u, s[q]);
+    if (u == t[q]) --q;
+  }
+}
+
+}  // namespace voxd::detail
