@@ -110,7 +110,8 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
     thickness = {
         {"measure", "wall"},
         {"method", "wall thickness: the distance between the wall's two faces, from a theta-medial axis (Foskey, Lin & "
-                   "Manocha 2003; faces at least 150 degrees apart); edges and corners take the wall they end"},
+                   "Manocha 2003; faces at least 150 degrees apart); each voxel takes the wall's section through its "
+                   "nearest medial point, so edges and corners take the wall they end"},
         {"error_bound", wall_thickness_error_statement(h)},
         {"voxels", t.stats.voxel_count},
         {"mean", t.stats.mean * h},

@@ -238,6 +238,58 @@ TEST(WallThickness, LBracketFinIsThinAndTheWallsAreNot) {
   }
 }
 
+// A point of the grid (model units) back in the frame of a part that
+// test::rotated() turned by ax about x, then ay about y.
+glm::dvec3 unrotated(const glm::dvec3& p, double ax_degrees, double ay_degrees) {
+  const double ax = ax_degrees * 3.14159265358979323846 / 180.0, ay = ay_degrees * 3.14159265358979323846 / 180.0;
+  const glm::dvec3 q{p.x * std::cos(ay) - p.z * std::sin(ay), p.y, p.x * std::sin(ay) + p.z * std::cos(ay)};
+  return {q.x, q.y * std::cos(ax) + q.z * std::sin(ax), -q.y * std::sin(ax) + q.z * std::cos(ax)};
+}
+
+TEST(WallThickness, WedgeIsThinExactlyWhereItsThicknessCrossesMinWall) {
+  // A symmetric wedge, 2 mm thick at x = 0 tapering to 0 at x = L (its
+  // faces 2 atan(1/L) apart, a wall, not an edge), 4 mm deep (y), turned
+  // off the grid. Its section across its mid-plane is t(x) = 2 (1 - x / L),
+  // so it is thinner than min_wall exactly where x > x* = L (1 - min_wall / 2).
+  // The region of voxels that read thinner than min_wall, as voxel cubes,
+  // must end within a voxel of the plane x = x*: a voxel on the wrong side
+  // is at most a voxel (plus its own half-extent along x) from it. Within
+  // the wall's end zones (up to half its thickness from its end faces
+  // y = +-2, where the medial surface has stopped and the voxels take the
+  // nearest point of its ragged edge, which may lie a few voxels along the
+  // taper), within four voxels (three measured). (Along the grid a taper
+  // this gentle is a staircase in the voxel model: see the header's limits.)
+  const double h = 0.1;
+  for (double L : {5.0, 8.0})
+    for (const auto& [ax, ay] : {std::pair{30.0, 30.0}, std::pair{20.0, -35.0}}) {
+      const BitVolume v = solid_of(test::rotated(test::make_extrusion({{0, -1}, {L, 0}, {0, 1}}, -2, 2), ax, ay), h);
+      const DenseVolume<float> w = wall_thickness(v, 2);
+      const Grid& g = v.grid();
+      // A voxel cube's half-extent along the wedge's x axis.
+      const glm::dvec3 o = unrotated(glm::dvec3(0.0), ax, ay);
+      const double half_extent = 0.5 * h *
+                                 (std::abs(unrotated({1, 0, 0}, ax, ay).x - o.x) + std::abs(unrotated({0, 1, 0}, ax, ay).x - o.x) +
+                                  std::abs(unrotated({0, 0, 1}, ax, ay).x - o.x));
+      for (double min_wall : {0.6, 0.8, 1.2}) {
+        const double crossing = L * (1.0 - min_wall / 2.0);
+        double worst_inside = 0.0, worst_end = 0.0;
+        for (std::int64_t k = 0; k < g.dims.z; ++k)
+          for (std::int64_t j = 0; j < g.dims.y; ++j)
+            for (std::int64_t i = 0; i < g.dims.x; ++i) {
+              if (!v.get(i, j, k)) continue;
+              const glm::dvec3 p = unrotated(g.origin + (glm::dvec3(i, j, k) + 0.5) * h, ax, ay);
+              const bool thin = w.at(i, j, k) * h < min_wall;
+              if (thin == (p.x > crossing)) continue;
+              const double off = std::abs(p.x - crossing) - half_extent;
+              double& worst = std::abs(p.y) > 2.0 - min_wall / 2 - h ? worst_end : worst_inside;
+              worst = std::max(worst, off);
+            }
+        EXPECT_LE(worst_inside, h) << "L " << L << " turned " << ax << " " << ay << " min_wall " << min_wall;
+        EXPECT_LE(worst_end, 4 * h) << "L " << L << " turned " << ax << " " << ay << " min_wall " << min_wall;
+      }
+    }
+}
+
 TEST(WallThickness, SameResultOnOneThreadAndMany) {
   const BitVolume v = solid_of(test::rotated(plate(1.0, 4, 3, 0.3), 30, 30), 0.1);
   EXPECT_TRUE(wall_thickness(v, 1).values() == wall_thickness(v, 3).values());

@@ -589,7 +589,10 @@ TEST_F(HttpApiTest, AnalysisOfAHollowBoxFindsItsVoidItsThinWallsAndIsKept) {
   EXPECT_TRUE(a.at("mass_properties").at("mesh").at("available"));
   EXPECT_NEAR(a.at("mass_properties").at("mesh").at("volume").get<double>(), 900.0, 1e-9);
   const json& t = a.at("thickness");
-  EXPECT_EQ(t.at("min"), 2.0);  // the 2-voxel walls, exactly (even widths are exact)
+  // The 2-voxel walls. Exact on walls whose faces are flat for two voxels
+  // around (the surface fits' windows); every face of this small box is
+  // nearer an edge than that, where the fits lean: within a quarter voxel.
+  EXPECT_NEAR(t.at("min").get<double>(), 2.0, 0.25);
   EXPECT_EQ(t.at("verdict"), "fail");
   EXPECT_GE(t.at("thin_regions").at("count").get<int>(), 1);
   EXPECT_FALSE(t.at("error_bound").get<std::string>().empty());

@@ -1,9 +1,11 @@
 // Wall thickness (voxd/analysis/wall_thickness.h): medial pairs from the
-// feature transform, their balls painted largest first, and the voxels no
-// medial ball reaches filled from their neighbours.
+// feature transform, each voxel given the wall of its nearest medial voxel,
+// the junctions of walls painted by the walls' balls largest first, and the
+// few voxels left filled from their neighbours.
 #include "voxd/analysis/wall_thickness.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -78,6 +80,33 @@ SurfaceFit fit_surface(const BitVolume& solid, const glm::i64vec3& f) {
   return fit;
 }
 
+// The fits of the empty voxels a thread met last: every empty voxel on a
+// wall's face is fitted for each pair of medial voxels that sees it
+// (typically several), so a small direct-mapped cache of the fits saves
+// most of them. One per thread: no locking, same results.
+class FitCache {
+ public:
+  explicit FitCache(const BitVolume& solid) : solid_(solid), padded_(solid.grid()), keys_(kSlots, kEmpty), fits_(kSlots) {}
+  const SurfaceFit& fit(const glm::i64vec3& f) {
+    const std::uint32_t key = padded_.of(f.x, f.y, f.z);
+    const std::size_t slot = (key * 2654435761u) >> (32 - kBits);
+    if (keys_[slot] != key) {
+      keys_[slot] = key;
+      fits_[slot] = fit_surface(solid_, f);
+    }
+    return fits_[slot];
+  }
+
+ private:
+  static constexpr int kBits = 14;
+  static constexpr std::size_t kSlots = std::size_t{1} << kBits;
+  static constexpr std::uint32_t kEmpty = 0xFFFFFFFFu;  // no padded index is this (see nearest_empty.h)
+  const BitVolume& solid_;
+  PaddedIndex padded_;
+  std::vector<std::uint32_t> keys_;
+  std::vector<SurfaceFit> fits_;
+};
+
 // The wall between the empty voxels fp and fq on its two sides, seen from
 // the medial voxels p and q (p == q for a wall one voxel thick): its
 // thickness in voxels if the two surfaces face each other, else a negative
@@ -86,16 +115,24 @@ SurfaceFit fit_surface(const BitVolume& solid, const glm::i64vec3& f) {
 // edge, where a rib meets a wall), the directions from p and q to fp and fq
 // are, if both are at least two voxels long (shorter ones are the lattice's
 // steps on a convex edge, not a direction).
-double wall_between(const BitVolume& solid, const glm::i64vec3& p, const glm::i64vec3& q, const glm::i64vec3& fp,
+double wall_between(FitCache& fits, const glm::i64vec3& p, const glm::i64vec3& q, const glm::i64vec3& fp,
                     const glm::i64vec3& fq, double cos_separation) {
-  const SurfaceFit a = fit_surface(solid, fp), b = fit_surface(solid, fq);
+  const SurfaceFit a = fits.fit(fp), b = fits.fit(fq);
   if (a.valid && b.valid &&
       a.normal.x * b.normal.x + a.normal.y * b.normal.y + a.normal.z * b.normal.z <= cos_separation) {
+    // Across the wall (n, from side a to side b) through the medial
+    // location c, between the two fitted planes. Where the faces are not
+    // parallel (a tapering wall) this is the wall's section at c, not at the
+    // fits' footpoints, which lie towards the thin end.
     glm::dvec3 n = a.normal - b.normal;
     n /= std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-    const glm::dvec3 span(fq - fp);
-    const double across = span.x * n.x + span.y * n.y + span.z * n.z;
-    return std::max(0.5, across - a.offset - b.offset);
+    const glm::dvec3 c = 0.5 * (glm::dvec3(p) + glm::dvec3(q));
+    auto crossing = [&](const SurfaceFit& fit, const glm::i64vec3& f) {
+      const glm::dvec3 on_plane = glm::dvec3(f) + fit.offset * fit.normal - c;
+      return (on_plane.x * fit.normal.x + on_plane.y * fit.normal.y + on_plane.z * fit.normal.z) /
+             (n.x * fit.normal.x + n.y * fit.normal.y + n.z * fit.normal.z);
+    };
+    return std::max(0.5, crossing(b, fq) - crossing(a, fp));
   }
   // Where a rib meets a wall the fitted normals are still more than 120°
   // apart (the concave corner's normal is the bisector); on a convex edge
@@ -122,15 +159,91 @@ double wall_between(const BitVolume& solid, const glm::i64vec3& p, const glm::i6
 }
 
 // The segment across the wall between its two surfaces' empty voxels
-// (padded indices).
+// (voxel coordinates; -1 or dims for the outside).
 struct Chord {
-  std::uint32_t from = 0, to = 0;
+  glm::i32vec3 from{0}, to{0};
 };
 
 struct Medial {
   Ball ball;
   Chord chord;
+  // Squared depth a voxel of this wall may have: the ball's radius and a
+  // voxel, (r + 1)^2 (a wall's voxels beside its medial ones on the lattice).
+  std::int64_t reach2 = 0;
 };
+
+// Which medial record a medial voxel has: its rank among the set bits of
+// `centres` in memory order (a count per row, then the bits before it in
+// its row) indexes the records sorted by voxel.
+class MedialIndex {
+ public:
+  MedialIndex(const BitVolume& centres, const std::vector<Medial>& medial) : centres_(centres) {
+    const glm::i64vec3 d = centres.grid().dims;
+    ny_ = d.y;
+    by_rank_.resize(medial.size());
+    for (std::uint32_t i = 0; i < by_rank_.size(); ++i) by_rank_[i] = i;
+    std::sort(by_rank_.begin(), by_rank_.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return medial[a].ball.index < medial[b].ball.index; });
+    before_row_.assign(static_cast<std::size_t>(d.y * d.z) + 1, 0);
+    for (std::int64_t r = 0; r < d.y * d.z; ++r) {
+      const std::uint64_t* row = centres.row(r % d.y, r / d.y);
+      std::uint32_t n = 0;
+      for (std::int64_t w = 0; w < centres.row_words(); ++w) n += static_cast<std::uint32_t>(std::popcount(row[w]));
+      before_row_[static_cast<std::size_t>(r) + 1] = before_row_[static_cast<std::size_t>(r)] + n;
+    }
+  }
+  // The record of the medial voxel c.
+  std::uint32_t at(const glm::i64vec3& c) const {
+    const std::uint64_t* row = centres_.row(c.y, c.z);
+    std::uint32_t rank = before_row_[static_cast<std::size_t>(c.y + ny_ * c.z)];
+    for (std::int64_t w = 0; w < (c.x >> 6); ++w) rank += static_cast<std::uint32_t>(std::popcount(row[w]));
+    if (c.x & 63) rank += static_cast<std::uint32_t>(std::popcount(row[c.x >> 6] & ((std::uint64_t{1} << (c.x & 63)) - 1)));
+    return by_rank_[rank];
+  }
+
+ private:
+  const BitVolume& centres_;
+  std::int64_t ny_ = 0;
+  std::vector<std::uint32_t> by_rank_, before_row_;
+};
+
+// Each medial voxel's thickness becomes the mean over the medial voxels of
+// its wall within three voxels of it (those whose thickness is within a
+// voxel of its own). A single pair's thickness comes from two surface fits
+// on a voxelized face, within about half a voxel; the mean over its
+// neighbourhood on the medial sheet is within a fraction of that, and on a
+// tapering wall (thickness linear along the sheet) it is still the
+// thickness at the voxel. On a wall along the grid every pair whose fits
+// see only its flat face reads the same, and so does the mean.
+void smooth_medial_values(const BitVolume& centres, std::vector<Medial>& medial, const MedialIndex& index,
+                          int threads) {
+  const glm::i64vec3 d = centres.grid().dims;
+  std::vector<float> smoothed(medial.size());
+  const auto n = static_cast<std::int64_t>(medial.size());
+  parallel_for(0, n, std::max<std::int64_t>(1, n / (threads * 16)), threads, [&](std::int64_t a, std::int64_t b) {
+    constexpr std::int64_t R = 3;
+    for (std::int64_t r = a; r < b; ++r) {
+      const Medial& m = medial[static_cast<std::size_t>(r)];
+      const auto idx = static_cast<std::int64_t>(m.ball.index);
+      const glm::i64vec3 c{idx % d.x, (idx / d.x) % d.y, idx / (d.x * d.y)};
+      double sum = 0.0;
+      int count = 0;
+      for (std::int64_t z = std::max<std::int64_t>(0, c.z - R); z <= std::min(d.z - 1, c.z + R); ++z)
+        for (std::int64_t y = std::max<std::int64_t>(0, c.y - R); y <= std::min(d.y - 1, c.y + R); ++y)
+          for (std::int64_t x = std::max<std::int64_t>(0, c.x - R); x <= std::min(d.x - 1, c.x + R); ++x) {
+            const glm::i64vec3 q{x, y, z};
+            if (norm2(q - c) > R * R || !centres.get(x, y, z)) continue;
+            const Medial& other = medial[index.at(q)];
+            const float v = other.ball.value;
+            if (std::abs(v - m.ball.value) > 1.0f) continue;
+            sum += v;
+            ++count;
+          }
+      smoothed[static_cast<std::size_t>(r)] = static_cast<float>(sum / count);
+    }
+  });
+  for (std::size_t i = 0; i < medial.size(); ++i) medial[i].ball.value = smoothed[i];
+}
 
 // The medial voxels: each with its ball (its own distance to the surface)
 // and the wall's thickness there (the mean over the pairs it is part of).
@@ -146,6 +259,7 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
   const std::int64_t grain = std::max<std::int64_t>(1, d.z / (static_cast<std::int64_t>(threads) * 8));
   parallel_for(0, d.z, grain, threads, [&](std::int64_t k0, std::int64_t k1) {
     std::vector<Medial> found;
+    FitCache fits(solid);
     for (std::int64_t k = k0; k < k1; ++k) {
       progress.check_cancelled();
       for (std::int64_t j = 0; j < d.y; ++j) {
@@ -160,11 +274,11 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
             int count = 0;
             Chord chord;
             auto add = [&](const glm::i64vec3& q, const glm::i64vec3& f1, const glm::i64vec3& f2) {
-              const double t = wall_between(solid, p, q, f1, f2, cos_separation);
+              const double t = wall_between(fits, p, q, f1, f2, cos_separation);
               if (t < 0) return;
               sum += t;
               ++count;
-              chord = {padded.of(f1.x, f1.y, f1.z), padded.of(f2.x, f2.y, f2.z)};
+              chord = {glm::i32vec3(f1), glm::i32vec3(f2)};
             };
             for (int axis = 0; axis < 3; ++axis) {
               bool empty_both = true;
@@ -192,7 +306,7 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
             if (count == 0) continue;
             found.push_back({{static_cast<std::uint64_t>(i + d.x * (j + d.y * k)), static_cast<std::uint32_t>(u2),
                               static_cast<float>(sum / count)},
-                             chord});
+                             chord, u2 + 2 * detail::ceil_sqrt(u2) + 1});
           }
         });
       }
@@ -212,52 +326,128 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
   return balls;
 }
 
-// Each medial voxel's value along its chord, the segment across the wall
-// through it: a voxel takes the thickness of its own cross-section of the
-// wall. Balls alone would give a voxel of a tapering wall the value of a
-// thicker section nearby (a ball reaches half its diameter along the wall),
-// which moves where a thin region starts by half the threshold. Largest
-// ball first, the first chord to reach a voxel sets it. Returns the filled
-// voxels no chord reached, left to the balls: the sides of curved walls
-// between chords, the ends and edges of walls. On a flat wall the chords
-// cover nearly all of it, and its balls, the costliest part to paint (a
-// plate T voxels thick has T^2 rows per ball), have little left to do.
-BitVolume paint_chords(const BitVolume& solid, const std::vector<Medial>& medial, DenseVolume<float>& out) {
+// Until a filled voxel has its wall, `out` holds minus its squared depth
+// (the squared distance to its nearest empty voxel, at least 1), so the
+// feature transform's memory can be reused for the nearest medial voxels
+// while the depths stay at hand. Walls are at least half a voxel thick, so
+// a negative value is a voxel still to paint.
+void store_depths(const BitVolume& solid, const DenseVolume<std::uint32_t>& nearest, DenseVolume<float>& out,
+                  int threads) {
   const glm::i64vec3 d = solid.grid().dims;
   const PaddedIndex padded(solid.grid());
+  parallel_for(0, d.z, std::max<std::int64_t>(1, d.z / (threads * 8)), threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < d.y; ++j)
+        detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
+          float* row = out.slab(k) + j * d.x;
+          for (std::int64_t i = a; i < b; ++i)
+            row[i] = -static_cast<float>(norm2(padded.at(nearest.at(i, j, k)) - glm::i64vec3{i, j, k}));
+        });
+  });
+}
+
+inline std::int64_t depth2_of(const DenseVolume<float>& out, std::int64_t x, std::int64_t y, std::int64_t z) {
+  return static_cast<std::int64_t>(-out.at(x, y, z));
+}
+
+// Nearest voxel of a point no further than a few voxels outside the grid
+// (truncation of a positive number is its floor).
+inline glm::i64vec3 rounded(const glm::dvec3& p) {
+  constexpr double kBias = 1024.0;
+  return {static_cast<std::int64_t>(p.x + 0.5 + kBias) - 1024, static_cast<std::int64_t>(p.y + 0.5 + kBias) - 1024,
+          static_cast<std::int64_t>(p.z + 0.5 + kBias) - 1024};
+}
+
+// Each filled voxel takes the wall of its nearest medial voxel (`nearest`
+// holds the nearest medial voxels now), when it lies in that wall: no
+// deeper than the wall's ball and a voxel (a deeper voxel belongs to a
+// thicker wall: under a rib's root), between the wall's two faces (its
+// projection on the chord within a voxel and a half of the chord), and
+// with the wall's faces on both sides of it (the chord moved to it, across
+// the wall, ends outside the solid, or within two voxels further out: at a
+// rib's root the moved chord ends inside the wall the rib stands on). The
+// nearest medial point is the foot of the voxel's own cross-section of the
+// wall, so a tapering wall reads its thickness where the voxel is, and the
+// ends and edges of a wall take the wall they end. Returns the filled
+// voxels this leaves (junctions of walls), for the balls.
+BitVolume paint_nearest_walls(const BitVolume& solid, const DenseVolume<std::uint32_t>& nearest,
+                              const std::vector<Medial>& medial, const MedialIndex& index, DenseVolume<float>& out,
+                              int threads, const detail::ProgressSpan& progress) {
+  const Grid& grid = solid.grid();
+  const glm::i64vec3 d = grid.dims;
+  const PaddedIndex padded(grid);
+  auto filled = [&](const glm::i64vec3& p) {
+    return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < d.x && p.y < d.y && p.z < d.z && solid.get(p.x, p.y, p.z);
+  };
+  // Whether the face at `end` of the chord, moved across the wall, is
+  // still there: the moved end, or a voxel or two further out along
+  // `out_dir`, is outside the solid (the voxel lattice puts a face's empty
+  // voxels anywhere within a voxel of it).
+  auto face_at = [&](const glm::dvec3& end, const glm::dvec3& out_dir) {
+    for (int t = 0; t <= 2; ++t)
+      if (!filled(rounded(end + out_dir * static_cast<double>(t)))) return true;
+    return false;
+  };
   BitVolume left = solid.clone();
-  for (const Medial& m : medial) {
-    const glm::dvec3 a(padded.at(m.chord.from)), b(padded.at(m.chord.to));
-    const glm::dvec3 span = b - a;
-    const double length = std::sqrt(span.x * span.x + span.y * span.y + span.z * span.z);
-    const int steps = static_cast<int>(std::ceil(length * 4.0));
-    for (int s = 1; s < steps; ++s) {
-      const glm::dvec3 at = a + span * (static_cast<double>(s) / steps);
-      const auto i = static_cast<std::int64_t>(std::lround(at.x)), j = static_cast<std::int64_t>(std::lround(at.y)),
-                 k = static_cast<std::int64_t>(std::lround(at.z));
-      if (i < 0 || j < 0 || k < 0 || i >= d.x || j >= d.y || k >= d.z) continue;
-      if (!left.get(i, j, k)) continue;
-      left.set(i, j, k, false);
-      out.at(i, j, k) = m.ball.value;
+  const std::int64_t grain = std::max<std::int64_t>(1, d.z / (static_cast<std::int64_t>(threads) * 8));
+  parallel_for(0, d.z, grain, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k) {
+      progress.check_cancelled();
+      for (std::int64_t j = 0; j < d.y; ++j) {
+        float* out_row = out.slab(k) + j * d.x;
+        std::uint64_t* left_row = left.row(j, k);
+        // Neighbours along a row mostly share their nearest medial voxel.
+        std::uint32_t last_site = detail::kNoNearestVoxel;
+        const Medial* m = nullptr;
+        glm::i64vec3 c{0}, from{0}, span{0};
+        glm::dvec3 unit{0.0};
+        double length = 0.0, length2 = 0.0;
+        detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
+          for (std::int64_t i = a; i < b; ++i) {
+            const std::uint32_t site = nearest.at(i, j, k);
+            if (site == detail::kNoNearestVoxel) continue;
+            if (site != last_site) {
+              last_site = site;
+              c = padded.at(site);
+              m = &medial[index.at(c)];
+              from = glm::i64vec3(m->chord.from);
+              span = glm::i64vec3(m->chord.to) - from;
+              length2 = static_cast<double>(norm2(span));
+              length = std::sqrt(length2);
+              unit = glm::dvec3(span) / length;
+            }
+            const glm::i64vec3 v{i, j, k};
+            if (c != v) {
+              if (static_cast<std::int64_t>(-out_row[i]) >= m->reach2) continue;
+              const glm::i64vec3 rel = v - from;
+              const auto along = static_cast<double>(rel.x * span.x + rel.y * span.y + rel.z * span.z);
+              if (along < -1.5 * length || along > length2 + 1.5 * length) continue;
+              const glm::dvec3 shift = glm::dvec3(rel) - glm::dvec3(span) * (along / length2);
+              if (!face_at(glm::dvec3(from) + shift, -unit) || !face_at(glm::dvec3(from + span) + shift, unit)) continue;
+            }
+            out_row[i] = m->ball.value;
+            left_row[i >> 6] &= ~(std::uint64_t{1} << (i & 63));
+          }
+        });
+      }
     }
-  }
+  });
   return left;
 }
 
-// The filled voxels no medial ball reached take, layer by layer outwards
+// The filled voxels nothing else reached take, layer by layer outwards
 // from the painted ones, the largest value among their 26 neighbours of the
 // layers before. A piece with no medial voxel at all (a fragment with no two
 // surfaces facing each other) keeps its own ball's diameter less one voxel.
-void fill_unreached(const BitVolume& solid, const DenseVolume<std::uint32_t>& nearest, DenseVolume<float>& out) {
+void fill_unreached(const BitVolume& solid, DenseVolume<float>& out) {
   const glm::i64vec3 d = solid.grid().dims;
   std::vector<std::int64_t> left;
-  // Voxels no ball and no chord reached keep 0 until filled here.
   for (std::int64_t k = 0; k < d.z; ++k)
     for (std::int64_t j = 0; j < d.y; ++j)
       detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
         const float* row = out.slab(k) + j * d.x;
         for (std::int64_t i = a; i < b; ++i)
-          if (row[i] == 0.0f) left.push_back(i + d.x * (j + d.y * k));
+          if (row[i] < 0.0f) left.push_back(i + d.x * (j + d.y * k));
       });
   std::vector<std::pair<std::int64_t, float>> layer;
   while (!left.empty()) {
@@ -265,7 +455,7 @@ void fill_unreached(const BitVolume& solid, const DenseVolume<std::uint32_t>& ne
     std::vector<std::int64_t> still;
     for (std::int64_t index : left) {
       const std::int64_t x = index % d.x, y = (index / d.x) % d.y, z = index / (d.x * d.y);
-      float best = 0.0f;
+      float best = 0.0f;  // unpainted neighbours hold negative depths
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
@@ -280,11 +470,9 @@ void fill_unreached(const BitVolume& solid, const DenseVolume<std::uint32_t>& ne
       }
     }
     if (layer.empty()) {
-      const PaddedIndex padded(solid.grid());
       for (std::int64_t index : still) {
-        const glm::i64vec3 p{index % d.x, (index / d.x) % d.y, index / (d.x * d.y)};
-        const double r = std::sqrt(static_cast<double>(norm2(padded.at(nearest.values()[static_cast<std::size_t>(index)]) - p)));
-        out.values()[static_cast<std::size_t>(index)] = static_cast<float>(std::max(1.0, 2.0 * r - 1.0));
+        float& value = out.values()[static_cast<std::size_t>(index)];
+        value = static_cast<float>(std::max(1.0, 2.0 * std::sqrt(static_cast<double>(-value)) - 1.0));
       }
       break;
     }
@@ -301,11 +489,18 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
   const detail::ProgressSpan progress{control, 0.0, 1.0};
   DenseVolume<float> out(grid, 0.0f);
   if (grid.voxel_count() == 0) return out;
-  const DenseVolume<std::uint32_t> nearest = detail::nearest_empty_voxels(solid, nthreads, control, 0.0, 0.4);
+  DenseVolume<std::uint32_t> nearest = detail::nearest_empty_voxels(solid, nthreads, control, 0.0, 0.3);
   BitVolume centres(grid);
-  const std::vector<Medial> medial = medial_voxels(solid, nearest, centres, nthreads, progress.part(0.4, 0.5));
-  progress.report(0.5);
-  const PaddedIndex padded(grid);
+  std::vector<Medial> medial = medial_voxels(solid, nearest, centres, nthreads, progress.part(0.3, 0.45));
+  const MedialIndex index(centres, medial);
+  smooth_medial_values(centres, medial, index, nthreads);
+  store_depths(solid, nearest, out, nthreads);
+  detail::nearest_marked_voxels(centres, nearest, nthreads, control, 0.45, 0.65);
+  const BitVolume left = paint_nearest_walls(solid, nearest, medial, index, out, nthreads, progress.part(0.65, 0.75));
+  nearest = {};
+  // The junctions of walls (a rib's root in the wall it stands on), where
+  // no wall's nearest medial voxel took them: the balls of the walls,
+  // largest first, so the thickest wall a voxel is part of owns it.
   const glm::i64vec3 d = grid.dims;
   std::size_t next = 0;
   const detail::BallSource source = [&](Ball& ball) {
@@ -317,7 +512,7 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
   const detail::BallContained contained = [&](std::int64_t x, std::int64_t y, std::int64_t z, std::int64_t r2) {
     return detail::inside_a_neighbour(d, x, y, z, r2, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
       if (!centres.get(i, j, k)) return std::int64_t{0};
-      return norm2(padded.at(nearest.at(i, j, k)) - glm::i64vec3{i, j, k});
+      return static_cast<std::int64_t>(medial[index.at({i, j, k})].ball.r2);
     });
   };
   // A wall's ball paints only the voxels between the wall's two faces:
@@ -328,42 +523,35 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
   // would give them the rib's value; they lie outside the rib's faces.
   const detail::BallAccepts between_faces = [&](const Ball& ball, std::int64_t x, std::int64_t y, std::int64_t z) {
     const Chord& chord = medial[ball.tag].chord;
-    const glm::i64vec3 from = padded.at(chord.from);
-    const glm::i64vec3 span = padded.at(chord.to) - from;
+    const glm::i64vec3 from(chord.from), span = glm::i64vec3(chord.to) - from;
     const glm::i64vec3 v = glm::i64vec3{x, y, z} - from;
     const std::int64_t along = v.x * span.x + v.y * span.y + v.z * span.z;
     return along >= 0 && along <= norm2(span);
   };
-  // And only voxels nearer the surface than the ball's radius, or medial
-  // voxels themselves: within a wall, only its medial voxels are as deep
-  // as its balls are wide. A voxel as deep or deeper belongs to a thicker
-  // wall whose balls missed it (under a rib's root, near the end face of
-  // the wall it stands on). The wall's own voxels this misses on the
-  // lattice are painted by the grown balls below, with the same values.
+  // And only voxels nearer the surface than the ball's radius (medial
+  // voxels have their wall already): within a wall, only its medial voxels
+  // are as deep as its balls are wide. A voxel as deep or deeper belongs to
+  // a thicker wall whose balls missed it (under a rib's root, near the end
+  // face of the wall it stands on). The wall's own voxels this misses on
+  // the lattice are painted by the grown balls below, with the same values.
   const detail::BallAccepts in_the_wall = [&](const Ball& ball, std::int64_t x, std::int64_t y, std::int64_t z) {
-    return (centres.get(x, y, z) ||
-            norm2(padded.at(nearest.at(x, y, z)) - glm::i64vec3{x, y, z}) < static_cast<std::int64_t>(ball.r2)) &&
-           between_faces(ball, x, y, z);
+    return depth2_of(out, x, y, z) < static_cast<std::int64_t>(ball.r2) && between_faces(ball, x, y, z);
   };
-  // Chords first: a voxel on a chord takes the chord's value whatever
-  // ball contains it, so the balls paint only what the chords left.
-  const BitVolume off_chords = paint_chords(solid, medial, out);
-  detail::paint_balls_largest_first(off_chords, out, source, contained, {}, nthreads, progress.part(0.5, 0.8),
-                                    in_the_wall);
-  // The edges and corners of walls, which no medial ball reaches: the ball
-  // at a wall's end is r from the end face, and the edge's corner lies up
-  // to sqrt(3) r from it (a cube's corner). Each such voxel takes the
-  // largest wall whose ball, grown by sqrt(3) and a voxel, reaches it and
-  // whose faces it lies between. These voxels are few, so the engine goes
-  // straight to its sparse phase.
+  detail::paint_balls_largest_first(left, out, source, contained, {}, nthreads, progress.part(0.75, 0.85), in_the_wall);
+  // The edges and corners of walls at their junctions, which no medial
+  // ball reaches: the ball at a wall's end is r from the end face, and the
+  // edge's corner lies up to sqrt(3) r from it (a cube's corner). Each such
+  // voxel takes the largest wall whose ball, grown by sqrt(3) and a voxel,
+  // reaches it and whose faces it lies between. These voxels are few, so
+  // the engine goes straight to its sparse phase.
   BitVolume edges(grid);
   std::int64_t edge_voxels = 0;
   for (std::int64_t k = 0; k < d.z; ++k)
     for (std::int64_t j = 0; j < d.y; ++j)
-      detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
+      detail::for_each_row_run(left.row(j, k), left.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
         const float* row = out.slab(k) + j * d.x;
         for (std::int64_t i = a; i < b; ++i)
-          if (row[i] == 0.0f) {
+          if (row[i] < 0.0f) {
             edges.set(i, j, k, true);
             ++edge_voxels;
           }
@@ -380,9 +568,9 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
     sparse_only.sparse_from = INT64_MAX;
     detail::paint_balls_largest_first(
         edges, out, grown, [](std::int64_t, std::int64_t, std::int64_t, std::int64_t) { return false; }, sparse_only,
-        nthreads, progress.part(0.8, 0.95), between_faces);
+        nthreads, progress.part(0.85, 0.95), between_faces);
   }
-  fill_unreached(solid, nearest, out);
+  fill_unreached(left, out);
   progress.report(1.0);
   return out;
 }
@@ -395,7 +583,7 @@ std::string wall_thickness_error_statement(double voxel_size) {
   std::snprintf(text, sizeof text,
                 "within -%g to +%g voxels (-%g to +%g model units) of the distance between the wall's two faces: "
                 "the voxelization places each face anywhere within a voxel; a wall along the grid axes N voxels "
-                "thick reports exactly N",
+                "thick reports exactly N where its faces are flat for two voxels around",
                 b.below_voxels, b.above_voxels, b.below_voxels * voxel_size, b.above_voxels * voxel_size);
   return text;
 }

@@ -24,33 +24,51 @@
 //    around those empty voxels (5^3 windows) face each other (150°); where a
 //    fit cannot be trusted (at a concave edge, where a rib meets a wall, the
 //    fitted normal is the corner's bisector) the lattice directions decide;
-//  - the thickness is the distance between the two fitted planes, each
-//    placed from the window's filled-voxel count, so a wall along the grid
-//    axes N voxels thick reads exactly N;
-//  - each medial voxel paints its chord (the segment across the wall through
-//    it), then its ball (largest first, the painting engine of local
-//    thickness, analysis/ball_painting.h) the rest, both only between the
-//    wall's two faces and only voxels no deeper than the ball; edges and
-//    corners then take the largest wall whose ball, grown by sqrt(3),
-//    reaches them between its faces, and the last few their neighbours'.
+//  - the thickness at a medial voxel is the wall's section through it: the
+//    distance between the two fitted planes along their common normal, each
+//    plane placed from its window's filled-voxel count (so a wall along the
+//    grid axes N voxels thick reads exactly N; between faces that are not
+//    parallel, the section at the medial voxel, not at the fits'
+//    footpoints), then averaged over the medial voxels of the same wall
+//    within 3 voxels, which takes most of the lattice's noise out of the
+//    fits and keeps a linear taper's value where it is;
+//  - every filled voxel takes the wall of its NEAREST medial voxel (a
+//    second feature transform, of the medial voxels), if it lies in that
+//    wall: no deeper than the wall's ball and a voxel, between its two
+//    faces, and with both faces still there when the wall's chord is moved
+//    across to it. The nearest medial point is the foot of the voxel's own
+//    cross-section, so a tapering wall reads its section where the voxel
+//    is, and a wall's ends and edges take the wall they end;
+//  - what that leaves (junctions: a rib's root inside the wall it stands
+//    on) is painted by the walls' balls, largest first (the painting engine
+//    of local thickness, analysis/ball_painting.h), so the thickest wall a
+//    voxel is part of owns it; their edges by the balls grown by sqrt(3),
+//    and the last few take their neighbours' values.
 //
 // Error bound (wall_thickness_error_bound()): within one voxel of the
 // distance between the faces for walls with parallel or gently curved faces
 // at any orientation: the voxelization itself puts a face anywhere within a
-// voxel. Exact (the voxel count) for walls along the grid axes. Tested on
+// voxel. Exact (the voxel count) for walls along the grid axes where their
+// faces are flat for two voxels around (nearer an edge, the fits lean: a
+// 2-voxel wall beside a 5-voxel cavity reads 2.2). Tested on
 // plates (sharp, chamfered, rotated 30° about two axes, three voxel sizes),
-// tubes, spherical shells and an L-bracket with a thin fin. So a wall at
-// least min_wall + 1 voxel thick is never reported thin. Limits: a round
-// bar (no parallel faces) reads up to a few voxels under its diameter off
-// its centre when it is under about 30 voxels across; a wall tapering by
-// less than a voxel per 5 voxels along the grid is a staircase in the voxel
-// model, and reads as the staircase's steps.
+// tubes, spherical shells, an L-bracket with a thin fin, and wedges turned
+// off the grid, whose region under min_wall ends within a voxel of where
+// their section crosses it. So a wall at least min_wall + 1 voxel thick is
+// never reported thin. Limits: a round bar (no parallel faces) reads up to
+// a few voxels under its diameter off its centre when it is under about 30
+// voxels across; at the end faces of a tapering wall (within half its
+// thickness of them) a voxel takes the medial surface's ragged edge, up to
+// three voxels along the taper; a wall tapering by less than a voxel per 5
+// voxels along the grid is a staircase in the voxel model, and reads as the
+// staircase's steps.
 //
-// Cost: the feature transform (about twice the distance transform's), one
-// pass over the voxels for the medial pairs, and the painting. Memory: one
-// uint32 per voxel (the feature transform), the float result, a few bits
-// per voxel, 16 bytes per medial voxel and per voxel left to the balls'
-// sparse phase.
+// Cost: two feature transforms (each about twice the distance
+// transform's), one pass over the voxels for the medial pairs and one to
+// give each voxel its wall; the balls only at junctions. Memory: one
+// uint32 per voxel (the feature transforms, one after the other in the
+// same volume), the float result, a few bits per voxel, and about 64 bytes
+// per medial voxel.
 #include <string>
 
 #include "voxd/bit_volume.h"
