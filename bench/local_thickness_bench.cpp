@@ -1,8 +1,10 @@
 // Distance transform and local thickness of the benchmark mesh (a thick
-// tilted torus) voxelized at 256^3 and 512^3: the wall thickness analysis a
+// tilted torus) voxelized at 256^3 and 512^3: the thickness analyses a
 // part review runs after voxelizing. Also two machined parts from shared/
-// meshes (a hex nut and a screw: sharp edges and thread crests keep voxels
-// unpainted until the smallest balls, the slow case of the method) at 512^3.
+// meshes (a hex nut and a screw: for local thickness, sharp edges and
+// thread crests keep voxels unpainted until the smallest balls, its slow
+// case; for wall thickness, the nut's thick flat plate is a large medial
+// sheet) at 512^3.
 // Counters: filled voxels.
 #include <benchmark/benchmark.h>
 
