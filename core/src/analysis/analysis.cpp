@@ -31,12 +31,16 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
     t.stats = thickness_statistics(map, options.histogram_bins);
     t.min_wall_voxels = options.min_wall_voxels;
     t.max_wall_voxels = options.max_wall_voxels;
+    // Beyond the thresholds by more than the reading's noise (see
+    // kWallReportTolerance).
     if (options.min_wall_voxels > 0)
-      t.thin_regions = find_thickness_regions(map, ThicknessRegionKind::thin, static_cast<float>(options.min_wall_voxels),
-                                              options.min_region_voxels);
+      t.thin_regions = find_thickness_regions(
+          map, ThicknessRegionKind::thin, static_cast<float>(options.min_wall_voxels - kWallReportTolerance),
+          options.min_region_voxels);
     if (options.max_wall_voxels > 0)
-      t.thick_regions = find_thickness_regions(map, ThicknessRegionKind::thick, static_cast<float>(options.max_wall_voxels),
-                                               options.min_region_voxels);
+      t.thick_regions = find_thickness_regions(
+          map, ThicknessRegionKind::thick, static_cast<float>(options.max_wall_voxels + kWallReportTolerance),
+          options.min_region_voxels);
     report.thickness = std::move(t);
   }
   step(1.0);

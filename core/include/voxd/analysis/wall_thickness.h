@@ -77,6 +77,14 @@
 
 namespace voxd {
 
+// How far under min_wall (over max_wall) a wall must read, in voxels, for
+// the report to call it thin (thick). On flat faces at any orientation a
+// wall reads within a tenth of a voxel of its thickness (plates turned 30°
+// about two axes: -0.09 to +0.04 voxel), so a wall exactly min_wall thick
+// would otherwise fail by the lattice's noise; a quarter voxel is well
+// inside the error bound.
+inline constexpr double kWallReportTolerance = 0.25;
+
 // The smallest angle between the directions to a medial point's two nearest
 // surface points for it to be inside a wall rather than at an edge.
 inline constexpr double kWallSeparationDegrees = 150.0;
