@@ -55,7 +55,8 @@
 // tubes, spherical shells, an L-bracket with a thin fin, and wedges turned
 // off the grid, whose region under min_wall ends within a voxel of where
 // their section crosses it. So a wall at least min_wall + 1 voxel thick is
-// never reported thin. Limits: a round bar (no parallel faces) reads up to
+// never reported thin, and one with flat faces at least min_wall thick
+// neither (kWallReportTolerance). Limits: a round bar (no parallel faces) reads up to
 // a few voxels under its diameter off its centre when it is under about 30
 // voxels across; at the end faces of a tapering wall (within half its
 // thickness of them) a voxel takes the medial surface's ragged edge, up to
