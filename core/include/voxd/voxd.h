@@ -39,8 +39,10 @@
 #include "voxd/analysis/sdf_render.h"
 #include "voxd/analysis/section.h"
 #include "voxd/analysis/skin_removal.h"
+#include "voxd/analysis/thickness_error.h"
 #include "voxd/analysis/thickness_regions.h"
 #include "voxd/analysis/value_images.h"
+#include "voxd/analysis/wall_thickness.h"
 
 #include "voxd/encode/colour_map.h"
 #include "voxd/encode/magica_vox.h"

@@ -9,7 +9,6 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <mutex>
 
@@ -182,18 +181,13 @@ ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, in
   return st;
 }
 
-ThicknessErrorBound thickness_error_bound() { return {}; }
+ThicknessErrorBound thickness_error_bound() { return {1.0, 2.0}; }
 
 std::string thickness_error_statement(double voxel_size) {
-  const ThicknessErrorBound b = thickness_error_bound();
-  char text[512];
-  std::snprintf(text, sizeof text,
-                "-%g to +%g voxels (-%g to +%g model units) against the mesh's wall thickness, away from convex "
-                "edges and corners (where the largest ball containing a point is smaller by definition): the "
-                "voxelization places each face anywhere within a voxel, and a wall N voxels thick reports N (even N) "
-                "or N + 1 (odd N)",
-                b.below_voxels, b.above_voxels, b.below_voxels * voxel_size, b.above_voxels * voxel_size);
-  return text;
+  return voxels_and_model_units(thickness_error_bound(), voxel_size) +
+         " against the mesh's wall thickness, away from convex edges and corners (where the largest ball containing "
+         "a point is smaller by definition): the voxelization places each face anywhere within a voxel, and a wall N "
+         "voxels thick reports N (even N) or N + 1 (odd N)";
 }
 
 }  // namespace voxd

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstdio>
 #include <mutex>
 #include <vector>
 
@@ -575,17 +574,13 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
   return out;
 }
 
-WallThicknessErrorBound wall_thickness_error_bound() { return {}; }
+ThicknessErrorBound wall_thickness_error_bound() { return {1.0, 1.0}; }
 
 std::string wall_thickness_error_statement(double voxel_size) {
-  const WallThicknessErrorBound b = wall_thickness_error_bound();
-  char text[512];
-  std::snprintf(text, sizeof text,
-                "within -%g to +%g voxels (-%g to +%g model units) of the distance between the wall's two faces: "
-                "the voxelization places each face anywhere within a voxel; a wall along the grid axes N voxels "
-                "thick reports exactly N where its faces are flat for two voxels around",
-                b.below_voxels, b.above_voxels, b.below_voxels * voxel_size, b.above_voxels * voxel_size);
-  return text;
+  return "within " + voxels_and_model_units(wall_thickness_error_bound(), voxel_size) +
+         " of the distance between the wall's two faces: the voxelization places each face anywhere within a "
+         "voxel; a wall along the grid axes N voxels thick reports exactly N where its faces are flat for two "
+         "voxels around";
 }
 
 }  // namespace voxd

@@ -54,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "voxd/analysis/thickness_error.h"
 #include "voxd/bit_volume.h"
 #include "voxd/dense_volume.h"
 #include "voxd/progress.h"
@@ -93,11 +94,7 @@ ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, in
 // on voxel centres (under one voxel for radii of a few voxels). At convex
 // edges and corners the definition itself gives less than the wall: the
 // ball that spans the wall does not reach into the corner.
-struct ThicknessErrorBound {
-  double below_voxels = 1.0;  // reported >= true - below_voxels
-  double above_voxels = 2.0;  // reported <= true + above_voxels
-};
-ThicknessErrorBound thickness_error_bound();
+ThicknessErrorBound thickness_error_bound();  // -1 to +2 voxels
 // The bound as a sentence for reports, in voxels and in model units, e.g.
 // "-1 to +2 voxels (-0.1 to +0.2 model units) ...".
 std::string thickness_error_statement(double voxel_size);

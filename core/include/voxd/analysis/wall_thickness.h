@@ -72,6 +72,7 @@
 // per medial voxel.
 #include <string>
 
+#include "voxd/analysis/thickness_error.h"
 #include "voxd/bit_volume.h"
 #include "voxd/dense_volume.h"
 #include "voxd/progress.h"
@@ -95,11 +96,7 @@ inline constexpr double kWallSeparationDegrees = 150.0;
 // to 1 and cancellation (Error(cancelled)) is honoured.
 DenseVolume<float> wall_thickness(const BitVolume& solid, int threads = 0, JobControl* control = nullptr);
 
-struct WallThicknessErrorBound {
-  double below_voxels = 1.0;  // reported > true - below_voxels
-  double above_voxels = 1.0;  // reported < true + above_voxels
-};
-WallThicknessErrorBound wall_thickness_error_bound();
+ThicknessErrorBound wall_thickness_error_bound();  // -1 to +1 voxels
 // The bound as a sentence for reports, in voxels and model units.
 std::string wall_thickness_error_statement(double voxel_size);
 
