@@ -24,6 +24,12 @@ using detail::PaddedIndex;
 
 inline std::int64_t norm2(const glm::i64vec3& v) { return v.x * v.x + v.y * v.y + v.z * v.z; }
 
+// Whether voxel p is filled; outside the grid nothing is.
+inline bool filled_at(const BitVolume& solid, const glm::i64vec3& p) {
+  const glm::i64vec3 d = solid.grid().dims;
+  return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < d.x && p.y < d.y && p.z < d.z && solid.get(p.x, p.y, p.z);
+}
+
 // The surface near an empty voxel f next to the solid, fitted from the
 // voxels around it: the inward normal (towards the solid's voxels within
 // two voxels) and the plane's offset from f along it. The offset is where
@@ -41,10 +47,7 @@ struct SurfaceFit {
 };
 
 SurfaceFit fit_surface(const BitVolume& solid, const glm::i64vec3& f) {
-  const glm::i64vec3 d = solid.grid().dims;
-  auto filled = [&](const glm::i64vec3& p) {
-    return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < d.x && p.y < d.y && p.z < d.z && solid.get(p.x, p.y, p.z);
-  };
+  auto filled = [&](const glm::i64vec3& p) { return filled_at(solid, p); };
   SurfaceFit fit;
   glm::dvec3 g{0.0};
   for (int z = -2; z <= 2; ++z)
@@ -375,9 +378,7 @@ BitVolume paint_nearest_walls(const BitVolume& solid, const DenseVolume<std::uin
   const Grid& grid = solid.grid();
   const glm::i64vec3 d = grid.dims;
   const PaddedIndex padded(grid);
-  auto filled = [&](const glm::i64vec3& p) {
-    return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < d.x && p.y < d.y && p.z < d.z && solid.get(p.x, p.y, p.z);
-  };
+  auto filled = [&](const glm::i64vec3& p) { return filled_at(solid, p); };
   // Whether the face at `end` of the chord, moved across the wall, is
   // still there: the moved end, or a voxel or two further out along
   // `out_dir`, is outside the solid (the voxel lattice puts a face's empty
