@@ -25,7 +25,11 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
   step(0.7);
   if (options.thickness) {
     std::optional<DenseVolume<float>> computed;
-    if (options.cleanup || !options.thickness_map) computed = wall_thickness(v, options.threads, control);
+    if (options.cleanup || !options.thickness_map) {
+      // The thickness reports 0..1 of the last three tenths of the bar.
+      const NestedSpan thickness_share(control, 0.7, 1.0);
+      computed = wall_thickness(v, options.threads, control);
+    }
     const DenseVolume<float>& map = computed ? *computed : *options.thickness_map;
     ThicknessAnalysis t;
     t.stats = thickness_statistics(map, options.histogram_bins);

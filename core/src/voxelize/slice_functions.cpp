@@ -157,15 +157,6 @@ class SliceShader {
   std::optional<detail::PerlinNoise> noise_;
 };
 
-// Puts the caller's progress span back however the stage ends.
-struct SpanRestore {
-  JobControl* control;
-  double begin, end;
-  ~SpanRestore() {
-    if (control) control->set_span(begin, end);
-  }
-};
-
 }  // namespace
 
 glm::dvec3 SliceFrame::coordinates(const glm::dvec3& p) const {
@@ -275,11 +266,13 @@ DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const Slic
   const SliceFrame frame = make_slice_frame(mesh, options.axis);
   const SliceShader shader(options, frame);
 
-  const SpanRestore restore{control, control ? control->span_begin() : 0.0, control ? control->span_end() : 1.0};
-  const double middle = restore.begin + 0.5 * (restore.end - restore.begin);
-  if (control) control->set_span(restore.begin, middle);
-  const BitVolume solid = voxelize(mesh, grid, {VoxelMode::solid, options.inside, options.threads}, control);
-  if (control) control->set_span(middle, restore.end);
+  // The solid takes the first half of the caller's share of the bar, the
+  // colours the second.
+  const BitVolume solid = [&] {
+    const NestedSpan first_half(control, 0.0, 0.5);
+    return voxelize(mesh, grid, {VoxelMode::solid, options.inside, options.threads}, control);
+  }();
+  const NestedSpan second_half(control, 0.5, 1.0);
 
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
   if (grid.voxel_count() == 0) return DenseVolume<Rgba8>(grid);
