@@ -152,6 +152,7 @@ VoxelJobResult begin_voxel_job(PreparedVoxelJob& job, bool with_report, JobContr
   result.timings = std::move(job.timings);
   if (control) control->check_cancelled();
   if (with_report) {
+    if (control) control->set_stage("mesh report");
     result.report = make_mesh_report(job.mesh);
     result.timings.add("report", clock.lap());
   }
@@ -184,6 +185,7 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
     if (control) control->set_span(b, e);
   };
   const bool parity_solid = mode.needs_parity_solid(job.params);
+  if (control) control->set_stage("voxelize");
   if (parity_solid) {
     span(begin, begin + 0.1 * (end - begin));
     VoxelizeOptions options;
@@ -192,6 +194,7 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
     result.volume = voxelize(job.mesh, job.grid, options, control);
     result.timings.add("voxelize", clock.lap());
     span(begin + 0.1 * (end - begin), end);
+    if (control) control->set_stage(std::string(mode.stage_name()));
   }
   api::ModeResult made = mode.run({job.mesh, job.grid, job.params, threads, control, parity_solid ? &result.volume : nullptr});
   span(begin, end);
@@ -223,6 +226,7 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
   // made first, in a tenth of the progress bar.
   const double begin = control ? control->span_begin() : 0.0, end = control ? control->span_end() : 1.0;
   const bool parity_solid = mode.needs_parity_solid(job.params);
+  if (control) control->set_stage("voxelize");
   if (parity_solid) {
     if (control) control->set_span(begin, begin + 0.1 * (end - begin));
     VoxelizeOptions options;
@@ -231,6 +235,7 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
     voxelize_streamed(job.mesh, job.grid, options, slab_layers, bits, control);
     result.timings.add("voxelize+write", clock.lap());
     if (control) control->set_span(begin + 0.1 * (end - begin), end);
+    if (control) control->set_stage(std::string(mode.stage_name()));
   }
   result.values_info = mode.run_streamed({job.mesh, job.grid, job.params, threads, control, nullptr}, slab_layers,
                                          parity_solid ? BitSlabConsumer([](std::int64_t, const BitVolume&) {}) : bits,

@@ -1,5 +1,6 @@
 #include "server/http/routes.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,25 @@ api::AnalysisRequest request_of(api::AnalysisKind kind, const Request& req) {
   }
 }
 
+struct KeptAnalysis {
+  Grid grid;
+  std::string bytes;
+};
+
+// The kept result of a request a running job's JSON asked for and its
+// worker has made ready; nothing for any other job or request.
+std::optional<KeptAnalysis> ready_while_running(JobManager& jobs, const std::string& id,
+                                                const api::AnalysisRequest& request) {
+  const auto job = jobs.get(id);
+  if (!job || job->state != JobState::running || !job->analyses.is_array()) return std::nullopt;
+  const std::string url = analysis_url(request, id);
+  for (const auto& entry : job->analyses) {
+    if (entry.value("url", "") != url || entry.value("state", "") != "ready") continue;
+    if (auto bytes = jobs.load_artifact(id, request.artifact_key())) return KeptAnalysis{job->grid, std::move(*bytes)};
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
@@ -61,6 +81,14 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
     routes.get(kJobPath + "/" + to_string(kind), [&jobs, kind](const Request& req, Response& res) {
       const std::string id = req.matches[1];
       const api::AnalysisRequest request = request_of(kind, req);
+      // One the job JSON asked for is served as soon as it is ready, while
+      // the job still runs (its event stream says when).
+      if (auto kept = ready_while_running(jobs, id, request)) {
+        for (const auto& [name, value] : analysis_headers(request, kept->grid)) res.set_header(name, value);
+        res.set_header("X-Voxd-Cache", "hit");
+        res.set_content(std::move(kept->bytes), request.content_type());
+        return;
+      }
       const JobSnapshot job = succeeded_job(jobs, id, "volume", "its analyses exist");
       // Computing (or even serving a kept result, read whole) takes memory
       // beside the job's volumes: held from the budget meanwhile. A streamed

@@ -177,6 +177,8 @@ struct ConnectionServer::Impl {
 
   ConnectionLimits limits;
   std::atomic<std::size_t> open{0};  // connections, anywhere
+  std::function<bool(std::string_view)> is_stream;
+  ConnectionServer* server = nullptr;
 
   // The gate: connections waiting for a request head, or lingering after a
   // refusal (reading what the client still sends, so closing with unread
@@ -202,7 +204,16 @@ struct ConnectionServer::Impl {
   std::vector<std::thread> workers;
   bool stopping = false;
 
-  void start(ConnectionServer& server) {
+  // Long-lived requests, each on a stream thread: threads are made as
+  // streams arrive (max_streams at most) and wait for the next one after.
+  std::deque<Waiting> stream_queue;         // guarded by queue_mutex
+  std::condition_variable stream_cv;
+  std::vector<std::thread> stream_workers;  // guarded by queue_mutex
+  std::size_t idle_stream_workers = 0;      // guarded by queue_mutex
+  std::atomic<std::size_t> streams{0};      // running or waiting for a stream thread
+
+  void start(ConnectionServer& owner) {
+    server = &owner;
     epoll_fd = ::epoll_create1(EPOLL_CLOEXEC);
     wake_fd = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
     epoll_event ev{};
@@ -210,7 +221,7 @@ struct ConnectionServer::Impl {
     ev.data.fd = wake_fd;
     ::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, wake_fd, &ev);
     gate = std::thread([this] { gate_loop(); });
-    for (int i = 0; i < std::max(1, limits.threads); ++i) workers.emplace_back([this, &server] { work(server); });
+    for (int i = 0; i < std::max(1, limits.threads); ++i) workers.emplace_back([this] { work(*server); });
   }
 
   void stop() {
@@ -220,10 +231,15 @@ struct ConnectionServer::Impl {
       stopping = true;
     }
     queue_cv.notify_all();
+    stream_cv.notify_all();
     wake();
     if (gate.joinable()) gate.join();
     for (auto& t : workers) t.join();
     workers.clear();
+    // The gate is gone, so no stream thread is made from now on.
+    for (auto& t : stream_workers) t.join();
+    stream_workers.clear();
+    stream_queue.clear();
     queue.clear();
     waiting.clear();
     incoming.clear();
@@ -353,8 +369,9 @@ struct ConnectionServer::Impl {
       w.deadline = Clock::now() + limits.header_timeout;
     }
     // A head longer than the peek is left to httplib's own limits.
-    if (has_complete_head({head.data(), static_cast<std::size_t>(r)}) || static_cast<std::size_t>(r) == head.size())
-      dispatch(it);
+    const std::string_view peeked(head.data(), static_cast<std::size_t>(r));
+    if (has_complete_head(peeked) || peeked.size() == head.size())
+      dispatch(it, is_stream && is_stream(peeked.substr(0, peeked.find_first_of("\r\n"))));
   }
 
   // After an answer that ends the connection while the client may still be
@@ -372,7 +389,8 @@ struct ConnectionServer::Impl {
     examine(it);
   }
 
-  void dispatch(std::unordered_map<int, Waiting>::iterator it) {
+  void dispatch(std::unordered_map<int, Waiting>::iterator it, bool stream = false) {
+    if (stream) return dispatch_stream(it);
     {
       std::lock_guard lock(queue_mutex);
       if (queue.size() < limits.max_queued) {
@@ -387,6 +405,46 @@ struct ConnectionServer::Impl {
     send_canned(it->first, 429, "Too Many Requests", "too-many-requests", "Too many requests",
                 "every HTTP thread is busy and the queue of waiting requests is full; retry shortly", true);
     linger(it);
+  }
+
+  void dispatch_stream(std::unordered_map<int, Waiting>::iterator it) {
+    {
+      std::lock_guard lock(queue_mutex);
+      if (!stopping && streams.load() < limits.max_streams) {
+        ++streams;
+        ::epoll_ctl(epoll_fd, EPOLL_CTL_DEL, it->first, nullptr);
+        it->second.connection->begin_head(it->second.deadline);
+        stream_queue.push_back(std::move(it->second));
+        waiting.erase(it);
+        if (idle_stream_workers == 0) {
+          stream_workers.emplace_back([this] { work_streams(); });
+        } else {
+          stream_cv.notify_one();
+        }
+        return;
+      }
+    }
+    send_canned(it->first, 503, "Service Unavailable", "too-many-streams", "Too many event streams",
+                "the service holds as many event streams open as it allows; poll GET /v1/jobs/{id} or retry shortly",
+                true);
+    linger(it);
+  }
+
+  void work_streams() {
+    for (;;) {
+      Waiting w;
+      {
+        std::unique_lock lock(queue_mutex);
+        ++idle_stream_workers;
+        stream_cv.wait(lock, [&] { return stopping || !stream_queue.empty(); });
+        --idle_stream_workers;
+        if (stopping) return;
+        w = std::move(stream_queue.front());
+        stream_queue.pop_front();
+      }
+      serve(*server, w);
+      --streams;
+    }
   }
 
   void expire() {
@@ -478,6 +536,12 @@ void ConnectionServer::apply_backlog() {
 }
 
 void ConnectionServer::close_connections() { impl_->stop(); }
+
+void ConnectionServer::set_stream_requests(std::function<bool(std::string_view)> is_stream) {
+  impl_->is_stream = std::move(is_stream);
+}
+
+std::size_t ConnectionServer::open_streams() const { return impl_->streams.load(); }
 
 bool ConnectionServer::process_and_close_socket(socket_t sock) {
   impl_->admit(sock);

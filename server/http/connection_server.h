@@ -13,11 +13,17 @@
 //     so the rest of that body is never parsed as further requests;
 //   - past the queue of requests waiting for a thread, or the connection
 //     limit, a client gets a 429 or 503 problem at once, not a reset; the
-//     listen backlog is sized for bursts.
+//     listen backlog is sized for bursts;
+//   - a long-lived request (a server-sent event stream, open for as long as
+//     its job runs) runs on a stream thread of its own, up to max_streams of
+//     them, so that open streams never take the HTTP threads every other
+//     request needs; past max_streams it gets a 503 at once.
 // A handler reaches its own connection through the functions at the end.
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <memory>
+#include <string_view>
 
 #include <httplib.h>
 
@@ -25,6 +31,7 @@ namespace voxd::server {
 
 struct ConnectionLimits {
   int threads = 16;                  // HTTP threads running requests
+  std::size_t max_streams = 64;      // long-lived requests at once, each on a stream thread (503 above)
   std::size_t max_queued = 256;      // requests with a head, waiting for a thread (429 above)
   std::size_t max_connections = 1024;  // open connections (503 above)
   int backlog = 1024;                // listen backlog
@@ -46,6 +53,11 @@ class ConnectionServer : public httplib::Server {
   void apply_backlog();
   // After listen_after_bind returned: closes every connection, joins threads.
   void close_connections();
+  // Which requests are long-lived, by their request line ("GET /path?q
+  // HTTP/1.1"); set before listening.
+  void set_stream_requests(std::function<bool(std::string_view request_line)> is_stream);
+  // Long-lived requests running (or about to) now.
+  std::size_t open_streams() const;
 
  private:
   bool process_and_close_socket(socket_t sock) override;

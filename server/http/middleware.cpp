@@ -45,7 +45,8 @@ bool constant_time_equal(const std::string& a, const std::string& b) {
 // Route label for metrics: the pattern, not the concrete path (bounded cardinality).
 std::string route_of(const std::string& path) {
   if (path.rfind("/v1/jobs/", 0) == 0) return path.size() > 41 ? "/v1/jobs/{id}" + path.substr(41) : "/v1/jobs/{id}";
-  static const char* known[] = {"/v1/jobs", "/v1/voxelize", "/healthz", "/readyz", "/metrics", "/openapi.json"};
+  if (path.rfind("/ui/", 0) == 0) return "/ui/{file}";
+  static const char* known[] = {"/v1/jobs", "/v1/voxelize", "/healthz", "/readyz", "/metrics", "/openapi.json", "/"};
   for (const char* k : known)
     if (path == k) return k;
   return "other";
@@ -70,7 +71,7 @@ bool answer_cors(const Request& req, Response& res, const ServeConfig& config) {
   if (!cors) return false;
   res.set_header("Access-Control-Allow-Origin", origin);
   res.set_header("Vary", "Origin");
-  res.set_header("Access-Control-Expose-Headers", "Location, Retry-After, X-Request-Id, X-Voxd-Job-Id, X-Voxd-Dims, X-Voxd-Filled-Voxels, X-Voxd-Value-Type");
+  res.set_header("Access-Control-Expose-Headers", "Location, Retry-After, X-Request-Id, X-Voxd-Job-Id, X-Voxd-Dims, X-Voxd-Filled-Voxels, X-Voxd-Value-Type, X-Voxd-Scale, X-Voxd-Cache");
   if (req.method != "OPTIONS" || !req.has_header("Access-Control-Request-Method")) return false;
   res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
   res.set_header("Access-Control-Allow-Headers", "Authorization, Content-Type, X-Request-Id");

@@ -11,9 +11,12 @@
 //    unless the worker prepared them (the job JSON's "analyses"), and kept
 //    beside it (server/jobs/job_analyses.h).
 //  - mode_routes.cpp: what a mode serves beyond its volume (mode_routes.h).
+//  - event_routes.cpp: GET /v1/jobs/{id}/events, the job's progress as
+//    server-sent events (job_event_stream.h), on the stream threads.
 //  - voxelize_route.cpp: POST /v1/voxelize, a small job run at once, its
 //    volume the answer, nothing stored.
 #include <atomic>
+#include <string_view>
 
 #include "api/bounded_json.h"
 
@@ -30,6 +33,10 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
                         const api::JsonLimits& params_limits);
 void install_analysis_routes(RouteTable& routes, JobManager& jobs);
 void install_mode_routes(RouteTable& routes, JobManager& jobs);
+void install_event_routes(RouteTable& routes, JobManager& jobs);
+// Whether a request line ("GET /v1/jobs/ID/events?x HTTP/1.1") asks for an
+// event stream: the connection server runs those on its stream threads.
+bool is_event_stream_request(std::string_view request_line);
 void install_voxelize_route(RouteTable& routes, JobManager& jobs, Metrics& metrics, const ServeConfig& config,
                             const api::JsonLimits& params_limits);
 

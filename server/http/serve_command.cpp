@@ -18,6 +18,7 @@
 #include "server/http/connection_server.h"
 #include "server/http/http_api.h"
 #include "server/http/metrics.h"
+#include "server/http/routes.h"
 #include "server/http/server_config.h"
 #include "server/jobs/job_manager.h"
 #include "server/redis/redis_job_queue.h"
@@ -125,6 +126,7 @@ int serve_command(int argc, char** argv) {
   limits.threads = config.http_threads;
   limits.max_queued = config.http_queue;
   limits.max_connections = config.max_connections;
+  limits.max_streams = config.max_event_streams;
   limits.header_timeout = std::chrono::seconds(config.header_timeout);
   limits.body_grace = std::chrono::seconds(config.body_grace);
   limits.body_min_rate = config.body_min_rate;
@@ -132,6 +134,7 @@ int serve_command(int argc, char** argv) {
   limits.write_timeout = std::chrono::seconds(config.write_timeout);
   limits.keep_alive_max_count = 1000;  // batch clients reuse one connection
   ConnectionServer server(limits);
+  server.set_stream_requests(is_event_stream_request);
   HttpApi api(config, jobs, metrics);
   api.install(server);
   server.set_payload_max_length(config.max_upload_bytes);

@@ -27,6 +27,7 @@ struct ServeConfig {
   int http_threads = 16;
   std::size_t http_queue = 256;      // requests waiting for an HTTP thread (429 above)
   std::size_t max_connections = 1024;  // open connections (503 above)
+  std::size_t max_event_streams = 64;  // open event streams, each on a thread of its own (503 above)
   int header_timeout = 10;  // seconds from a request's first byte to the end of its head
   int body_grace = 10;                      // seconds any request body may take...
   std::uint64_t body_min_rate = 16 * 1024;  // ...plus its size at this many bytes/s

@@ -116,6 +116,10 @@ struct JobManager::Impl {
   // The job table: every job this process knows, by id.
   mutable std::mutex mutex;
   std::condition_variable finished_cv;  // synchronous callers wait here
+  // Every state change and every analysis made ready counts one, for the
+  // event streams (wait_for_change); progress moves without counting.
+  std::uint64_t changes = 0;
+  std::condition_variable changed_cv;
   std::unordered_map<std::string, std::shared_ptr<Job>> jobs;
   std::unordered_map<std::string, std::string> succeeded_by_hash;  // content hash -> job id
   bool accepting = true;
@@ -135,7 +139,15 @@ struct JobManager::Impl {
   std::atomic<bool> backend_ok{true};
   std::atomic<std::int64_t> backend_warned_at{0};
 
-  void announce(const JobSnapshot& s) { events.announce(s); }  // caller holds mutex: the table's order
+  // Caller holds mutex: the table's order. Wakes whoever waits for a change.
+  void announce(const JobSnapshot& s) {
+    events.announce(s);
+    note_change();
+  }
+  void note_change() {  // caller holds mutex
+    ++changes;
+    changed_cv.notify_all();
+  }
   void deliver() { events.deliver(); }                         // caller holds no lock
 
   void persist(Job& job, const JobSnapshot& s) const {
@@ -158,7 +170,10 @@ struct JobManager::Impl {
 
   JobSnapshot snapshot_of(const Job& job) const {
     JobSnapshot s = job.snap;
-    if (s.state == JobState::running) s.progress = job.control.progress();
+    if (s.state == JobState::running) {
+      s.progress = job.control.progress();
+      s.stage = job.control.stage();
+    }
     return s;
   }
 
@@ -189,10 +204,17 @@ struct JobManager::Impl {
             spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
           }
         }};
+    // Each entry is shown as soon as it is ready (or failed), not at the end.
+    auto publish = [&] {
+      std::lock_guard lock(mutex);
+      job.snap.analyses = status;
+      note_change();
+    };
     for (std::size_t i = 0; i < requests.size(); ++i) {
       const double n = static_cast<double>(requests.size());
       job.control.set_span(0.5 + 0.5 * static_cast<double>(i) / n, 0.5 + 0.5 * static_cast<double>(i + 1) / n);
       job.control.set_progress(0.0);
+      job.control.set_stage(std::string("analysis: ") + to_string(requests[i].kind));
       try {
         job_analysis(requests[i], view, output, artifacts, &job.control);
         status[i]["state"] = "ready";
@@ -209,6 +231,7 @@ struct JobManager::Impl {
         status[i]["state"] = "failed";
         status[i]["error"] = "the analysis failed unexpectedly; it was logged";
       }
+      publish();
     }
     job.control.set_span(0.0, 1.0);
     return status;
@@ -716,6 +739,7 @@ struct JobManager::Impl {
         if (type) output.values_rle = store->layer_rle(job->snap.id, "values");
       } else {
         r = execute_voxel_job(std::move(prepared), /*with_report=*/!job->ephemeral, &job->control, engine_threads);
+        job->control.set_stage("store");
         output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
         if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
         for (auto& [name, layer] : r.layers)
@@ -810,15 +834,17 @@ struct JobManager::Impl {
   void keep() {
     std::unique_lock wait_lock(keeper_mutex);
     while (!keeper_wake.wait_for(wait_lock, std::chrono::milliseconds(100), [&] { return keeper_stop; })) {
-      std::vector<std::pair<std::string, double>> running;
+      std::vector<SharedJobRecords::RunningReport> running;
       {
         std::lock_guard lock(mutex);
         for (const auto& [id, job] : jobs)
           if (job->shared && job->snap.state == JobState::running) {
             // A slab task reports for its job, leaving its progress to the
             // tasks' count.
-            if (job->task_of.empty()) running.emplace_back(id, job->control.progress());
-            else running.emplace_back(job->task_of, -1.0);
+            if (job->task_of.empty())
+              running.push_back({id, job->control.progress(), job->control.stage(), job->snap.analyses});
+            else
+              running.push_back({job->task_of, -1.0, "", nullptr});
           }
       }
       try {
@@ -1138,6 +1164,12 @@ JobSnapshot JobManager::submit(std::vector<std::uint8_t> mesh_bytes, const std::
 }
 
 std::optional<JobSnapshot> JobManager::get(const std::string& id) const { return impl_->find(id); }
+
+std::uint64_t JobManager::wait_for_change(std::uint64_t seen, std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(impl_->mutex);
+  impl_->changed_cv.wait_for(lock, timeout, [&] { return impl_->changes != seen; });
+  return impl_->changes;
+}
 
 std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
   if (impl_->shared()) {

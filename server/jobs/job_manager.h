@@ -50,7 +50,10 @@ struct JobFailure {
 struct JobSnapshot {
   std::string id;  // 32 lowercase hex characters, random
   JobState state = JobState::queued;
-  double progress = 0.0;  // 0..1
+  double progress = 0.0;  // 0..1, never going back while the job runs
+  // What a running job is doing now ("mesh report", "voxelize" or the mode's
+  // stage, "store", "analysis: radiography"); empty otherwise.
+  std::string stage;
   std::string created_at, started_at, finished_at;  // RFC 3339 UTC, empty until reached
   nlohmann::json params;                            // the job JSON as submitted
   // The job JSON parsed, once, when the job is accepted or its record read:
@@ -189,6 +192,12 @@ class JobManager {
                      const nlohmann::json& params_json);
 
   std::optional<JobSnapshot> get(const std::string& id) const;
+
+  // Waits until a job changed state or had an analysis made ready since
+  // `seen` (a value this returned before; 0 at first), or until `timeout`;
+  // returns the value to pass next time. Progress moves without a change,
+  // and so do jobs other replicas change: watchers poll get() as well.
+  std::uint64_t wait_for_change(std::uint64_t seen, std::chrono::milliseconds timeout) const;
 
   // Newest first. `total` receives the number of jobs.
   std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const;

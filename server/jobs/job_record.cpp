@@ -9,6 +9,8 @@
 
 #include "api/analysis_json.h"
 #include "api/result_json.h"
+#include "api/job_mode.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
 namespace {
@@ -81,11 +83,28 @@ std::optional<JobState> job_state_from_string(const std::string& name) {
   return value_named(kJobStateNames, name);
 }
 
+// The formats a succeeded job's volume is offered in (those
+// GET /v1/jobs/{id}/volume does not refuse for its mode and value type), by
+// name, each with its URL.
+json downloads(const JobSnapshot& job) {
+  json out = json::object();
+  if (job.state != JobState::succeeded || !job.job) return out;
+  const api::JobParams& params = *job.job;
+  const std::optional<ValueVolume> probe = params.value_type();
+  for (const auto& [format, name] : kVolumeFormatNames) {
+    const bool offered = params.mode->writes(format) ||
+                         !(probe ? format_refusal(*probe, format, EncodeOptions{}) : format_refusal(BitVolume(), format));
+    if (offered) out[name] = "/v1/jobs/" + job.id + "/volume?format=" + name;
+  }
+  return out;
+}
+
 json to_json(const JobSnapshot& job) {
   json out = {
       {"id", job.id},
       {"state", to_string(job.state)},
       {"progress", job.progress},
+      {"stage", job.state == JobState::running && !job.stage.empty() ? json(job.stage) : json(nullptr)},
       {"created_at", time_or_null(job.created_at)},
       {"started_at", time_or_null(job.started_at)},
       {"finished_at", time_or_null(job.finished_at)},
@@ -97,7 +116,8 @@ json to_json(const JobSnapshot& job) {
       {"cached", job.cached},
       {"streamed", job.streamed},
       {"content_hash", job.content_hash},
-      {"links", {{"self", "/v1/jobs/" + job.id}, {"volume", "/v1/jobs/" + job.id + "/volume"}}},
+      {"links", {{"self", "/v1/jobs/" + job.id}, {"volume", "/v1/jobs/" + job.id + "/volume"},
+                 {"events", "/v1/jobs/" + job.id + "/events"}, {"downloads", downloads(job)}}},
   };
   json timings = json::object();
   for (const auto& [stage, seconds] : job.timings) timings[stage] = seconds;

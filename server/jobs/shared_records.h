@@ -47,11 +47,17 @@ class SharedJobRecords {
 
   // Asks whichever replica runs the job to stop it (it polls, ~100 ms).
   virtual void request_cancel(const std::string& id) const = 0;
-  // This replica's running jobs and their progress (negative: left as it
-  // is, for a job whose tasks run here), reported every ~100 ms:
-  // the progress others show, the replica's heartbeat. Returns the ids
-  // whose cancellation was asked (or whose record was deleted).
-  virtual std::vector<std::string> report_running(const std::vector<std::pair<std::string, double>>& running) const = 0;
+  // This replica's running jobs, reported every ~100 ms: the progress and
+  // live state others show (JobSnapshot's progress, stage and analyses as
+  // each becomes ready), the replica's heartbeat. Returns the ids whose
+  // cancellation was asked (or whose record was deleted).
+  struct RunningReport {
+    std::string id;
+    double progress = -1.0;  // negative: left as it is (a job whose slab tasks run here)
+    std::string stage;       // empty with a negative progress: left as it is
+    nlohmann::json analyses;  // null: left as it is
+  };
+  virtual std::vector<std::string> report_running(const std::vector<RunningReport>& running) const = 0;
 
   // Whether the backend answers now.
   virtual bool reachable() const = 0;

@@ -47,7 +47,7 @@ redis.call('HSET', KEYS[1], 'record', ARGV[1], 'state', ARGV[2])
 redis.call('ZADD', KEYS[2], ARGV[3], ARGV[4])
 local s = ARGV[2]
 if s == 'succeeded' or s == 'failed' or s == 'cancelled' then
-  redis.call('HDEL', KEYS[1], 'cancel', 'progress')
+  redis.call('HDEL', KEYS[1], 'cancel', 'progress', 'live')
   redis.call('PEXPIRE', KEYS[1], ARGV[5])
   for _, k in ipairs(redis.call('SMEMBERS', KEYS[3])) do redis.call('PEXPIRE', k, ARGV[5]) end
   redis.call('PEXPIRE', KEYS[3], ARGV[5])
@@ -111,7 +111,8 @@ return 1
 )lua";
 
 // KEYS: the running jobs' records. ARGV: their progress ("" to leave it:
-// a split job's moves as its tasks finish). Returns per job
+// a split job's moves as its tasks finish), then their live state (JSON of
+// stage and analyses, "" to leave it). Returns per job
 // "1" when its cancellation was asked, "gone" when it was deleted, "ended"
 // when it ended already (a slab task of a job another task ended), "" else.
 constexpr const char* kReportRunning = R"lua(
@@ -122,6 +123,7 @@ for i, k in ipairs(KEYS) do
     out[i] = 'ended'
   elseif state then
     if ARGV[i] ~= '' then redis.call('HSET', k, 'progress', ARGV[i]) end
+    if ARGV[#KEYS + i] ~= '' then redis.call('HSET', k, 'live', ARGV[#KEYS + i]) end
     out[i] = redis.call('HGET', k, 'cancel') or ''
   else
     out[i] = 'gone'
@@ -268,19 +270,26 @@ bool RedisJobStore::transition(const JobSnapshot& job, std::initializer_list<Job
 
 namespace {
 
-// A job from the reply to HMGET job record progress: the record, with the
-// live progress of a running job.
+// A job from the reply to HMGET job record progress live: the record, with
+// the live progress, stage and analyses of a running job.
 JobSnapshot record_of(const RedisReply& fields) {
   JobSnapshot job = job_from_json(nlohmann::json::parse(fields.at(0).text()));
-  if (job.state == JobState::running && !fields.at(1).is_nil())
-    job.progress = parse_number<double>(fields.at(1).text()).value_or(job.progress);
+  if (job.state != JobState::running) return job;
+  if (!fields.at(1).is_nil()) job.progress = parse_number<double>(fields.at(1).text()).value_or(job.progress);
+  if (fields.size() > 2 && !fields.at(2).is_nil()) {
+    const nlohmann::json live = nlohmann::json::parse(fields.at(2).text(), nullptr, /*allow_exceptions=*/false);
+    if (live.is_object()) {
+      if (live.contains("stage") && live["stage"].is_string()) job.stage = live["stage"];
+      if (live.contains("analyses") && live["analyses"].is_array()) job.analyses = live["analyses"];
+    }
+  }
   return job;
 }
 
 }  // namespace
 
 std::optional<JobSnapshot> RedisJobStore::load(const std::string& id) const {
-  const RedisReply r = pool_->command({"HMGET", key("job", id), "record", "progress"});
+  const RedisReply r = pool_->command({"HMGET", key("job", id), "record", "progress", "live"});
   if (r.at(0).is_nil()) return std::nullopt;
   return record_of(r);
 }
@@ -299,7 +308,7 @@ std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t lim
   std::vector<std::string> keys;
   keys.reserve(page[1].size());
   for (std::size_t i = 0; i < page[1].size(); ++i) keys.push_back(key("job", std::string(page[1].at(i).text())));
-  for (std::size_t i = 0; i < keys.size(); ++i) gets.push_back({"HMGET", keys[i], "record", "progress"});
+  for (std::size_t i = 0; i < keys.size(); ++i) gets.push_back({"HMGET", keys[i], "record", "progress", "live"});
   const std::vector<RedisReply> records = pool_->pipeline(gets);
   for (std::size_t i = 0; i < records.size(); ++i) {
     if (records[i].at(0).is_nil()) {
@@ -498,28 +507,34 @@ void RedisJobStore::request_cancel(const std::string& id) const {
   pool_->command({"EVAL", kRequestCancel, "1", key("job", id)});
 }
 
-std::vector<std::string> RedisJobStore::report_running(const std::vector<std::pair<std::string, double>>& running) const {
+std::vector<std::string> RedisJobStore::report_running(const std::vector<RunningReport>& running) const {
   const std::string now = std::to_string(now_ms()), replicas = options_.prefix + "replicas";
   std::vector<RedisArgs> commands{{"ZADD", replicas, now, options_.replica_id}};
-  std::vector<std::string> keys, progress;
+  std::vector<std::string> keys, progress, live;
   keys.reserve(running.size());
   progress.reserve(running.size());
-  for (const auto& [id, p] : running) {
-    keys.push_back(key("job", id));
-    progress.push_back(p < 0 ? std::string() : std::to_string(p));
+  live.reserve(running.size());
+  for (const RunningReport& r : running) {
+    keys.push_back(key("job", r.id));
+    progress.push_back(r.progress < 0 ? std::string() : std::to_string(r.progress));
+    nlohmann::json state = nlohmann::json::object();
+    if (r.progress >= 0 || !r.stage.empty()) state["stage"] = r.stage;
+    if (!r.analyses.is_null()) state["analyses"] = r.analyses;
+    live.push_back(state.empty() ? std::string() : state.dump());
   }
   const std::string n = std::to_string(keys.size());
   if (!keys.empty()) {
     RedisArgs eval{"EVAL", kReportRunning, n};
     for (const std::string& k : keys) eval.push_back(k);
     for (const std::string& p : progress) eval.push_back(p);
+    for (const std::string& l : live) eval.push_back(l);
     commands.push_back(std::move(eval));
   }
   const std::vector<RedisReply> replies = pool_->pipeline(commands);
   std::vector<std::string> cancel;
   if (keys.empty()) return cancel;
   for (std::size_t i = 0; i < running.size(); ++i)
-    if (!replies[1].at(i).text().empty()) cancel.push_back(running[i].first);
+    if (!replies[1].at(i).text().empty()) cancel.push_back(running[i].id);
   return cancel;
 }
 

@@ -82,7 +82,7 @@ class RedisJobStore final : public JobStore, public SharedJobRecords, public Sha
   void drop_input(const std::string& id) const override;
   std::optional<std::string> succeeded_with_hash(const std::string& hash) const override;
   void request_cancel(const std::string& id) const override;
-  std::vector<std::string> report_running(const std::vector<std::pair<std::string, double>>& running) const override;
+  std::vector<std::string> report_running(const std::vector<RunningReport>& running) const override;
   bool reachable() const override;
   std::size_t live_replicas() const override;
   void prune() const override;

@@ -1,0 +1,86 @@
+#include "server/http/job_event_stream.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "server/jobs/job_record.h"
+
+namespace voxd::server {
+
+using nlohmann::json;
+
+namespace {
+
+json stage_json(const std::string& stage) { return stage.empty() ? json(nullptr) : json(stage); }
+// Four decimals: a bar's hundredth of a percent, without float noise.
+double rounded(double progress) { return std::round(progress * 1e4) / 1e4; }
+
+}  // namespace
+
+std::string JobEventStream::event(const char* name, const json& data) {
+  // One line of JSON: no newline can end the data field early.
+  return "id: " + std::to_string(next_id_++) + "\nevent: " + name +
+         "\ndata: " + data.dump(-1, ' ', false, json::error_handler_t::replace) + "\n\n";
+}
+
+std::string JobEventStream::start(const JobSnapshot& now) {
+  state_ = now.state;
+  progress_ = now.progress;
+  stage_ = now.state == JobState::running ? now.stage : std::string();
+  analyses_ = now.analyses;
+  // How long a client's EventSource waits before it reconnects.
+  std::string out = "retry: 1000\n\n" + event("job", to_json(now));
+  if (finished(now.state)) {
+    out += event("end", to_json(now));
+    ended_ = true;
+  }
+  return out;
+}
+
+std::string JobEventStream::update(const JobSnapshot& now) {
+  if (ended_) return {};
+  std::string out;
+  // The bar only rises, also when another replica takes over a job whose
+  // replica died and runs it again from the start.
+  const double progress = finished(now.state) ? now.progress : std::max(progress_, now.progress);
+  const std::string stage = now.state == JobState::running ? now.stage : std::string();
+  if (now.state != state_ && !finished(now.state)) {
+    out += event("state", {{"state", to_string(now.state)}, {"progress", rounded(progress)}, {"stage", stage_json(stage)}});
+    state_ = now.state;
+    progress_ = progress;
+    stage_ = stage;
+  } else if (!finished(now.state) && (progress >= progress_ + 0.001 || stage != stage_)) {
+    // Smaller steps wait until the bar moves visibly.
+    out += event("progress", {{"progress", rounded(progress)}, {"stage", stage_json(stage)}});
+    progress_ = progress;
+    stage_ = stage;
+  }
+  // Each requested analysis once, when it leaves "pending".
+  if (now.analyses.is_array()) {
+    for (std::size_t i = 0; i < now.analyses.size(); ++i) {
+      const json& entry = now.analyses[i];
+      const json before = i < analyses_.size() ? analyses_[i] : json(nullptr);
+      const std::string state = entry.value("state", "");
+      if (state == "pending" || state == "on_request") continue;
+      if (before.is_object() && before.value("state", "") == state) continue;
+      json data = entry;
+      data["index"] = i;
+      out += event("analysis", data);
+    }
+    analyses_ = now.analyses;
+  }
+  if (finished(now.state)) {
+    out += event("end", to_json(now));
+    state_ = now.state;
+    ended_ = true;
+  }
+  return out;
+}
+
+std::string JobEventStream::gone(const std::string& id) {
+  if (ended_) return {};
+  ended_ = true;
+  return event("gone", {{"id", id}, {"detail", "the job was deleted or has expired"}});
+}
+
+}  // namespace voxd::server
