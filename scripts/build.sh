@@ -7,6 +7,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 ./scripts/install-deps.sh
+# The web page's npm modules (three.js, and playwright-core for its test),
+# exactly as web/package-lock.json pins them; voxd embeds the page at build.
+if [[ ! -f web/node_modules/.package-lock.json || web/package-lock.json -nt web/node_modules/.package-lock.json ]]; then
+  (cd web && npm ci --no-audit --no-fund)
+fi
 
 build_type=Release
 sanitize=OFF

@@ -23,6 +23,7 @@ packages=(
   libhiredis-dev redis-server
   python3 python3-numpy python3-jsonschema python3-yaml
   clang libclang-rt-14-dev util-linux
+  chromium
 )
 if [[ "${1:-}" == --runtime ]]; then
   packages=("${runtime_packages[@]}")
@@ -31,6 +32,13 @@ elif [[ "${VOXD_INSTALL_PEERS:-0}" == 1 ]]; then
 fi
 
 missing=()
+# The web page's modules and the browser test's driver come from npm (web/
+# package-lock.json): Node.js and npm from Debian unless a node is already
+# installed (NodeSource's nodejs carries its own npm and conflicts with
+# Debian's npm package).
+if [[ "${1:-}" != --runtime ]] && ! { command -v node && command -v npm; } >/dev/null 2>&1; then
+  missing+=(nodejs npm)
+fi
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done

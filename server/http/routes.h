@@ -13,6 +13,8 @@
 //  - mode_routes.cpp: what a mode serves beyond its volume (mode_routes.h).
 //  - event_routes.cpp: GET /v1/jobs/{id}/events, the job's progress as
 //    server-sent events (job_event_stream.h), on the stream threads.
+//  - web_routes.cpp: the web page at / and its files under /ui/, from the
+//    binary (web_assets.h); open without an API key, like the probes.
 //  - voxelize_route.cpp: POST /v1/voxelize, a small job run at once, its
 //    volume the answer, nothing stored.
 #include <atomic>
@@ -34,6 +36,7 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
 void install_analysis_routes(RouteTable& routes, JobManager& jobs);
 void install_mode_routes(RouteTable& routes, JobManager& jobs);
 void install_event_routes(RouteTable& routes, JobManager& jobs);
+void install_web_routes(RouteTable& routes);
 // Whether a request line ("GET /v1/jobs/ID/events?x HTTP/1.1") asks for an
 // event stream: the connection server runs those on its stream threads.
 bool is_event_stream_request(std::string_view request_line);

@@ -1,0 +1,18 @@
+#pragma once
+// The web page's files (web/, and the npm modules it imports), assembled
+// into the binary at build time (server/CMakeLists.txt): path under /ui/ ->
+// bytes.
+#include <cstddef>
+#include <string_view>
+#include <vector>
+
+namespace voxd::server {
+
+struct WebAsset {
+  std::string_view path;   // "index.html", "js/app.js", "vendor/three.module.js"
+  std::string_view bytes;
+};
+
+const std::vector<WebAsset>& web_assets();
+
+}  // namespace voxd::server

@@ -1,0 +1,191 @@
+// The web page in real headless Chromium (Debian's chromium, driven by
+// playwright-core from web/package-lock.json) against a real `voxd serve` on
+// a loopback ephemeral port, as a person uses it: load /, upload a mesh,
+// watch the progress bar reach done, see the 3D view drawn, switch the
+// radiography's axis, open the report, download a volume and compare its
+// bytes with the API's, and see a malformed upload's problem on the page.
+// Screenshots of each step go to $VOXD_TEST_ARTIFACTS (default
+// build/test-artifacts/browser).
+//   node tests/web/browser_test.mjs   (VOXD_BINARY=path/to/voxd)
+import assert from 'node:assert/strict';
+import { spawn } from 'node:child_process';
+import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { createRequire } from 'node:module';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const repo = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
+const { chromium } = createRequire(join(repo, 'web/package.json'))('playwright-core');
+const voxd = process.env.VOXD_BINARY || join(repo, 'build/server/voxd');
+const artifacts = process.env.VOXD_TEST_ARTIFACTS || join(repo, 'build/test-artifacts/browser');
+const browserPath = process.env.CHROMIUM || '/usr/bin/chromium';
+mkdirSync(artifacts, { recursive: true });
+const work = mkdtempSync(join(tmpdir(), 'voxd-browser-'));
+
+// A hollow box, 20 x 16 x 12 with walls 2 thick: volume 3840 - 1536 = 2304.
+function boxTriangles([x0, y0, z0], [x1, y1, z1], inward) {
+  const v = [[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0], [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]];
+  const f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [3, 0, 4], [3, 4, 7]];
+  return f.map(([a, b, c]) => (inward ? [v[a], v[c], v[b]] : [v[a], v[b], v[c]]));
+}
+function binaryStl(triangles) {
+  const buffer = Buffer.alloc(84 + 50 * triangles.length);
+  buffer.writeUInt32LE(triangles.length, 80);
+  triangles.forEach((t, i) => t.forEach((p, k) => p.forEach((x, a) => buffer.writeFloatLE(x, 84 + 50 * i + 12 + 12 * k + 4 * a))));
+  return buffer;
+}
+const meshPath = join(work, 'hollow-box.stl');
+writeFileSync(meshPath, binaryStl([...boxTriangles([0, 0, 0], [20, 16, 12], false), ...boxTriangles([2, 2, 2], [18, 14, 10], true)]));
+const badPath = join(work, 'broken.stl');
+writeFileSync(badPath, 'solid broken\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0 0\n      vertex 1 0\n');
+
+function startServer() {
+  return new Promise((resolveStart, reject) => {
+    const child = spawn(voxd, ['serve', '--host', '127.0.0.1', '--port', '0', '--data-dir', join(work, 'data'), '--workers', '2'],
+                        { stdio: ['ignore', 'pipe', 'pipe'] });
+    let log = '';
+    const timer = setTimeout(() => reject(new Error(`voxd serve did not listen within 30 s:\n${log}`)), 30000);
+    const look = (chunk) => {
+      log += chunk;
+      const m = /listening on (http:\/\/127\.0\.0\.1:\d+)/.exec(log);
+      if (m) { clearTimeout(timer); resolveStart({ child, base: m[1] }); }
+    };
+    child.stdout.on('data', look);
+    child.stderr.on('data', look);
+    child.on('exit', (code) => reject(new Error(`voxd serve exited (${code}):\n${log}`)));
+  });
+}
+
+let step = 0;
+async function shot(page, name) {
+  await page.screenshot({ path: join(artifacts, `${String(++step).padStart(2, '0')}-${name}.png`), fullPage: true });
+}
+
+// Pixels of the 3D canvas unlike its clear colour (#fafbfd).
+const drawnPixels = (page) => page.evaluate(() => {
+  const gl = document.querySelector('#viewer canvas');
+  const c = Object.assign(document.createElement('canvas'), { width: gl.width, height: gl.height });
+  const ctx = c.getContext('2d');
+  ctx.drawImage(gl, 0, 0);
+  const d = ctx.getImageData(0, 0, c.width, c.height).data;
+  let n = 0;
+  for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 250) + Math.abs(d[i + 1] - 251) + Math.abs(d[i + 2] - 253) > 12) ++n;
+  return { drawn: n, total: d.length / 4 };
+});
+
+const { child, base } = await startServer();
+const browser = await chromium.launch({
+  executablePath: browserPath,
+  // WebGL in a headless browser with no GPU: SwiftShader.
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+});
+let failed = false;
+try {
+  const context = await browser.newContext({ viewport: { width: 1400, height: 1000 }, acceptDownloads: true });
+  const page = await context.newPage();
+  const consoleErrors = [];
+  page.on('pageerror', (e) => consoleErrors.push(String(e)));
+
+  // 1. The page loads, with the form made from the job schema.
+  await page.goto(`${base}/`);
+  await page.waitForFunction(() => document.querySelectorAll('#mode option').length > 0);
+  const modes = await page.$$eval('#mode option', (o) => o.map((x) => x.value));
+  assert.deepEqual(modes, JSON.parse(readFileSync(join(repo, 'proto-schemas/job-params.schema.json'))).properties.mode.enum);
+  await shot(page, 'loaded');
+
+  // 2. Upload the mesh with a job, and follow its progress bar to done.
+  await page.setInputFiles('#mesh-file', meshPath);
+  await page.fill('#resolution', '80');
+  await page.fill('#min-wall', '1');
+  await page.evaluate(() => {
+    window.progressSeen = [];
+    new MutationObserver(() => window.progressSeen.push(parseFloat(document.getElementById('progress-bar').style.width)))
+      .observe(document.getElementById('progress-bar'), { attributes: true });
+  });
+  await page.click('#submit');
+  await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
+  assert.equal(await page.$eval('#progress-bar', (e) => e.style.width), '100%');
+  const seen = await page.evaluate(() => window.progressSeen);
+  for (let i = 1; i < seen.length; ++i) assert.ok(seen[i] >= seen[i - 1], `progress went back: ${seen.join(', ')}`);
+  assert.equal(await page.isVisible('#problem'), false, 'a problem box is shown for a job that succeeded');
+  const jobId = await page.$eval('#job-id', (e) => e.textContent);
+  assert.match(jobId, /^[0-9a-f]{32}$/);
+  await shot(page, 'done');
+
+  // 3. The 3D view draws the voxels (a real picture, not a blank canvas).
+  await page.waitForFunction(() => /filled voxels/.test(document.getElementById('view-info').textContent), null, { timeout: 60000 });
+  const pixels = await drawnPixels(page);
+  assert.ok(pixels.drawn > pixels.total * 0.02, `3D view nearly blank: ${pixels.drawn} of ${pixels.total} pixels drawn`);
+  await shot(page, 'view3d');
+
+  // 4. Radiography: switching the axis changes the map; the readout is in model units.
+  await page.click('button[data-tab=radiography]');
+  await page.waitForFunction(() => document.getElementById('rad-canvas').width > 0);
+  const image = () => page.$eval('#rad-canvas', (c) => ({ w: c.width, h: c.height, url: c.toDataURL() }));
+  const alongZ = await image();
+  const box = await page.locator('#rad-canvas').boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  const readout = await page.$eval('#rad-readout', (e) => e.textContent);
+  // Through the middle, along z, the thickest run of material is a 2-thick wall.
+  const value = Number(/max ([0-9.]+)/.exec(readout)[1]);
+  assert.ok(Math.abs(value - 2) <= 0.5, `readout ${readout}`);
+  await shot(page, 'radiography-z');
+  await page.selectOption('#rad-axis', 'x');
+  await page.waitForFunction((before) => document.getElementById('rad-canvas').toDataURL() !== before, alongZ.url);
+  const alongX = await image();
+  assert.notEqual(alongX.url, alongZ.url);
+  const job = await (await fetch(`${base}/v1/jobs/${jobId}`)).json();
+  const [nx, ny, nz] = job.grid.dims;
+  assert.deepEqual([alongZ.w, alongZ.h], [nx, ny]);
+  assert.deepEqual([alongX.w, alongX.h], [ny, nz]);
+  await shot(page, 'radiography-x');
+
+  // 5. The report: the voxel volume is the box's, within a voxel layer.
+  await page.click('button[data-tab=report]');
+  await page.waitForSelector('#report table');
+  const volumeText = await page.$eval('#report table tbody tr td:nth-child(2)', (e) => e.textContent);
+  assert.ok(Math.abs(Number(volumeText) - 2304) / 2304 < 0.05, `volume ${volumeText}`);
+  assert.match(await page.$eval('#report', (e) => e.textContent), /Wall thickness/);
+  await page.click('#report tr.region >> nth=0');
+  await shot(page, 'report');
+
+  // 6. Sections: the slider moves through the part.
+  await page.click('button[data-tab=sections]');
+  await page.waitForFunction(() => document.getElementById('sec-image').complete && document.getElementById('sec-image').naturalWidth > 0);
+  await shot(page, 'section');
+
+  // 7. A download has the API's bytes.
+  await page.click('button[data-tab=downloads]');
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#downloads a[data-format=rle]')]);
+  const downloaded = readFileSync(await download.path());
+  const fromApi = Buffer.from(await (await fetch(`${base}/v1/jobs/${jobId}/volume?format=rle`)).arrayBuffer());
+  assert.ok(downloaded.length > 0);
+  assert.ok(downloaded.equals(fromApi), `downloaded ${downloaded.length} bytes differ from the API's ${fromApi.length}`);
+  await shot(page, 'downloads');
+
+  // 8. A malformed STL: the page shows the API's problem, title and detail.
+  const form = new FormData();
+  form.append('mesh', new Blob([readFileSync(badPath)]), 'broken.stl');
+  form.append('params', new Blob([JSON.stringify({ grid: { resolution: 80 } })], { type: 'application/json' }));
+  const refusal = await fetch(`${base}/v1/jobs`, { method: 'POST', body: form });
+  assert.equal(refusal.status, 422);
+  const problem = await refusal.json();
+  await page.setInputFiles('#mesh-file', badPath);
+  await page.click('#submit');
+  await page.waitForSelector('#problem:not([hidden])');
+  assert.equal(await page.$eval('#problem-title', (e) => e.textContent), problem.title);
+  assert.equal(await page.$eval('#problem-detail', (e) => e.textContent), problem.detail);
+  await shot(page, 'malformed-stl');
+
+  assert.deepEqual(consoleErrors, []);
+  console.log(`browser test passed; screenshots in ${artifacts}`);
+} catch (e) {
+  failed = true;
+  console.error(e);
+} finally {
+  await browser.close();
+  child.kill('SIGTERM');
+  rmSync(work, { recursive: true, force: true });
+}
+process.exit(failed ? 1 : 0);

@@ -1,0 +1,302 @@
+// voxd's page: submit a mesh with a job, follow it over its event stream,
+// look at what it made. Plain ES modules over the public API, so it is also
+// an example of using it (docs/web.md).
+import { ApiError, apiKey, call, getJson, listJobs, removeJob, submitJob, watchJob } from './api.js';
+import { RadiographyView } from './radiography.js';
+import { renderReport } from './report.js';
+import { MAX_VIEW_VOXELS, Viewer, filledTest, voxelSurface } from './viewer.js';
+
+const $ = (id) => document.getElementById(id);
+let schema = null;       // proto-schemas/job-params.schema.json
+let meshFile = null;
+let current = null;      // the job shown
+let stopWatching = () => {};
+let viewer = null;
+const radiography = new RadiographyView({
+  canvas: $('rad-canvas'), readout: $('rad-readout'), scale: $('rad-scale'), lo: $('rad-lo'), hi: $('rad-hi'),
+});
+
+// ---- problems ---------------------------------------------------------------
+
+function showProblem(e) {
+  const title = e instanceof ApiError ? e.title : 'Something went wrong';
+  const detail = e instanceof ApiError ? e.detail : String(e.message || e);
+  $('problem-title').textContent = title;
+  $('problem-detail').textContent = detail;
+  $('problem').hidden = false;
+}
+const guarded = (fn) => async (...args) => {
+  try { await fn(...args); } catch (e) { showProblem(e); }
+};
+$('problem-close').onclick = () => { $('problem').hidden = true; };
+
+// ---- the job form, from the schema's enums, limits and defaults --------------
+
+function fillSelect(select, values, chosen) {
+  select.replaceChildren(...values.map((v) => new Option(v, v, false, v === chosen)));
+}
+
+// One input per plain option of a mode (enums, numbers, booleans).
+function optionInputs(modeName) {
+  const box = $('mode-options');
+  box.replaceChildren();
+  const options = schema.properties[modeName];
+  if (!options || !options.properties) return;
+  for (const [name, spec] of Object.entries(options.properties)) {
+    const s = spec.$ref ? resolve(spec.$ref) : spec;
+    let input;
+    if (s.enum && s.enum.every((v) => typeof v === 'string')) {
+      input = document.createElement('select');
+      fillSelect(input, s.enum, s.default);
+    } else if (s.type === 'boolean') {
+      input = Object.assign(document.createElement('input'), { type: 'checkbox', checked: !!s.default });
+    } else if (s.type === 'integer' || s.type === 'number') {
+      input = Object.assign(document.createElement('input'), { type: 'number', step: s.type === 'integer' ? 1 : 'any' });
+      if (s.minimum !== undefined) input.min = s.minimum;
+      if (s.maximum !== undefined) input.max = s.maximum;
+      if (s.default !== undefined) input.placeholder = s.default;
+    } else {
+      continue;  // colours, ramps, lookup images: the API takes them as JSON
+    }
+    input.dataset.option = name;
+    input.dataset.kind = s.type || 'enum';
+    input.title = s.description || '';
+    const label = Object.assign(document.createElement('label'), { textContent: `${name} ` });
+    label.append(input);
+    box.append(label);
+  }
+}
+
+function resolve(ref) {
+  return ref.replace(/^#\//, '').split('/').reduce((o, k) => o[k], schema);
+}
+
+async function loadSchema() {
+  schema = await getJson('/ui/job-params.schema.json');
+  const p = schema.properties;
+  fillSelect($('mode'), p.mode.enum, p.mode.default);
+  fillSelect($('inside'), p.inside.enum, p.inside.default);
+  const byResolution = p.grid.oneOf.find((g) => g.required.includes('resolution')).properties.resolution;
+  Object.assign($('resolution'), { min: byResolution.minimum, max: Math.min(byResolution.maximum, 4096), value: 128 });
+  $('mode').onchange = () => optionInputs($('mode').value);
+  optionInputs($('mode').value);
+}
+
+function jobParams() {
+  const params = { mode: $('mode').value, inside: $('inside').value };
+  const kind = document.querySelector('input[name=grid-kind]:checked').value;
+  params.grid = kind === 'resolution' ? { resolution: Number($('resolution').value) }
+                                      : { voxel_size: Number($('voxel-size').value) };
+  const options = {};
+  for (const input of $('mode-options').querySelectorAll('[data-option]')) {
+    if (input.dataset.kind === 'boolean') options[input.dataset.option] = input.checked;
+    else if (input.value !== '') options[input.dataset.option] = input.tagName === 'SELECT' ? input.value : Number(input.value);
+  }
+  if (schema.properties[params.mode]?.properties) params[params.mode] = options;
+  params.analyses = [];
+  if ($('want-report').checked) {
+    const a = { kind: 'analysis' };
+    if ($('min-wall').value) a.min_wall = Number($('min-wall').value);
+    if ($('max-wall').value) a.max_wall = Number($('max-wall').value);
+    params.analyses.push(a);
+  }
+  if ($('want-radiography').checked)
+    params.analyses.push({ kind: 'radiography', axis: 'z', measure: 'max', format: 'png16', unit: 'model' });
+  return params;
+}
+
+function chooseFile(file) {
+  meshFile = file;
+  $('mesh-name').textContent = file ? `${file.name} (${(file.size / 1024).toFixed(1)} KiB)` : 'no file chosen';
+}
+$('mesh-file').onchange = (e) => chooseFile(e.target.files[0]);
+const drop = $('drop');
+drop.addEventListener('dragover', (e) => { e.preventDefault(); drop.classList.add('over'); });
+drop.addEventListener('dragleave', () => drop.classList.remove('over'));
+drop.addEventListener('drop', (e) => {
+  e.preventDefault();
+  drop.classList.remove('over');
+  if (e.dataTransfer.files.length) chooseFile(e.dataTransfer.files[0]);
+});
+
+$('job-form').onsubmit = guarded(async (e) => {
+  e.preventDefault();
+  if (!meshFile) throw new ApiError(0, { title: 'No mesh', detail: 'drop a mesh file or pick one first' });
+  $('problem').hidden = true;
+  $('submit').disabled = true;
+  try {
+    const job = await submitJob(meshFile, jobParams());
+    openJob(job.id);
+    refreshJobs();
+  } finally {
+    $('submit').disabled = false;
+  }
+});
+
+// ---- recent jobs ------------------------------------------------------------
+
+const refreshJobs = guarded(async () => {
+  const { jobs } = await listJobs();
+  $('jobs').replaceChildren(...jobs.map((j) => {
+    const li = document.createElement('li');
+    li.dataset.id = j.id;
+    li.append(Object.assign(document.createElement('span'), { className: `state ${j.state}`, textContent: j.state }),
+              Object.assign(document.createElement('code'), { textContent: j.id.slice(0, 8) }),
+              ` ${j.params.mode} ${j.grid.dims.join('×')} `,
+              Object.assign(document.createElement('span'), { className: 'muted', textContent: j.created_at.slice(11, 19) }));
+    li.onclick = () => openJob(j.id);
+    return li;
+  }));
+});
+
+// ---- one job: progress over its event stream --------------------------------
+
+function showProgress(state, progress, stage) {
+  $('job-state').textContent = state;
+  $('job-state').className = `state ${state}`;
+  $('progress-bar').style.width = `${Math.round(progress * 100)}%`;
+  $('progress-text').textContent = `${Math.round(progress * 100)} %` + (stage ? ` · ${stage}` : '');
+  $('cancel').disabled = !(state === 'queued' || state === 'running');
+}
+
+function openJob(id) {
+  stopWatching();
+  current = { id, job: null };
+  $('job-panel').hidden = false;
+  $('results').hidden = true;
+  $('job-id').textContent = id;
+  showProgress('queued', 0, null);
+  const mine = current;
+  stopWatching = watchJob(id, {
+    job: (job) => { mine.job = job; showProgress(job.state, job.progress, job.stage); },
+    state: (s) => showProgress(s.state, s.progress, s.stage),
+    progress: (p) => showProgress(mine.job ? 'running' : 'running', p.progress, p.stage),
+    analysis: (a) => { $('progress-text').textContent += ` · ${a.request.kind || 'analysis'} ${a.state}`; },
+    end: guarded(async (job) => {
+      mine.job = job;
+      showProgress(job.state, job.progress, null);
+      refreshJobs();
+      if (current !== mine) return;
+      if (job.state === 'failed' && job.error) showProblem(new ApiError(job.error.status, job.error));
+      if (job.state === 'succeeded') await showResults(job);
+    }),
+    gone: () => { showProgress('deleted', 0, null); refreshJobs(); },
+    error: () => showProblem(new ApiError(0, { title: 'Event stream lost', detail: 'the connection to the service closed; reload the job' })),
+  });
+}
+
+$('cancel').onclick = guarded(async () => { await removeJob(current.id); });
+$('delete').onclick = guarded(async () => {
+  await removeJob(current.id);
+  stopWatching();
+  $('job-panel').hidden = true;
+  refreshJobs();
+});
+
+// ---- results ------------------------------------------------------------------
+
+for (const b of $('tabs').querySelectorAll('button')) {
+  b.onclick = () => {
+    for (const other of $('tabs').querySelectorAll('button')) other.classList.toggle('active', other === b);
+    for (const tab of document.querySelectorAll('.tab')) tab.hidden = tab.id !== `tab-${b.dataset.tab}`;
+    if (b.dataset.tab === 'view3d' && viewer) viewer.resize();
+  };
+}
+
+async function showResults(job) {
+  $('results').hidden = false;
+  const mode = job.params.mode;
+  fillSelect($('view-source'), mode === 'palette' ? ['voxels', 'reconstruction'] : ['voxels'], 'voxels');
+  $('view-source').onchange = guarded(() => show3d(job));
+  await Promise.all([show3d(job), showRadiography(job), showSection(job, true), showPreviews(job), showReport(job)]
+    .map((p) => p.catch(showProblem)));
+  showDownloads(job);
+}
+
+async function show3d(job) {
+  if (!viewer) viewer = new Viewer($('viewer'));
+  const grid = job.grid;
+  if (grid.voxel_count > MAX_VIEW_VOXELS) {
+    viewer.clear();
+    $('view-info').textContent = `${grid.voxel_count} voxels: too many to draw here; see the previews`;
+    return;
+  }
+  if ($('view-source').value === 'reconstruction') {
+    const res = await call(`/v1/jobs/${job.id}/volume?format=stl`);
+    viewer.showMesh(grid, await res.arrayBuffer());
+    $('view-info').textContent = 'palette reconstruction';
+    return;
+  }
+  const res = await call(`/v1/jobs/${job.id}/volume?format=raw`);
+  const type = res.headers.get('X-Voxd-Value-Type') || 'bit';
+  const bytes = await res.arrayBuffer();
+  const filled = filledTest(bytes, type, job.params.mode);
+  let colourOf = null;
+  if (type === 'rgba8') {
+    const v = new Uint8Array(bytes);
+    colourOf = (i) => [v[4 * i] / 255, v[4 * i + 1] / 255, v[4 * i + 2] / 255];
+  }
+  viewer.showVoxels(grid, voxelSurface(grid.dims, filled, colourOf));
+  $('view-info').textContent = `${job.filled_voxels} filled voxels of ${grid.dims.join(' × ')}, ${grid.voxel_size.toPrecision(4)} each`;
+}
+
+async function showRadiography(job) {
+  await radiography.show(job.id, $('rad-axis').value, $('rad-measure').value);
+}
+$('rad-axis').onchange = $('rad-measure').onchange = guarded(() => current?.job && showRadiography(current.job));
+
+async function showSection(job, reset) {
+  const axis = $('sec-axis').value, a = 'xyz'.indexOf(axis);
+  const slider = $('sec-index');
+  slider.max = job.grid.dims[a] - 1;
+  if (reset) slider.value = Math.floor(job.grid.dims[a] / 2);
+  const index = Number(slider.value);
+  const at = job.grid.origin[a] + (index + 0.5) * job.grid.voxel_size;
+  $('sec-where').textContent = `layer ${index} of ${job.grid.dims[a]}, ${axis} = ${at.toPrecision(5)}`;
+  const res = await call(`/v1/jobs/${job.id}/section?axis=${axis}&index=${index}&colour=${$('sec-colour').value}`);
+  const img = $('sec-image');
+  if (img.src) URL.revokeObjectURL(img.src);
+  img.src = URL.createObjectURL(await res.blob());
+}
+$('sec-axis').onchange = guarded(() => current?.job && showSection(current.job, true));
+$('sec-index').oninput = guarded(() => current?.job && showSection(current.job, false));
+$('sec-colour').onchange = guarded(() => current?.job && showSection(current.job, false));
+
+async function showPreviews(job) {
+  const colour = $('prev-colour').value;
+  $('previews').replaceChildren(...['+x', '-x', '+y', '-y', '+z', '-z'].map((view) => {
+    const figure = document.createElement('figure');
+    const img = Object.assign(document.createElement('img'), { alt: `preview from ${view}`, loading: 'lazy' });
+    call(`/v1/jobs/${job.id}/preview?view=${encodeURIComponent(view)}&colour=${colour}`)
+      .then((r) => r.blob()).then((b) => { img.src = URL.createObjectURL(b); }).catch(showProblem);
+    figure.append(img, Object.assign(document.createElement('figcaption'), { textContent: `from ${view}` }));
+    return figure;
+  }));
+}
+$('prev-colour').onchange = guarded(() => current?.job && showPreviews(current.job));
+
+async function showReport(job) {
+  // The report the job asked for (its min and max wall), else one with none.
+  const asked = (job.analyses || []).find((a) => a.request && a.request.kind === 'analysis');
+  const report = await getJson(asked ? asked.url : `/v1/jobs/${job.id}/analysis`);
+  renderReport($('report'), report, (min, max) => viewer && viewer.showBox(min, max));
+}
+
+function showDownloads(job) {
+  const downloads = job.links.downloads || {};
+  $('downloads').replaceChildren(...Object.entries(downloads).map(([format, url]) => {
+    const a = Object.assign(document.createElement('a'), { href: url, textContent: format, download: '' });
+    a.dataset.format = format;
+    const li = document.createElement('li');
+    li.append(a);
+    return li;
+  }));
+}
+
+// ---- start --------------------------------------------------------------------
+
+$('api-key').value = apiKey.get();
+$('api-key').onchange = (e) => { apiKey.set(e.target.value.trim()); refreshJobs(); };
+guarded(loadSchema)();
+refreshJobs();
+setInterval(refreshJobs, 5000);

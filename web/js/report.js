@@ -1,0 +1,73 @@
+// The analysis report as tables: mass properties (voxels against the exact
+// mesh), parts, voids, wall thickness with its thin and thick regions.
+// Clicking a region's row shows its box in the 3D view.
+
+const fmt = (x, digits = 4) => (x === null || x === undefined ? '–' : Number(x).toPrecision(digits));
+const vec = (v) => (v ? `(${v.map((x) => fmt(x)).join(', ')})` : '–');
+
+function table(headings, rows, rowClass) {
+  const t = document.createElement('table');
+  const head = t.createTHead().insertRow();
+  for (const h of headings) head.appendChild(Object.assign(document.createElement('th'), { textContent: h }));
+  const body = t.createTBody();
+  for (const r of rows) {
+    const tr = body.insertRow();
+    if (rowClass) tr.className = rowClass;
+    for (const cell of r.cells) tr.insertCell().textContent = cell;
+    if (r.onclick) tr.addEventListener('click', () => r.onclick(tr));
+  }
+  return t;
+}
+
+function heading(text) { return Object.assign(document.createElement('h3'), { textContent: text }); }
+
+// `showRegion(min, max)` puts a box in the 3D view (null: none).
+export function renderReport(container, report, showRegion) {
+  container.replaceChildren();
+  const unit = report.unit || 'model units';
+  const m = report.mass_properties;
+  container.append(heading(`Mass properties (${unit})`));
+  const mesh = m.mesh && m.mesh.available !== false ? m.mesh : null;
+  container.append(table(['', 'voxels', 'mesh (exact)'], [
+    { cells: ['volume', fmt(m.voxels.volume), fmt(mesh && mesh.volume)] },
+    { cells: ['centroid', vec(m.voxels.centroid), vec(mesh && mesh.centroid)] },
+    { cells: ['bounding box min', vec(m.voxels.bbox_min), vec(mesh && mesh.bbox_min)] },
+    { cells: ['bounding box max', vec(m.voxels.bbox_max), vec(mesh && mesh.bbox_max)] },
+    { cells: ['surface area', '–', fmt(mesh && mesh.surface_area)] },
+  ]));
+  if (m.difference) {
+    container.append(Object.assign(document.createElement('p'), {
+      className: 'muted',
+      textContent: `voxel volume differs from the mesh's by ${(100 * m.difference.volume_relative).toFixed(3)} %`,
+    }));
+  }
+  const clickable = (r) => (tr) => {
+    const shown = tr.classList.contains('shown');
+    for (const other of container.querySelectorAll('tr.shown')) other.classList.remove('shown');
+    if (!shown) tr.classList.add('shown');
+    showRegion(shown ? null : r.bbox_min, shown ? null : r.bbox_max);
+  };
+  const regions = (title, set, extra = () => [], extraHead = []) => {
+    container.append(heading(`${title}: ${set.count}` + (set.total_volume !== undefined ? `, ${fmt(set.total_volume)} ${unit}³ in all` : '')));
+    if (!set.items.length) return;
+    container.append(table(['#', 'voxels', 'volume', 'centroid', 'box min', 'box max', ...extraHead],
+      set.items.map((r, i) => ({ cells: [i + 1, r.voxels, fmt(r.volume), vec(r.centroid), vec(r.bbox_min), vec(r.bbox_max), ...extra(r)],
+                                 onclick: clickable(r) })), 'region'));
+  };
+  regions('Parts', report.parts);
+  regions('Voids', report.voids);
+  const t = report.thickness;
+  if (t) {
+    container.append(heading(`Wall thickness (${unit})`));
+    const verdict = document.createElement('p');
+    verdict.innerHTML = `min ${fmt(t.min)}, mean ${fmt(t.mean)}, max ${fmt(t.max)}; ` +
+      `min wall ${fmt(t.min_wall)}, max wall ${fmt(t.max_wall)}: `;
+    verdict.append(Object.assign(document.createElement('strong'), {
+      className: `verdict ${t.verdict || ''}`, textContent: t.verdict || 'no limits given',
+    }));
+    container.append(verdict, Object.assign(document.createElement('p'), { className: 'muted', textContent: t.error_bound }));
+    const thick = (r) => [fmt(r.min_thickness ?? r.max_thickness), fmt(r.mean_thickness)];
+    regions('Thin regions', t.thin_regions, thick, ['thinnest', 'mean']);
+    regions('Thick regions', t.thick_regions, (r) => [fmt(r.max_thickness ?? r.min_thickness), fmt(r.mean_thickness)], ['thickest', 'mean']);
+  }
+}
