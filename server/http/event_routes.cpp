@@ -10,6 +10,7 @@
 #include "server/http/connection_server.h"
 #include "server/http/job_event_stream.h"
 #include "server/http/job_lookup.h"
+#include "server/http/metrics.h"
 #include "server/http/route_table.h"
 #include "server/jobs/job_manager.h"
 
@@ -39,22 +40,28 @@ bool is_event_stream_request(std::string_view request_line) {
   return std::all_of(id.begin(), id.end(), [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
 }
 
-void install_event_routes(RouteTable& routes, JobManager& jobs) {
+void install_event_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics) {
   // Runs on one of the connection server's stream threads, never an HTTP
   // thread (connection_server.h), for as long as the job runs.
-  routes.get(kJobPath + "/events", [&jobs](const httplib::Request& req, httplib::Response& res) {
+  routes.get(kJobPath + "/events", [&jobs, &metrics](const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.matches[1];
     // Counted before the first look, so a change between the two is seen.
     const std::uint64_t seen = jobs.wait_for_change(~std::uint64_t{0}, std::chrono::milliseconds(0));
     const auto job = jobs.get(id);
     if (!job) throw unknown_job(id);
+    // Lives as long as the response's provider: the stream is open.
     struct State {
+      explicit State(Metrics& m) : metrics(m) { metrics.stream_opened(); }
+      ~State() { metrics.stream_closed(); }
+      State(const State&) = delete;
+      State& operator=(const State&) = delete;
+      Metrics& metrics;
       JobEventStream stream;
       std::string pending;
       std::uint64_t seen = 0;
       Clock::time_point last_write = Clock::now();
     };
-    auto state = std::make_shared<State>();
+    auto state = std::make_shared<State>(metrics);
     state->pending = state->stream.start(*job);
     state->seen = seen;
     res.set_header("Cache-Control", "no-cache");

@@ -15,7 +15,7 @@ void HttpApi::install(httplib::Server& server) {
   install_job_routes(routes, jobs_, metrics_, config_, params_limits_);
   install_analysis_routes(routes, jobs_);
   install_mode_routes(routes, jobs_);
-  install_event_routes(routes, jobs_);
+  install_event_routes(routes, jobs_, metrics_);
   install_web_routes(routes);
   install_voxelize_route(routes, jobs_, metrics_, config_, params_limits_);
   routes.refuse_other_methods();

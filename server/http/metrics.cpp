@@ -45,6 +45,9 @@ std::string Metrics::render(const JobCounts& jobs) const {
          "# TYPE voxd_replicas_live gauge\n";
     o << "voxd_replicas_live " << *jobs.live_replicas << '\n';
   }
+  o << "# HELP voxd_event_streams_open Event streams open on this replica (at most --max-event-streams).\n"
+       "# TYPE voxd_event_streams_open gauge\n";
+  o << "voxd_event_streams_open " << event_streams_.load() << '\n';
   o << "# HELP voxd_http_bytes_received_total Request body bytes received.\n# TYPE voxd_http_bytes_received_total counter\n";
   o << "voxd_http_bytes_received_total " << bytes_in_.load() << '\n';
   o << "# HELP voxd_http_bytes_sent_total Response body bytes sent.\n# TYPE voxd_http_bytes_sent_total counter\n";

@@ -20,6 +20,9 @@ class Metrics {
   void observe_stage(const std::string& stage, double seconds);
   void add_bytes_in(std::uint64_t n) { bytes_in_ += n; }
   void add_bytes_out(std::uint64_t n) { bytes_out_ += n; }
+  // Event streams (GET /v1/jobs/{id}/events) open now.
+  void stream_opened() { ++event_streams_; }
+  void stream_closed() { --event_streams_; }
   std::string render(const JobCounts& jobs) const;
 
  private:
@@ -34,6 +37,7 @@ class Metrics {
   std::map<std::string, std::uint64_t> rejected_;
   std::map<std::string, Histogram> stages_;
   std::atomic<std::uint64_t> bytes_in_{0}, bytes_out_{0};
+  std::atomic<std::int64_t> event_streams_{0};
 };
 
 }  // namespace voxd::server

@@ -219,6 +219,9 @@ TEST_F(JobEventsTest, OpenStreamsDoNotStarveTheHttpThreads) {
     ASSERT_TRUE(health);
     EXPECT_EQ(health->status, 200);
   }
+  auto metrics = quick->Get("/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_NE(metrics->body.find("voxd_event_streams_open 6\n"), std::string::npos) << metrics->body;
   int status = 0;
   const std::vector<Event> refused = read_events(server_->port(), id, &status);
   EXPECT_EQ(status, 503);
@@ -226,6 +229,11 @@ TEST_F(JobEventsTest, OpenStreamsDoNotStarveTheHttpThreads) {
   for (auto& t : readers) t.join();
   const json done = expect_json(http().Get(("/v1/jobs/" + id).c_str()), 200, "JobStatus");
   for (const auto& events : seen) expect_well_formed(events, done);
+  // Closed streams are counted out (just after their last bytes went).
+  bool closed = false;
+  for (int i = 0; i < 100 && !closed; ++i, std::this_thread::sleep_for(std::chrono::milliseconds(20)))
+    closed = quick->Get("/metrics")->body.find("voxd_event_streams_open 0\n") != std::string::npos;
+  EXPECT_TRUE(closed) << quick->Get("/metrics")->body;
 }
 
 // Replicas on one Redis: every replica streams every job, the one that runs

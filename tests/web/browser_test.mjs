@@ -164,7 +164,26 @@ try {
   assert.ok(downloaded.equals(fromApi), `downloaded ${downloaded.length} bytes differ from the API's ${fromApi.length}`);
   await shot(page, 'downloads');
 
-  // 8. A malformed STL: the page shows the API's problem, title and detail.
+  // 8. A distance field's job shows its zero level set (surface nets).
+  await page.selectOption('#mode', 'sdf');
+  await page.fill('#resolution', '48');
+  await page.uncheck('#want-report');
+  await page.uncheck('#want-radiography');
+  await page.setInputFiles('#mesh-file', meshPath);
+  await page.click('#submit');
+  await page.waitForFunction((before) => document.getElementById('job-id').textContent !== before, jobId);
+  await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
+  await page.click('button[data-tab=view3d]');
+  await page.waitForFunction(() => /zero level set: \d+ triangles/.test(document.getElementById('view-info').textContent),
+                             null, { timeout: 60000 });
+  // Closed and facing out: it encloses the box's 2304 (its edges rounded).
+  const enclosed = Number(/enclosing ([0-9.e+]+)/.exec(await page.$eval('#view-info', (e) => e.textContent))[1]);
+  assert.ok(Math.abs(enclosed - 2304) / 2304 < 0.05, `the zero level set encloses ${enclosed}`);
+  const sdfPixels = await drawnPixels(page);
+  assert.ok(sdfPixels.drawn > sdfPixels.total * 0.02, `zero level set nearly blank: ${sdfPixels.drawn} drawn`);
+  await shot(page, 'sdf-zero-level-set');
+
+  // 9. A malformed STL: the page shows the API's problem, title and detail.
   const form = new FormData();
   form.append('mesh', new Blob([readFileSync(badPath)]), 'broken.stl');
   form.append('params', new Blob([JSON.stringify({ grid: { resolution: 80 } })], { type: 'application/json' }));

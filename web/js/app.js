@@ -4,6 +4,7 @@
 import { ApiError, apiKey, call, getJson, listJobs, removeJob, submitJob, watchJob } from './api.js';
 import { RadiographyView } from './radiography.js';
 import { renderReport } from './report.js';
+import { enclosedVolume, surfaceNets } from './surface_nets.js';
 import { MAX_VIEW_VOXELS, Viewer, filledTest, voxelSurface } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
@@ -206,7 +207,8 @@ for (const b of $('tabs').querySelectorAll('button')) {
 async function showResults(job) {
   $('results').hidden = false;
   const mode = job.params.mode;
-  fillSelect($('view-source'), mode === 'palette' ? ['voxels', 'reconstruction'] : ['voxels'], 'voxels');
+  const sources = { palette: ['voxels', 'reconstruction'], sdf: ['zero level set', 'voxels'] }[mode] || ['voxels'];
+  fillSelect($('view-source'), sources, sources[0]);
   $('view-source').onchange = guarded(() => show3d(job));
   await Promise.all([show3d(job), showRadiography(job), showSection(job, true), showPreviews(job), showReport(job)]
     .map((p) => p.catch(showProblem)));
@@ -230,6 +232,19 @@ async function show3d(job) {
   const res = await call(`/v1/jobs/${job.id}/volume?format=raw`);
   const type = res.headers.get('X-Voxd-Value-Type') || 'bit';
   const bytes = await res.arrayBuffer();
+  if ($('view-source').value === 'zero level set') {
+    const [nx, ny] = grid.dims, d = new Float32Array(bytes);
+    // Positive outside; beyond the grid, half a voxel out (a fitted grid's
+    // part reaches its outermost voxels).
+    const sign = job.values.sign_convention === 'inside_positive' ? -1 : 1;
+    const half = job.values.unit === 'voxels' ? 0.5 : grid.voxel_size / 2;
+    const surface = surfaceNets(grid.dims, (i, j, k) => sign * d[i + nx * (j + ny * k)], half);
+    viewer.showSurface(grid, surface);
+    const volume = enclosedVolume(surface) * grid.voxel_size ** 3;
+    $('view-info').textContent =
+      `zero level set: ${surface.indices.length / 3} triangles (surface nets), enclosing ${volume.toPrecision(5)} units³`;
+    return;
+  }
   const filled = filledTest(bytes, type, job.params.mode);
   let colourOf = null;
   if (type === 'rgba8') {
@@ -287,6 +302,18 @@ function showDownloads(job) {
   $('downloads').replaceChildren(...Object.entries(downloads).map(([format, url]) => {
     const a = Object.assign(document.createElement('a'), { href: url, textContent: format, download: '' });
     a.dataset.format = format;
+    // A link cannot send the API key: with one, fetch and save the bytes.
+    a.onclick = guarded(async (e) => {
+      if (!apiKey.get()) return;
+      e.preventDefault();
+      const res = await call(url);
+      const name = /filename="?([^";]+)"?/.exec(res.headers.get('Content-Disposition') || '');
+      const save = Object.assign(document.createElement('a'), {
+        href: URL.createObjectURL(await res.blob()), download: name ? name[1] : `${job.id}.${format}`,
+      });
+      save.click();
+      setTimeout(() => URL.revokeObjectURL(save.href), 10000);
+    });
     const li = document.createElement('li');
     li.append(a);
     return li;

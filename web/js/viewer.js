@@ -1,7 +1,8 @@
 // The 3D view: the job's voxels as the surface between filled and empty
-// voxels (in a colour job, each voxel in its colour), or a palette job's
-// reconstruction, orbitable with the mouse (three.js). Regions of the report
-// are shown as boxes.
+// voxels (in a colour job, each voxel in its colour), a distance field's
+// zero level set (surface_nets.js), or a palette job's reconstruction,
+// orbitable with the mouse (three.js). Regions of the report are shown as
+// boxes.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/OrbitControls.js';
 import { STLLoader } from 'three/addons/STLLoader.js';
@@ -119,6 +120,20 @@ export class Viewer {
     const material = new THREE.MeshLambertMaterial({ color: geometry.getAttribute('color') ? 0xffffff : 0x9aa7b8,
                                                      vertexColors: !!geometry.getAttribute('color') });
     const mesh = new THREE.Mesh(geometry, material);
+    mesh.scale.setScalar(grid.voxel_size);
+    mesh.position.set(...grid.origin);
+    this.model.add(mesh);
+    this.frame(grid);
+  }
+
+  // An indexed surface in voxel units (sample (i, j, k) at i + 1/2, ...).
+  showSurface(grid, { positions, indices }) {
+    this.clear();
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+    geometry.setIndex(new THREE.BufferAttribute(indices, 1));
+    geometry.computeVertexNormals();
+    const mesh = new THREE.Mesh(geometry, new THREE.MeshLambertMaterial({ color: 0x9aa7b8 }));
     mesh.scale.setScalar(grid.voxel_size);
     mesh.position.set(...grid.origin);
     this.model.add(mesh);
