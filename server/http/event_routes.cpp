@@ -49,6 +49,13 @@ void install_event_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics
     const std::uint64_t seen = jobs.wait_for_change(~std::uint64_t{0}, std::chrono::milliseconds(0));
     const auto job = jobs.get(id);
     if (!job) throw unknown_job(id);
+    // An EventSource reconnects by itself after the stream ends, saying the
+    // last event it had: for a job that has ended there is nothing more,
+    // and 204 is what tells an EventSource to stop.
+    if (req.has_header("Last-Event-ID") && finished(job->state)) {
+      res.status = 204;
+      return;
+    }
     // Lives as long as the response's provider: the stream is open.
     struct State {
       explicit State(Metrics& m) : metrics(m) { metrics.stream_opened(); }

@@ -149,6 +149,11 @@ TEST_F(JobEventsTest, ALateSubscriberGetsTheJobAsItEndedAndTheEnd) {
   const json done = expect_json(http().Get(("/v1/jobs/" + id).c_str()), 200, "JobStatus");
   EXPECT_EQ(events.at(0).data, done);
   EXPECT_EQ(events.at(1).data, done);
+  // An EventSource reconnecting after the end is told to stop.
+  auto again = http().Get(("/v1/jobs/" + id + "/events").c_str(), {{"Last-Event-ID", "2"}});
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 204);
+  EXPECT_TRUE(again->body.empty());
 }
 
 TEST_F(JobEventsTest, ACancelledJobsStreamEndsCancelled) {

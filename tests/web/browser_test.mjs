@@ -147,8 +147,13 @@ try {
   const volumeText = await page.$eval('#report table tbody tr td:nth-child(2)', (e) => e.textContent);
   assert.ok(Math.abs(Number(volumeText) - 2304) / 2304 < 0.05, `volume ${volumeText}`);
   assert.match(await page.$eval('#report', (e) => e.textContent), /Wall thickness/);
-  await page.click('#report tr.region >> nth=0');
   await shot(page, 'report');
+  // A region's row shows its box in the 3D view.
+  const before3d = await page.$eval('#viewer canvas', (c) => c.toDataURL());
+  await page.click('#report tr.region >> nth=0');
+  await page.waitForSelector('#tab-view3d:not([hidden])');
+  assert.notEqual(await page.$eval('#viewer canvas', (c) => c.toDataURL()), before3d, 'the region box was not drawn');
+  await shot(page, 'region-in-3d');
 
   // 6. Sections: the slider moves through the part.
   await page.click('button[data-tab=sections]');

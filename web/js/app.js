@@ -196,13 +196,12 @@ $('delete').onclick = guarded(async () => {
 
 // ---- results ------------------------------------------------------------------
 
-for (const b of $('tabs').querySelectorAll('button')) {
-  b.onclick = () => {
-    for (const other of $('tabs').querySelectorAll('button')) other.classList.toggle('active', other === b);
-    for (const tab of document.querySelectorAll('.tab')) tab.hidden = tab.id !== `tab-${b.dataset.tab}`;
-    if (b.dataset.tab === 'view3d' && viewer) viewer.resize();
-  };
+function selectTab(name) {
+  for (const b of $('tabs').querySelectorAll('button')) b.classList.toggle('active', b.dataset.tab === name);
+  for (const tab of document.querySelectorAll('.tab')) tab.hidden = tab.id !== `tab-${name}`;
+  if (name === 'view3d' && viewer) viewer.resize();
 }
+for (const b of $('tabs').querySelectorAll('button')) b.onclick = () => selectTab(b.dataset.tab);
 
 async function showResults(job) {
   $('results').hidden = false;
@@ -294,7 +293,12 @@ async function showReport(job) {
   // The report the job asked for (its min and max wall), else one with none.
   const asked = (job.analyses || []).find((a) => a.request && a.request.kind === 'analysis');
   const report = await getJson(asked ? asked.url : `/v1/jobs/${job.id}/analysis`);
-  renderReport($('report'), report, (min, max) => viewer && viewer.showBox(min, max));
+  // A region's row shows where it is: its box in the 3D view.
+  renderReport($('report'), report, (min, max) => {
+    if (!viewer) return;
+    viewer.showBox(min, max);
+    if (min) selectTab('view3d');
+  });
 }
 
 function showDownloads(job) {
