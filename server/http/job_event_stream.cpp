@@ -27,7 +27,12 @@ std::string JobEventStream::start(const JobSnapshot& now) {
   state_ = now.state;
   progress_ = now.progress;
   stage_ = now.state == JobState::running ? now.stage : std::string();
-  analyses_ = now.analyses;
+  // What the first event shows as ready needs no event of its own.
+  if (now.analyses.is_array())
+    for (const auto& entry : now.analyses) {
+      const std::string state = entry.value("state", "");
+      analysis_sent_.push_back(state == "ready" || state == "failed");
+    }
   // How long a client's EventSource waits before it reconnects.
   std::string out = "retry: 1000\n\n" + event("job", to_json(now));
   if (finished(now.state)) {
@@ -55,19 +60,18 @@ std::string JobEventStream::update(const JobSnapshot& now) {
     progress_ = progress;
     stage_ = stage;
   }
-  // Each requested analysis once, when it leaves "pending".
+  // Each requested analysis once, when it is ready or failed.
   if (now.analyses.is_array()) {
+    if (analysis_sent_.size() < now.analyses.size()) analysis_sent_.resize(now.analyses.size(), false);
     for (std::size_t i = 0; i < now.analyses.size(); ++i) {
       const json& entry = now.analyses[i];
-      const json before = i < analyses_.size() ? analyses_[i] : json(nullptr);
       const std::string state = entry.value("state", "");
-      if (state == "pending" || state == "on_request") continue;
-      if (before.is_object() && before.value("state", "") == state) continue;
+      if (analysis_sent_[i] || (state != "ready" && state != "failed")) continue;
+      analysis_sent_[i] = true;
       json data = entry;
       data["index"] = i;
       out += event("analysis", data);
     }
-    analyses_ = now.analyses;
   }
   if (finished(now.state)) {
     out += event("end", to_json(now));

@@ -13,6 +13,7 @@
 // for a finished job, "end" right after).
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -40,7 +41,10 @@ class JobEventStream {
   JobState state_ = JobState::queued;
   double progress_ = 0.0;
   std::string stage_;
-  nlohmann::json analyses_ = nlohmann::json::array();
+  // Analyses already sent as ready or failed (by index): each is sent once,
+  // also when a later snapshot, read from another replica's or Redis's
+  // slightly older view, still says pending.
+  std::vector<bool> analysis_sent_;
   bool ended_ = false;
 };
 

@@ -685,6 +685,9 @@ struct JobManager::Impl {
   static void record_success(JobSnapshot& s, const VoxelJobResult& r, std::optional<nlohmann::json> analyses_done) {
     if (analyses_done) s.analyses = std::move(*analyses_done);
     s.state = JobState::succeeded;
+    // With the state, in one step: an event stream reading between the two
+    // would send an end with no finished_at.
+    s.finished_at = format_time(Clock::now());
     s.progress = 1.0;
     s.mesh = r.report;
     s.mesh_mass = r.mesh_mass;
@@ -773,6 +776,7 @@ struct JobManager::Impl {
         s.failure = JobFailure{kind.slug, "The job failed",
                                kind.client_message ? e.what() : "the job failed unexpectedly; it was logged"};
       }
+      s.finished_at = format_time(Clock::now());
     } catch (const StorageFull& e) {
       // Nothing half-written stays: the disk is not kept full by this job.
       spdlog::error("job {}: cannot store its result: {}", job->snap.id, e.what());
@@ -782,6 +786,7 @@ struct JobManager::Impl {
       }
       std::lock_guard lock(mutex);
       job->snap.state = JobState::failed;
+      job->snap.finished_at = format_time(Clock::now());
       job->snap.failure = JobFailure{"storage-full", "The service's storage is full",
                                      "the result could not be stored: " + std::string(e.what()) + "; retry later"};
     } catch (const BackendUnavailable& e) {
@@ -791,11 +796,12 @@ struct JobManager::Impl {
       spdlog::error("job {}: internal error: {}", job->snap.id, log_safe(e.what()));
       std::lock_guard lock(mutex);
       job->snap.state = JobState::failed;
+      job->snap.finished_at = format_time(Clock::now());
       job->snap.failure = JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
     }
     {
       std::lock_guard lock(mutex);
-      job->snap.finished_at = format_time(Clock::now());
+      if (job->snap.finished_at.empty()) job->snap.finished_at = format_time(Clock::now());
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       recent_job_seconds = 0.8 * recent_job_seconds + 0.2 * seconds;
       done = job->snap;

@@ -270,7 +270,10 @@ TEST_F(JobEventsTest, EveryReplicaOnOneRedisStreamsTheSameJob) {
       analyses += e.name == "analysis";
       staged += e.name == "progress" && e.data.at("stage").is_string();
     }
-    EXPECT_EQ(analyses, 2u);
+    std::string trace;
+    for (const auto& e : seen[i])
+      if (e.name != "progress") trace += e.name + " " + (e.name == "analysis" ? e.data.dump() : e.data.value("state", "")) + "\n";
+    EXPECT_EQ(analyses, 2u) << trace;
     EXPECT_GT(staged, 0u) << "no stage seen while the job ran";
   }
   for (auto& r : replicas) EXPECT_EQ(r->stop(), 0) << r->log();
