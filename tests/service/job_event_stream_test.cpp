@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "server/http/job_event_stream.h"
+#include "server/http/routes.h"
 
 namespace voxd::server {
 namespace {
@@ -105,6 +106,24 @@ TEST(JobEventStream, ADeletedJobIsGoneAndTheStreamEnds) {
   EXPECT_EQ(gone[0].name, "gone");
   EXPECT_EQ(gone[0].data.at("id"), std::string(32, 'a'));
   EXPECT_TRUE(stream.ended());
+}
+
+// The connection server sends exactly these request lines to the stream
+// threads; anything else (even close to it) goes to the HTTP threads.
+TEST(EventStreamRequest, OnlyAGetOfAJobsEventsIsAStream) {
+  const std::string id = "0123456789abcdef0123456789abcdef";
+  EXPECT_TRUE(is_event_stream_request("GET /v1/jobs/" + id + "/events HTTP/1.1"));
+  EXPECT_TRUE(is_event_stream_request("GET /v1/jobs/" + id + "/events?x=1 HTTP/1.1"));
+  EXPECT_TRUE(is_event_stream_request("GET /v1/jobs/" + id + "/events"));  // a head cut at the peek
+  EXPECT_FALSE(is_event_stream_request("POST /v1/jobs/" + id + "/events HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("GET /v1/jobs/" + id + " HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("GET /v1/jobs/" + id + "/events/more HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("GET /v1/jobs/" + id + "/eventsx HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("GET /v1/jobs/0123456789ABCDEF0123456789abcdef/events HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("GET /v1/jobs/0123/events HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("GET /x/v1/jobs/" + id + "/events HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request(""));
+  EXPECT_FALSE(is_event_stream_request("GET"));
 }
 
 }  // namespace
