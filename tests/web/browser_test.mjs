@@ -109,6 +109,8 @@ try {
   const seen = await page.evaluate(() => window.progressSeen);
   for (let i = 1; i < seen.length; ++i) assert.ok(seen[i] >= seen[i - 1], `progress went back: ${seen.join(', ')}`);
   assert.equal(await page.isVisible('#problem'), false, 'a problem box is shown for a job that succeeded');
+  // Both analyses the job asked for were announced by the event stream.
+  assert.equal(await page.$eval('#analyses-ready', (e) => e.textContent), 'analysis ready · radiography ready · ');
   const jobId = await page.$eval('#job-id', (e) => e.textContent);
   assert.match(jobId, /^[0-9a-f]{32}$/);
   await shot(page, 'done');

@@ -160,21 +160,35 @@ function showProgress(state, progress, stage) {
   $('cancel').disabled = !(state === 'queued' || state === 'running');
 }
 
+// The job JSON's analyses that are done, as the stream tells of them (those
+// done before it was opened come with its first event).
+let analysesDone = new Map();
+function noteAnalyses(entries) {
+  (entries || []).forEach((a, i) => {
+    if (a.state === 'ready' || a.state === 'failed') analysesDone.set(a.index ?? i, `${a.request.kind} ${a.state}`);
+  });
+  $('analyses-ready').textContent = [...analysesDone.keys()].sort((x, y) => x - y)
+    .map((k) => `${analysesDone.get(k)} · `).join('');
+}
+
 function openJob(id) {
   stopWatching();
   current = { id, job: null };
   $('job-panel').hidden = false;
   $('results').hidden = true;
   $('job-id').textContent = id;
+  analysesDone = new Map();
+  $('analyses-ready').textContent = '';
   showProgress('queued', 0, null);
   const mine = current;
   stopWatching = watchJob(id, {
-    job: (job) => { mine.job = job; showProgress(job.state, job.progress, job.stage); },
+    job: (job) => { mine.job = job; noteAnalyses(job.analyses); showProgress(job.state, job.progress, job.stage); },
     state: (s) => showProgress(s.state, s.progress, s.stage),
-    progress: (p) => showProgress(mine.job ? 'running' : 'running', p.progress, p.stage),
-    analysis: (a) => { $('progress-text').textContent += ` · ${a.request.kind || 'analysis'} ${a.state}`; },
+    progress: (p) => showProgress('running', p.progress, p.stage),
+    analysis: (a) => noteAnalyses([a]),
     end: guarded(async (job) => {
       mine.job = job;
+      noteAnalyses(job.analyses);
       showProgress(job.state, job.progress, null);
       refreshJobs();
       if (current !== mine) return;
