@@ -20,6 +20,7 @@ const { chromium } = createRequire(join(repo, 'web/package.json'))('playwright-c
 const voxd = process.env.VOXD_BINARY || join(repo, 'build/server/voxd');
 const artifacts = process.env.VOXD_TEST_ARTIFACTS || join(repo, 'build/test-artifacts/browser');
 const browserPath = process.env.CHROMIUM || '/usr/bin/chromium';
+rmSync(artifacts, { recursive: true, force: true });
 mkdirSync(artifacts, { recursive: true });
 const work = mkdtempSync(join(tmpdir(), 'voxd-browser-'));
 
@@ -152,7 +153,7 @@ try {
   await shot(page, 'report');
   // A region's row shows its box in the 3D view.
   const before3d = await page.$eval('#viewer canvas', (c) => c.toDataURL());
-  await page.click('#report tr.region >> nth=0');
+  await page.click('#report tr.region >> nth=1');  // the void inside the box
   await page.waitForSelector('#tab-view3d:not([hidden])');
   assert.notEqual(await page.$eval('#viewer canvas', (c) => c.toDataURL()), before3d, 'the region box was not drawn');
   await shot(page, 'region-in-3d');

@@ -148,10 +148,17 @@ export class Viewer {
     this.frame(grid);
   }
 
-  // A box in model coordinates (a region of the report), or none.
+  // A box in model coordinates (a region of the report), or none. The part
+  // turns see-through meanwhile: a void or a thin region is inside it.
   showBox(min, max) {
     for (const o of this.boxes.children) o.geometry && o.geometry.dispose();
     this.boxes.clear();
+    for (const o of this.model.children) {
+      o.material.transparent = !!min;
+      o.material.opacity = min ? 0.3 : 1;
+      o.material.depthWrite = !min;
+      o.material.needsUpdate = true;
+    }
     if (min) {
       const box = new THREE.Box3(new THREE.Vector3(...min), new THREE.Vector3(...max));
       this.boxes.add(new THREE.Box3Helper(box, 0xe8590c));
