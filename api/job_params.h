@@ -48,6 +48,15 @@ struct JobParams {
   // An empty volume of the value type the job produces, to ask
   // format_refusal() before any work; nullopt for a job of bits.
   std::optional<ValueVolume> value_type() const { return mode->value_type(*this); }
+  // Why the job's result cannot be given in `format` with `options` (a
+  // format the mode writes itself, or one its bits or values take, is
+  // none): what GET /v1/jobs/{id}/volume refuses, and the job status's
+  // downloads leave out.
+  std::optional<std::string> format_refusal(VolumeFormat format, const EncodeOptions& options = {}) const {
+    if (mode->writes(format)) return std::nullopt;
+    const std::optional<ValueVolume> probe = value_type();
+    return probe ? voxd::format_refusal(*probe, format, options) : voxd::format_refusal(BitVolume(), format);
+  }
   // The mode's options as its own type; null for another mode's.
   template <class T>
   const T* options_as() const {

@@ -541,8 +541,6 @@ void ConnectionServer::set_stream_requests(std::function<bool(std::string_view)>
   impl_->is_stream = std::move(is_stream);
 }
 
-std::size_t ConnectionServer::open_streams() const { return impl_->streams.load(); }
-
 bool ConnectionServer::process_and_close_socket(socket_t sock) {
   impl_->admit(sock);
   return true;

@@ -56,8 +56,6 @@ class ConnectionServer : public httplib::Server {
   // Which requests are long-lived, by their request line ("GET /path?q
   // HTTP/1.1"); set before listening.
   void set_stream_requests(std::function<bool(std::string_view request_line)> is_stream);
-  // Long-lived requests running (or about to) now.
-  std::size_t open_streams() const;
 
  private:
   bool process_and_close_socket(socket_t sock) override;

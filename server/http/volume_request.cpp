@@ -70,14 +70,8 @@ std::string volume_content(const JobSnapshot& job) {
 }
 
 void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {
-  if (params.mode->writes(v.format)) return;
-  const std::optional<ValueVolume> probe = params.value_type();
-  if (!probe) {
-    check_bits_format(v);
-    return;
-  }
-  if (auto refusal = format_refusal(*probe, v.format, v.options))
-    throw invalid_query(*refusal);
+  if (!params.mode->writes(v.format) && !params.has_values()) refuse_quantized_bits(v);
+  if (auto refusal = params.format_refusal(v.format, v.options)) throw invalid_query(*refusal);
 }
 
 void check_bits_format(const VolumeRequest& v) {

@@ -5,7 +5,6 @@
 
 #include <httplib.h>
 
-#include "server/http/job_lookup.h"
 #include "server/http/problem.h"
 #include "server/http/route_table.h"
 #include "server/http/web_assets.h"

@@ -9,8 +9,7 @@
 
 #include "api/analysis_json.h"
 #include "api/result_json.h"
-#include "api/job_mode.h"
-#include "voxd/encode/volume_format.h"
+#include "api/job_params.h"
 
 namespace voxd::server {
 namespace {
@@ -89,13 +88,8 @@ std::optional<JobState> job_state_from_string(const std::string& name) {
 json downloads(const JobSnapshot& job) {
   json out = json::object();
   if (job.state != JobState::succeeded || !job.job) return out;
-  const api::JobParams& params = *job.job;
-  const std::optional<ValueVolume> probe = params.value_type();
-  for (const auto& [format, name] : kVolumeFormatNames) {
-    const bool offered = params.mode->writes(format) ||
-                         !(probe ? format_refusal(*probe, format, EncodeOptions{}) : format_refusal(BitVolume(), format));
-    if (offered) out[name] = "/v1/jobs/" + job.id + "/volume?format=" + name;
-  }
+  for (const auto& [format, name] : kVolumeFormatNames)
+    if (!job.job->format_refusal(format)) out[name] = "/v1/jobs/" + job.id + "/volume?format=" + name;
   return out;
 }
 

@@ -276,7 +276,7 @@ JobSnapshot record_of(const RedisReply& fields) {
   JobSnapshot job = job_from_json(nlohmann::json::parse(fields.at(0).text()));
   if (job.state != JobState::running) return job;
   if (!fields.at(1).is_nil()) job.progress = parse_number<double>(fields.at(1).text()).value_or(job.progress);
-  if (fields.size() > 2 && !fields.at(2).is_nil()) {
+  if (!fields.at(2).is_nil()) {
     const nlohmann::json live = nlohmann::json::parse(fields.at(2).text(), nullptr, /*allow_exceptions=*/false);
     if (live.is_object()) {
       if (live.contains("stage") && live["stage"].is_string()) job.stage = live["stage"];
