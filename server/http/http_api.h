@@ -30,7 +30,4 @@ class HttpApi {
   std::atomic<bool> draining_{false};
 };
 
-// The OpenAPI document, embedded at build time from proto-schemas/openapi.json.
-extern const char* const kOpenApiDocument;
-
 }  // namespace voxd::server

@@ -5,6 +5,7 @@
 #include "server/http/http_api.h"
 #include "server/http/json_response.h"
 #include "server/http/metrics.h"
+#include "server/http/openapi_document.h"
 #include "server/http/route_table.h"
 #include "server/http/server_config.h"
 #include "server/jobs/job_manager.h"
@@ -29,7 +30,7 @@ void install_service_routes(RouteTable& routes, JobManager& jobs, Metrics& metri
   routes.get("/metrics", [&](const Request&, Response& res) {
     res.set_content(metrics.render(jobs.counts()), "text/plain; version=0.0.4; charset=utf-8");
   });
-  routes.get("/openapi.json", [](const Request&, Response& res) { res.set_content(kOpenApiDocument, "application/json"); });
+  routes.get("/openapi.json", [](const Request&, Response& res) { res.set_content(served_openapi_document(), "application/json"); });
 }
 
 }  // namespace voxd::server

@@ -43,6 +43,17 @@ void install_web_routes(RouteTable& routes) {
     if (!index) throw ProblemError(make_problem(404, "not-found", "Not found", "this build has no web page"));
     answer_asset(*index, res);
   });
+  // The API reference: Redoc over this service's own /openapi.json.
+  routes.get("/docs", [](const httplib::Request&, httplib::Response& res) {
+    const WebAsset* page = find_asset("docs.html");
+    if (!page) throw ProblemError(make_problem(404, "not-found", "Not found", "this build has no API reference page"));
+    // Redoc would show its maker's logo from cdn.redoc.ly: the reference
+    // asks this service for everything, or nothing (the image hides itself).
+    res.set_header("Content-Security-Policy",
+                   "default-src 'self'; img-src 'self' data:; style-src 'self' 'unsafe-inline'; "
+                   "font-src 'self' data:; worker-src 'self' blob:; object-src 'none'; base-uri 'none'");
+    answer_asset(*page, res);
+  });
   routes.get(R"(/ui/([A-Za-z0-9._/-]+))", [](const httplib::Request& req, httplib::Response& res) {
     const std::string path = req.matches[1];
     const WebAsset* asset = find_asset(path);

@@ -8,16 +8,13 @@
 // build/test-artifacts/browser).
 //   node tests/web/browser_test.mjs   (VOXD_BINARY=path/to/voxd)
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
 import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
-import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
-import { dirname, join, resolve } from 'node:path';
-import { fileURLToPath } from 'node:url';
+import { join } from 'node:path';
 
-const repo = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
-const { chromium } = createRequire(join(repo, 'web/package.json'))('playwright-core');
-const voxd = process.env.VOXD_BINARY || join(repo, 'build/server/voxd');
+import { repo, requireWebModule, startVoxd } from './voxd_server.mjs';
+
+const { chromium } = requireWebModule('playwright-core');
 const artifacts = process.env.VOXD_TEST_ARTIFACTS || join(repo, 'build/test-artifacts/browser');
 const browserPath = process.env.CHROMIUM || '/usr/bin/chromium';
 rmSync(artifacts, { recursive: true, force: true });
@@ -41,23 +38,6 @@ writeFileSync(meshPath, binaryStl([...boxTriangles([0, 0, 0], [20, 16, 12], fals
 const badPath = join(work, 'broken.stl');
 writeFileSync(badPath, 'solid broken\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0 0\n      vertex 1 0\n');
 
-function startServer() {
-  return new Promise((resolveStart, reject) => {
-    const child = spawn(voxd, ['serve', '--host', '127.0.0.1', '--port', '0', '--data-dir', join(work, 'data'), '--workers', '2'],
-                        { stdio: ['ignore', 'pipe', 'pipe'] });
-    let log = '';
-    const timer = setTimeout(() => reject(new Error(`voxd serve did not listen within 30 s:\n${log}`)), 30000);
-    const look = (chunk) => {
-      log += chunk;
-      const m = /listening on (http:\/\/127\.0\.0\.1:\d+)/.exec(log);
-      if (m) { clearTimeout(timer); resolveStart({ child, base: m[1] }); }
-    };
-    child.stdout.on('data', look);
-    child.stderr.on('data', look);
-    child.on('exit', (code) => reject(new Error(`voxd serve exited (${code}):\n${log}`)));
-  });
-}
-
 let step = 0;
 async function shot(page, name) {
   await page.screenshot({ path: join(artifacts, `${String(++step).padStart(2, '0')}-${name}.png`), fullPage: true });
@@ -75,7 +55,7 @@ const drawnPixels = (page) => page.evaluate(() => {
   return { drawn: n, total: d.length / 4 };
 });
 
-const { child, base } = await startServer();
+const { child, base } = await startVoxd(join(work, 'data'));
 const browser = await chromium.launch({
   executablePath: browserPath,
   // WebGL in a headless browser with no GPU: SwiftShader.
