@@ -12,6 +12,7 @@
 #include "server/http/connection_server.h"
 #include "server/http/metrics.h"
 #include "server/http/problem.h"
+#include "server/http/route_label.h"
 #include "server/http/server_config.h"
 #include "server/http/submission.h"
 #include "server/log_safe.h"
@@ -40,16 +41,6 @@ bool constant_time_equal(const std::string& a, const std::string& b) {
   unsigned char diff = 0;
   for (std::size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
   return diff == 0;
-}
-
-// Route label for metrics: the pattern, not the concrete path (bounded cardinality).
-std::string route_of(const std::string& path) {
-  if (path.rfind("/v1/jobs/", 0) == 0) return path.size() > 41 ? "/v1/jobs/{id}" + path.substr(41) : "/v1/jobs/{id}";
-  if (path.rfind("/ui/", 0) == 0) return "/ui/{file}";
-  static const char* known[] = {"/v1/jobs", "/v1/voxelize", "/healthz", "/readyz", "/metrics", "/openapi.json", "/"};
-  for (const char* k : known)
-    if (path == k) return k;
-  return "other";
 }
 
 // Every request gets an id (the client's, if it is a plain token) in its
@@ -136,7 +127,7 @@ void install_middleware(httplib::Server& server, const ServeConfig& config, Metr
 
   server.set_logger([&config, &metrics](const Request& req, const Response& res) {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - current_request.start).count();
-    metrics.count_request(req.method, route_of(req.path), res.status);
+    metrics.count_request(req.method, route_label(req.path), res.status);
     metrics.add_bytes_out(res.body.size());
     if (config.log_format == "json")
       spdlog::info(json{{"event", "request"}, {"method", req.method}, {"path", req.path}, {"status", res.status},
