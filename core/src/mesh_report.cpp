@@ -93,7 +93,11 @@ void add_edge_topology(const Mesh& welded, MeshReport& report) {
       else if (forward != 1) ++report.inconsistent_edges;
     }
   }
-  report.watertight = !uses.empty() && report.boundary_edges == 0 && report.nonmanifold_edges == 0;
+  // Watertight means the volume can be trusted: closed, manifold and
+  // consistently oriented (an inconsistent edge is a flipped triangle, which
+  // the divergence theorem counts with the wrong sign). Degenerate triangles
+  // neither open nor turn the surface, so they are only counted.
+  report.watertight = report.boundary_edges == 0 && report.nonmanifold_edges == 0 && report.inconsistent_edges == 0;
 }
 
 std::uint64_t count_referenced(const Mesh& mesh) {

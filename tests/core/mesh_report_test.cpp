@@ -137,8 +137,20 @@ TEST(MeshReport, FlippedTriangleMakesInconsistentEdges) {
   const MeshReport r = make_mesh_report(m);
   EXPECT_EQ(r.inconsistent_edges, 3u);  // each of its edges now runs the same way as its neighbour's
   EXPECT_EQ(r.boundary_edges, 0u);
-  EXPECT_TRUE(r.watertight);  // still closed, just not oriented
+  // Closed but not oriented: its volume is wrong, so it is not watertight.
+  EXPECT_FALSE(r.watertight);
   EXPECT_NE(r.volume, 6.0);
+}
+
+TEST(MeshReport, ACollapsedTriangleOnAClosedBoxLeavesItWatertight) {
+  Mesh m = unit_box();
+  m.vertices.push_back({1, 2, 3});  // vertex 0's position again
+  m.triangles.push_back({0, 8, 1});
+  const MeshReport r = make_mesh_report(m);
+  EXPECT_EQ(r.degenerate_triangles, 1u);
+  EXPECT_EQ(r.boundary_edges + r.nonmanifold_edges + r.inconsistent_edges, 0u);
+  EXPECT_TRUE(r.watertight);
+  EXPECT_DOUBLE_EQ(r.volume, 6.0);
 }
 
 TEST(MeshReport, ThreeTrianglesOnOneEdgeAreNonManifold) {

@@ -15,7 +15,7 @@ struct MeshReport {
   std::uint64_t boundary_edges = 0;       // edges used by exactly one triangle
   std::uint64_t nonmanifold_edges = 0;    // edges used by more than two triangles
   std::uint64_t inconsistent_edges = 0;   // manifold edges traversed in the same direction twice
-  bool watertight = false;                // no boundary and no non-manifold edge
+  bool watertight = false;                // has edges, none boundary, non-manifold or inconsistent
   double surface_area = 0.0;
   double volume = 0.0;                    // signed, by the divergence theorem; meaningful when watertight
 };
