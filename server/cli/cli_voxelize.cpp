@@ -72,10 +72,14 @@ volume to OUT ("-" for standard output).
   --max-voxels N         refuse grids with more voxels (default: 2^36, 8 GiB
                          of bits, in memory; no limit but disk when streamed)
   --report               include the mesh report (topology, area, volume)
-  --json                 print the summary as JSON on standard output
+  --json                 print the summary as JSON on standard output (on
+                         standard error when OUT is -: the volume's bytes
+                         are alone on standard output)
 
 Flags override the matching fields of --params. A summary (grid, filled
 voxels, volume, time per stage) is printed on standard error.
+Without --params or a grid flag the grid is 128 voxels along the longest
+bounding-box axis with no padding ({"resolution": 128}).
 
 Modes (a mode that writes values reports as "filled" the solid, voxel
 centres inside, that its values come with):
@@ -274,7 +278,8 @@ int voxelize_command(int argc, char** argv) {
     for (const auto& [name, s] : result.timings.stages) timings[name] = s;
     timings["total"] = result.timings.total();
     summary["timings"] = timings;
-    std::cout << summary.dump(2) << '\n';
+    // A volume on standard output keeps it to itself.
+    (*out_path == "-" ? std::cerr : std::cout) << summary.dump(2) << '\n';
   } else {
     std::ostringstream s;
     s << "mesh:    " << mesh_path << " (" << to_string(result.format) << ", " << result.triangles << " triangles)\n";

@@ -104,6 +104,23 @@ TEST_F(CliTest, VoxelizeJsonSummaryMatchesTheEngineAndTheFile) {
   EXPECT_EQ(direct.count(), from_file.count());
 }
 
+// A volume on standard output is alone there: the --json summary goes to
+// standard error, and the bytes equal the file the same job writes.
+TEST_F(CliTest, StandardOutputHoldsOnlyTheVolumeWithJson) {
+  const std::string mesh = write_mesh("box.stl", test::make_box({0, 0, 0}, {2, 3, 4}));
+  const auto piped = run_process(kVoxd + " voxelize " + mesh + " -o - --format raw --json --report");
+  ASSERT_EQ(piped.exit_code, 0) << piped.err;
+  ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " -o " + path("box.raw")).exit_code, 0);
+  const auto file = test::read_file(path("box.raw"));
+  EXPECT_EQ(piped.out, std::string(file.begin(), file.end()));
+  const json summary = json::parse(piped.err);
+  EXPECT_EQ(summary.at("output").at("path"), "-");
+  EXPECT_EQ(summary.at("output").at("bytes").get<std::size_t>(), file.size());
+  // The default grid is 128 voxels along the longest axis (z: 4), no padding.
+  EXPECT_EQ(summary.at("grid").at("dims"), json::array({64, 96, 128}));
+  EXPECT_EQ(file.size(), 64u * 96u * 128u);
+}
+
 TEST_F(CliTest, AllFormatsHoldTheSameVoxels) {
   const std::string mesh = write_mesh("torus.stl", test::make_torus({0, 0, 0}, 3, 1, 48, 24));
   ASSERT_EQ(run_process(kVoxd + " voxelize " + mesh + " --resolution 37 -o " + path("t.rle")).exit_code, 0);
