@@ -2,6 +2,7 @@
 
 #include "api/job_params.h"
 #include "api/param_validator.h"
+#include "api/result_json.h"
 #include "voxd/error.h"
 
 namespace voxd::api {
@@ -35,6 +36,10 @@ std::uint64_t JobMode::streamed_layer_bytes(const Grid& grid, const JobParams&) 
 }
 
 std::string JobMode::values_content(const JobParams&) const { return "values"; }
+
+std::string JobMode::layer_content(const std::string&, const nlohmann::json& values_info) const {
+  return volume_content(values_info);
+}
 
 bool JobMode::writes(VolumeFormat) const { return false; }
 

@@ -158,6 +158,9 @@ class JobMode {
   // Volumes a client can ask for with ?layer=NAME, the first being the
   // result, and those stored beside it (a subset, made by run()).
   virtual std::vector<std::string> layer_names() const { return {}; }
+  // What ?layer=NAME holds in words (NRRD's "content:"), given the job's
+  // "values"; by default the values' own.
+  virtual std::string layer_content(const std::string& layer, const nlohmann::json& values_info) const;
   virtual std::vector<std::string> stored_layers() const { return {}; }
   // The volume `layer` names; throws QueryRejected for a layer it cannot give.
   virtual std::shared_ptr<const ValueVolume> layer(const std::string& layer, const JobParams& params,

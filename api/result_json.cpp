@@ -33,4 +33,13 @@ nlohmann::json to_json(const Grid& g) {
   };
 }
 
+std::string volume_content(const nlohmann::json& values) {
+  if (values.is_null()) return "voxels (1 = filled)";
+  std::string text = values.value("quantity", "values");
+  if (values.contains("unit")) text += " (" + values.at("unit").get<std::string>();
+  if (values.contains("sign_convention")) text += ", " + values.at("sign_convention").get<std::string>();
+  if (values.contains("unit")) text += ")";
+  return text;
+}
+
 }  // namespace voxd::api

@@ -257,6 +257,11 @@ class PaletteMode final : public ModeWithOptions<PaletteParams> {
 
   std::vector<std::string> layer_names() const override { return {"element", "similarity", "display"}; }
   std::vector<std::string> stored_layers() const override { return {"similarity"}; }
+  std::string layer_content(const std::string& layer, const json& values_info) const override {
+    if (layer == "similarity") return "palette similarity (round(255 x the share of sample points where element and part agree))";
+    if (layer == "display") return "display object (0 = nothing shown, else render.objects index of GET /v1/jobs/{id}/palette)";
+    return JobMode::layer_content(layer, values_info);
+  }
 
   std::shared_ptr<const ValueVolume> layer(const std::string& layer, const JobParams& params,
                                            const VolumeSource& volumes) const override {

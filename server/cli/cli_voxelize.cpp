@@ -243,7 +243,7 @@ int voxelize_command(int argc, char** argv) {
   } else {
     result = execute_voxel_job(std::move(job), args.has("report"), nullptr, threads);
     if (result.values)
-      encode_options.content = result.values_info.value("quantity", "values") + " (" + result.values_info.value("unit", "") + ")";
+      encode_options.content = api::volume_content(result.values_info);
     const auto start = std::chrono::steady_clock::now();
     bytes_written = write_output([&](ByteSink& sink) {
       if (mode_writes)

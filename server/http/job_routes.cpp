@@ -74,7 +74,7 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
     const std::string id = req.matches[1];
     VolumeRequest v = read_volume_request(req);
     const JobSnapshot job = succeeded_job(jobs, id, "volume", "its volume exists");
-    v.options.content = volume_content(job);
+    v.options.content = volume_content(job, req.has_param("layer") ? req.get_param_value("layer") : "");
     const std::string filename = id + file_extension(v.format);
     if (job.job->mode->writes(v.format)) return answer_mode_written(res, job.job, volumes_of(jobs, job), v, filename, metrics);
     if (req.has_param("layer")) return answer_values(res, job_layer(jobs, job, req.get_param_value("layer")), v, filename, metrics);

@@ -7,6 +7,7 @@
 #include "voxd/encode/slab_writer.h"
 #include "voxd/voxelize/streamed.h"
 
+#include "api/result_json.h"
 #include "server/http/problem.h"
 #include "server/http/volume_stream.h"
 #include "server/jobs/job_store.h"
@@ -59,14 +60,9 @@ VolumeRequest read_volume_request(const httplib::Request& req) {
   return v;
 }
 
-std::string volume_content(const JobSnapshot& job) {
-  if (!job.has_value_volume()) return "voxels (1 = filled)";
-  const nlohmann::json& values = job.values;
-  std::string text = values.value("quantity", "values");
-  if (values.contains("unit")) text += " (" + values.at("unit").get<std::string>();
-  if (values.contains("sign_convention")) text += ", " + values.at("sign_convention").get<std::string>();
-  if (values.contains("unit")) text += ")";
-  return text;
+std::string volume_content(const JobSnapshot& job, const std::string& layer) {
+  if (!layer.empty()) return job.job->mode->layer_content(layer, job.values);
+  return api::volume_content(job.has_value_volume() ? job.values : nlohmann::json());
 }
 
 void check_format_holds(const api::JobParams& params, const VolumeRequest& v) {

@@ -25,8 +25,8 @@ struct VolumeRequest {
 // The query's volume parameters; a 400 problem naming the one that is wrong.
 VolumeRequest read_volume_request(const httplib::Request& req);
 
-// What a job's volume holds, for the NRRD "content:" line.
-std::string volume_content(const JobSnapshot& job);
+// What a job's volume (or its ?layer=) holds, for the NRRD "content:" line.
+std::string volume_content(const JobSnapshot& job, const std::string& layer = "");
 
 // Refuses, before any work, a format that cannot hold the job's result.
 void check_format_holds(const api::JobParams& params, const VolumeRequest& v);

@@ -353,7 +353,7 @@ TEST_F(CliTest, ValueModesWriteTheirValuesAndSummarizeThem) {
   const std::string text(nrrd.begin(), nrrd.end());
   EXPECT_NE(text.find("\nencoding: gzip\n"), std::string::npos);
   EXPECT_NE(text.find("\ntype: float\n"), std::string::npos);
-  EXPECT_NE(text.find("\ncontent: signed distance (model units)\n"), std::string::npos);
+  EXPECT_NE(text.find("\ncontent: signed distance (model units, inside_negative)\n"), std::string::npos);
   r = run_process(kVoxd + " voxelize " + mesh + " -o " + path("d.raw") + " --resolution 32 --padding 3 --mode sdf --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto raw = test::read_file(path("d.raw"));
