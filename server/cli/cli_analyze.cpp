@@ -17,15 +17,10 @@
 #include "server/job_pipeline.h"
 #include "server/jobs/job_analyses.h"
 #include "voxd/analysis/analysis.h"
-#include "voxd/analysis/analysis_images.h"
 #include "voxd/byte_sink.h"
+#include "voxd/encode/number_text.h"
 #include "voxd/error.h"
 #include "voxd/analysis/wall_thickness.h"
-#include "voxd/analysis/preview.h"
-#include "voxd/analysis/sdf_render.h"
-#include "voxd/analysis/value_images.h"
-#include "voxd/encode/volume_format.h"
-#include "voxd/encode/number_text.h"
 
 namespace voxd::cli {
 namespace {
@@ -46,15 +41,13 @@ writes into DIR what the HTTP API serves for a job:
   preview-from{+x,-x,+y,-y,+z,-z}.png  shaded views; preview-*-thickness.png
                          coloured by wall thickness
   thickness.nrrd         the wall-thickness volume (float32, model units)
-  with a mode of values, their middle sections and previews:
-                         section-{x,y,z}-coverage.png (grey levels),
-                         section-{x,y,z}-distance.png (diverging map) and
-                         preview-sdf-from{+x,...}.png (the zero level set
-                         ray-marched) for distances, section-{x,y,z}-colour.png
-                         and preview-colour-from{+x,...}.png for colours;
-                         the other files measure the solid
-  analyses/KEY.EXT       each entry of the job JSON's "analyses" array, the
-                         bytes its /v1/jobs/{id}/KIND route answers
+  analyses/KEY.EXT       each entry of the job JSON's "analyses" array
+Each file is what the service's route answers for the same job (the
+radiography, section, preview and thickness routes with their defaults):
+with a mode of values the sections and previews show the values as the
+service's do (grey coverage, a distance field's zero level set ray-marched
+and section-{x,y,z}-distance.png as a diverging map, colours); the
+measurements are of the solid.
 Lengths are in the mesh's model units. The thickness files need the wall
 thickness (not with --no-thickness or --cleanup*).
 
@@ -129,120 +122,95 @@ int analyze_command(int argc, char** argv) {
     if (!out) throw Error(ErrorCode::io_error, "cannot write " + path);
   }
   std::filesystem::rename(path + ".partial", path);
-  // The images the HTTP API serves: per axis, the exact 16-bit radiographs
-  // (min, max, total), a false-colour max map, and the middle section.
-  std::size_t images = 0;
-  auto write_png = [&](const std::string& name, const std::vector<std::uint8_t>& bytes) {
+  // Every file beside analysis.json is what the service answers for the
+  // same job: made by the function its routes call (server::job_analysis)
+  // from the request the route takes, so the bytes and their metadata agree.
+  // This run's wall-thickness map is handed over as a kept artifact.
+  std::map<std::string, std::string> kept;
+  if (map && !options.cleanup)
+    kept[server::thickness_map_key(api::ThicknessMeasure::wall)] =
+        std::string(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float));
+  const server::ArtifactAccess artifacts{
+      "cli", [&kept](const std::string& key) -> std::optional<std::string> {
+        auto it = kept.find(key);
+        if (it == kept.end()) return std::nullopt;
+        return it->second;
+      },
+      [&kept](const std::string& key, const std::string& bytes) { kept[key] = bytes; }};
+  server::JobSnapshot job;
+  job.id = "cli";
+  job.params = params_json;
+  job.job = std::make_shared<const api::JobParams>(params);
+  job.grid = result.grid;
+  job.mesh = result.report;
+  job.mesh_mass = result.mesh_mass;
+  job.values = result.values_info;
+  // Non-owning views of this run's volumes (they outlive the requests).
+  server::JobOutput output{
+      std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
+      result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}, nullptr, nullptr};
+  for (const auto& [name, volume] : result.layers)
+    output.layers.emplace_back(name, std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume));
+
+  std::size_t files = 0;
+  auto write_file = [&](const std::string& name, const std::string& bytes) {
     const std::string file = *out_dir + "/" + name;
     FileSink sink(file + ".partial");
     sink.write(bytes.data(), bytes.size());
     sink.close();
     std::filesystem::rename(file + ".partial", file);
-    ++images;
+    ++files;
   };
-  const PngScale scale{result.grid.voxel_size, "model units"};
+  auto answer = [&](const api::AnalysisRequest& request, const std::string& where) {
+    try {
+      return server::job_analysis(request, job, output, artifacts).bytes;
+    } catch (const server::AnalysisRejected& e) {
+      throw Error(ErrorCode::invalid_argument, where + ": " + e.what());
+    }
+  };
+  auto request = [](api::AnalysisKind kind, const api::Fields& fields) { return api::parse_analysis_request(kind, fields, ""); };
+  using api::AnalysisKind;
+  const bool distances = result.values && params.mode->distance_field(params, *result.values).has_value();
+  std::vector<std::pair<std::string, api::AnalysisRequest>> standard;
   for (int axis = 0; axis < 3; ++axis) {
     const std::string a(1, "xyz"[axis]);
-    const ThicknessImage image = radiography(result.volume, axis, threads);
-    for (RadiographyMeasure m : {RadiographyMeasure::min, RadiographyMeasure::max, RadiographyMeasure::total})
-      write_png("radiography-" + a + "-" + to_string(m) + ".png", radiography_png(image, axis, m, false, scale));
-    write_png("radiography-" + a + "-max-colour.png", radiography_png(image, axis, RadiographyMeasure::max, true, scale));
-    write_png("section-" + a + ".png", section_png(result.volume, axis, result.grid.dims[axis] / 2));
-    if (map) write_png("section-" + a + "-thickness.png", section_png(result.volume, axis, result.grid.dims[axis] / 2, &*map));
+    for (const char* m : {"min", "max", "total"})
+      standard.emplace_back("radiography-" + a + "-" + m + ".png", request(AnalysisKind::radiography, {{"axis", a}, {"measure", m}}));
+    standard.emplace_back("radiography-" + a + "-max-colour.png",
+                          request(AnalysisKind::radiography, {{"axis", a}, {"measure", "max"}, {"format", "png"}}));
+    const api::Fields middle = {{"axis", a}, {"index", std::to_string(result.grid.dims[axis] / 2)}};
+    standard.emplace_back("section-" + a + ".png", request(AnalysisKind::section, middle));
+    auto coloured = [&](const char* colour) {
+      api::Fields f = middle;
+      f.emplace_back("colour", colour);
+      return request(AnalysisKind::section, f);
+    };
+    if (map) standard.emplace_back("section-" + a + "-thickness.png", coloured("thickness"));
+    if (distances) standard.emplace_back("section-" + a + "-distance.png", coloured("distance"));
   }
-  // A value job's values: their middle sections, and a distance field's
-  // surface rendered from its distances.
-  std::optional<SdfRenderInput> sdf;
-  if (result.values) sdf = params.mode->distance_field(params, *result.values);
-  const bool colours = params.mode->colour_values();
-  if (result.values && params.mode->values_are_image()) {
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string a(1, "xyz"[axis]);
-      const std::int64_t middle = result.grid.dims[axis] / 2;
-      if (sdf) {
-        write_png("section-" + a + "-distance.png", sdf_section_png(*sdf, axis, middle, true));
-      } else if (colours) {
-        write_png("section-" + a + "-colour.png", colour_section_png(std::get<DenseVolume<Rgba8>>(*result.values), axis, middle));
-      } else {
-        write_png("section-" + a + "-coverage.png",
-                  std::visit(
-                      [&](const auto& v) {
-                        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, DenseVolume<Rgba8>>)
-                          return colour_section_png(v, axis, middle);
-                        else
-                          return coverage_section_png(v, axis, middle);
-                      },
-                      *result.values));
-      }
-    }
+  for (const char* view : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
+    standard.emplace_back(std::string("preview-from") + view + ".png", request(AnalysisKind::preview, {{"view", view}}));
+    if (map)
+      standard.emplace_back(std::string("preview-from") + view + "-thickness.png",
+                            request(AnalysisKind::preview, {{"view", view}, {"colour", "thickness"}}));
   }
-  for (const char* name : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
-    const View view = *parse_view(name);
-    if (sdf) write_png(std::string("preview-sdf-from") + name + ".png", sdf_preview_png(*sdf, view, {}, threads));
-    if (colours)
-      write_png(std::string("preview-colour-from") + name + ".png",
-                colour_preview_png(result.volume, std::get<DenseVolume<Rgba8>>(*result.values), view, {}, threads));
-    write_png(std::string("preview-from") + name + ".png", preview_png(result.volume, view, nullptr, {}, threads));
-    if (map) write_png(std::string("preview-from") + name + "-thickness.png", preview_png(result.volume, view, &*map, {}, threads));
-  }
-  if (map) {
-    DenseVolume<float> model_units = *map;
-    for (float& v : model_units.values()) v *= static_cast<float>(result.grid.voxel_size);
-    const std::string file = *out_dir + "/thickness.nrrd";
-    FileSink sink(file + ".partial");
-    write_nrrd(model_units, "wall thickness (model units)", sink);
-    sink.close();
-    std::filesystem::rename(file + ".partial", file);
-  }
-  // The job JSON's analyses, computed as the service's worker does, with
-  // this run's thickness map.
+  if (map) standard.emplace_back("thickness.nrrd", request(AnalysisKind::thickness, {{"format", "nrrd"}}));
+  for (const auto& [name, r] : standard) write_file(name, answer(r, name));
+
+  // The job JSON's analyses, named by their keys.
   if (!params.analyses.empty()) {
-    std::map<std::string, std::string> kept;
-    if (map && !options.cleanup) {
-      kept[server::thickness_map_key(api::ThicknessMeasure::wall)] = std::string(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float));
-    }
-    const server::ArtifactAccess artifacts{
-        "cli", [&kept](const std::string& key) -> std::optional<std::string> {
-          auto it = kept.find(key);
-          if (it == kept.end()) return std::nullopt;
-          return it->second;
-        },
-        [&kept](const std::string& key, const std::string& bytes) { kept[key] = bytes; }};
-    server::JobSnapshot job;
-    job.id = "cli";
-    job.params = params_json;
-    job.job = std::make_shared<const api::JobParams>(params);
-    job.grid = result.grid;
-    job.mesh = result.report;
-    job.mesh_mass = result.mesh_mass;
-    job.values = result.values_info;
-    // Non-owning views of this run's volumes (they outlive the loop).
-    server::JobOutput output{
-        std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
-        result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}, nullptr, nullptr};
-    for (const auto& [name, volume] : result.layers)
-      output.layers.emplace_back(name, std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume));
     std::filesystem::create_directories(*out_dir + "/analyses");
     for (std::size_t i = 0; i < params.analyses.size(); ++i) {
-      const api::AnalysisRequest& request = params.analyses[i];
-      std::string bytes;
-      try {
-        bytes = server::job_analysis(request, job, output, artifacts).bytes;
-      } catch (const server::AnalysisRejected& e) {
-        throw Error(ErrorCode::invalid_argument, "analyses/" + std::to_string(i) + ": " + e.what());
-      }
-      const std::string type = request.content_type();
+      const api::AnalysisRequest& r = params.analyses[i];
+      const std::string type = r.content_type();
       const char* ext = type == "application/json" ? ".json" : type == "image/png" ? ".png"
                         : type == "application/x-nrrd" ? ".nrrd" : type == "application/vnd.voxd.rle" ? ".rle" : ".raw";
-      const std::string file = *out_dir + "/analyses/" + request.artifact_key() + ext;
-      FileSink sink(file + ".partial");
-      sink.write(bytes.data(), bytes.size());
-      sink.close();
-      std::filesystem::rename(file + ".partial", file);
+      write_file("analyses/" + r.artifact_key() + ext, answer(r, "analyses/" + std::to_string(i)));
     }
   }
   std::cerr << "analysis: " << report.components.parts.size() << " part(s), " << report.components.voids.size()
-            << " void(s), skin " << (report.skin ? report.skin->max_depth : 0) << " layers deep; wrote " << path << " and " << images << " images\n";
+            << " void(s), skin " << (report.skin ? report.skin->max_depth : 0) << " layers deep; wrote " << path << " and " << files
+            << " files\n";
   return 0;
 }
 
