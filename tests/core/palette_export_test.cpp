@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
 #include "voxd/error.h"
@@ -342,10 +343,23 @@ TEST(PaletteGlb, InstancesEveryVoxelOfAPartialElementAndExposedFullOnes) {
   const std::size_t used_bin = g["buffers"][0]["byteLength"];
   for (std::size_t b = used_bin; b < glb.bin.size(); ++b) EXPECT_EQ(glb.bin[b], 0);
 
-  ASSERT_EQ(g["nodes"].size(), 3u);
-  ASSERT_EQ(g["scenes"][g["scene"].get<std::size_t>()]["nodes"].size(), 3u);
+  // One root node in the scene turns the Z-up model to glTF's Y-up: model
+  // +z ends up along glTF +y, model +y along glTF -z.
+  ASSERT_EQ(g["nodes"].size(), 4u);
+  const json& scene_nodes = g["scenes"][g["scene"].get<std::size_t>()]["nodes"];
+  ASSERT_EQ(scene_nodes.size(), 1u);
+  const json& root = g["nodes"][scene_nodes[0].get<std::size_t>()];
+  ASSERT_EQ(root["children"].size(), 3u);
+  const glm::dquat turn(root["rotation"][3].get<double>(), root["rotation"][0].get<double>(), root["rotation"][1].get<double>(),
+                        root["rotation"][2].get<double>());
+  EXPECT_NEAR(glm::length(turn), 1.0, 1e-12);
+  const glm::dvec3 up = turn * glm::dvec3(0, 0, 1), depth = turn * glm::dvec3(0, 1, 0), x = turn * glm::dvec3(1, 0, 0);
+  EXPECT_NEAR(glm::distance(up, glm::dvec3(0, 1, 0)), 0.0, 1e-12);
+  EXPECT_NEAR(glm::distance(depth, glm::dvec3(0, 0, -1)), 0.0, 1e-12);
+  EXPECT_NEAR(glm::distance(x, glm::dvec3(1, 0, 0)), 0.0, 1e-12);
   std::set<std::string> seen;
-  for (const json& node : g["nodes"]) {
+  for (const json& child : root["children"]) {
+    const json& node = g["nodes"][child.get<std::size_t>()];
     const std::string name = node["name"];
     SCOPED_TRACE(name);
     seen.insert(name);
@@ -397,7 +411,7 @@ TEST(PaletteGlb, FullyHiddenFullElementIsNotInstanced) {
   VectorSink sink;
   write_palette_glb(test_palette(), v, sink);
   const Glb glb = read_glb(sink.data);
-  ASSERT_EQ(glb.gltf["nodes"].size(), 1u);
+  ASSERT_EQ(glb.gltf["nodes"].size(), 2u);  // the element's, and the root turning it Y-up
   const std::size_t translation =
       glb.gltf["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"];
   const auto placed = read_vec3(glb, translation);

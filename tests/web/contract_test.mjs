@@ -4,6 +4,7 @@
 // from web/package-lock.json; the repository's own document (whose schemas
 // live in files beside it) lints clean too; and /docs renders every
 // operation in headless Chromium without asking any other host for anything.
+// A palette job's glb passes the Khronos glTF validator and stands Y-up.
 //   node --test tests/web/contract_test.mjs   (VOXD_BINARY=path/to/voxd)
 import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
@@ -100,4 +101,42 @@ test('/docs renders every operation of the served document, offline', async () =
   } finally {
     await browser.close();
   }
+});
+
+test('a palette job\'s glb passes the Khronos glTF validator, its model turned Y-up', async () => {
+  const validator = requireWebModule('gltf-validator');
+  // A 2 x 3 x 5 box, tallest along the model's z.
+  const v = [[0, 0, 0], [2, 0, 0], [2, 3, 0], [0, 3, 0], [0, 0, 5], [2, 0, 5], [2, 3, 5], [0, 3, 5]];
+  const f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [3, 0, 4], [3, 4, 7]];
+  const stl = Buffer.alloc(84 + 50 * f.length);
+  stl.writeUInt32LE(f.length, 80);
+  f.forEach((t, i) => t.forEach((k, c) => v[k].forEach((x, a) => stl.writeFloatLE(x, 84 + 50 * i + 12 + 12 * c + 4 * a))));
+  const params = { mode: 'palette', grid: { resolution: 10 }, palette: { elements: 10, rays: 4, points: 2, seed: 1 } };
+  const form = new FormData();
+  form.append('mesh', new Blob([stl]), 'box.stl');
+  form.append('params', JSON.stringify(params));
+  const submitted = await (await fetch(`${server.base}/v1/jobs`, { method: 'POST', body: form })).json();
+  let job = submitted;
+  for (let i = 0; i < 600 && !['succeeded', 'failed', 'cancelled'].includes(job.state); ++i) {
+    await new Promise((r) => setTimeout(r, 50));
+    job = await (await fetch(`${server.base}/v1/jobs/${submitted.id}`)).json();
+  }
+  assert.equal(job.state, 'succeeded', JSON.stringify(job));
+  const res = await fetch(`${server.base}/v1/jobs/${job.id}/volume?format=glb`);
+  assert.equal(res.status, 200);
+  const glb = new Uint8Array(await res.arrayBuffer());
+  const report = await validator.validateBytes(glb);
+  assert.equal(report.issues.numErrors, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  assert.equal(report.issues.numWarnings, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  // The scene's root turns model +z to glTF +y: the part's height (5) is
+  // along y, its depth (3) along z.
+  const gltf = JSON.parse(Buffer.from(glb.subarray(20, 20 + Buffer.from(glb).readUInt32LE(12))).toString());
+  const root = gltf.nodes[gltf.scenes[gltf.scene].nodes[0]];
+  const [x, y, z, w] = root.rotation;
+  const turn = ([px, py, pz]) => {  // q p q*, for a unit quaternion
+    const tx = 2 * (y * pz - z * py), ty = 2 * (z * px - x * pz), tz = 2 * (x * py - y * px);
+    return [px + w * tx + (y * tz - z * ty), py + w * ty + (z * tx - x * tz), pz + w * tz + (x * ty - y * tx)];
+  };
+  const extent = turn([2, 3, 5]).map((c) => Math.round(Math.abs(c) * 1e6) / 1e6);
+  assert.deepEqual(extent, [2, 5, 3]);
 });

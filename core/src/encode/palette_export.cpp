@@ -374,10 +374,18 @@ void write_palette_glb(const Palette& palette, const DenseVolume<std::uint8_t>& 
   if (used.empty()) {
     gltf["scenes"] = nlohmann::json::array({nlohmann::json::object()});
   } else {
-    nlohmann::json scene_nodes = nlohmann::json::array();
-    for (std::size_t n = 0; n < nodes.size(); ++n) scene_nodes.push_back(n);
+    // glTF is Y-up; the model's axes are CAD's Z-up. One root node turns
+    // the whole model -90 degrees about x, (x, y, z) -> (x, z, -y), so
+    // viewers stand the part up while the data keeps the model's
+    // coordinates (what the voxels, the STL and the job's grid use).
+    nlohmann::json children = nlohmann::json::array();
+    for (std::size_t n = 0; n < nodes.size(); ++n) children.push_back(n);
+    const double half = std::sqrt(0.5);
+    nodes.push_back({{"name", "voxd model (Z-up model axes turned to glTF's Y-up)"},
+                     {"rotation", {-half, 0.0, 0.0, half}},
+                     {"children", children}});
     gltf["extensionsUsed"] = nlohmann::json::array({kInstancing});
-    gltf["scenes"] = nlohmann::json::array({{{"nodes", scene_nodes}}});
+    gltf["scenes"] = nlohmann::json::array({{{"nodes", {nodes.size() - 1}}}});
     gltf["nodes"] = nodes;
     gltf["meshes"] = meshes;
     gltf["accessors"] = accessors;
