@@ -1,0 +1,240 @@
+"""voxd_client against a real `voxd serve`: results equal the CLI's bytes,
+waits end in the job's real state, errors carry the problem's fields."""
+import http.server
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from voxd_client import (Busy, InvalidMesh, InvalidParams, InvalidQuery, JobCancelled, JobFailed, NotFinished,  # noqa: E402
+                         NotFound, TransportError, VoxdClient, WaitTimeout)
+from voxd_client.events import read_events  # noqa: E402
+from voxd_server import SHARED_MESHES, VOXD, VoxdServer, box_stl  # noqa: E402
+
+BOX = box_stl((0, 0, 0), (4, 3, 2))  # volume 24
+
+
+class ClientAgainstVoxd(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.server = VoxdServer()
+        cls.client = VoxdClient(cls.server.url, timeout=30)
+        cls.tmp = tempfile.mkdtemp(prefix="voxd-pyclient-test-")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.stop()
+
+    def cli_volume(self, mesh_path, params, fmt):
+        out = os.path.join(self.tmp, "cli." + fmt)
+        r = subprocess.run([VOXD, "voxelize", mesh_path, "-o", out, "--format", fmt, "--params", json.dumps(params)],
+                           capture_output=True, text=True)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(out, "rb") as f:
+            return f.read()
+
+    def test_run_from_a_path_and_fetch_the_volume_the_cli_writes(self):
+        mesh = os.path.join(SHARED_MESHES, "torus.stl")
+        params = {"grid": {"resolution": 40, "padding": 1}}
+        progress = []
+        job = self.client.run(mesh, params, on_progress=progress.append)
+        self.assertEqual(job["state"], "succeeded")
+        self.assertEqual(job["grid"]["dims"][0], 42)
+        self.assertEqual(progress[-1]["state"], "succeeded")
+        self.assertEqual(progress[-1]["progress"], 1)
+        values = [p.get("progress", 0) for p in progress]
+        self.assertEqual(values, sorted(values), "progress never goes back")
+        for fmt in ("rle", "nrrd", "binvox"):
+            self.assertEqual(self.client.volume(job, fmt), self.cli_volume(mesh, params, fmt), fmt)
+        dest = os.path.join(self.tmp, "torus.rle")
+        self.assertEqual(self.client.volume(job["id"], "rle", dest=dest), dest)
+        with open(dest, "rb") as f:
+            self.assertEqual(f.read(), self.cli_volume(mesh, params, "rle"))
+        self.assertFalse(os.path.exists(dest + ".partial"))
+
+    def test_bytes_and_file_objects_submit_the_same_job(self):
+        by_bytes = self.client.run(BOX, {"grid": {"resolution": 16}}, filename="box.stl")
+        path = os.path.join(self.tmp, "box.stl")
+        with open(path, "wb") as f:
+            f.write(BOX)
+        with open(path, "rb") as f:
+            by_file = self.client.run(f, {"grid": {"resolution": 16}})
+        # The same bytes and parameters: the same content, answered from the kept result.
+        self.assertEqual(by_bytes["content_hash"], by_file["content_hash"])
+        self.assertEqual(by_bytes["filled_voxels"], by_file["filled_voxels"])
+
+    def test_polling_and_events_end_in_the_same_state(self):
+        params = {"grid": {"resolution": 24}, "mode": "sdf", "sdf": {"band": 2}}
+        job = self.client.submit(BOX, params, filename="box.stl")
+        polled = self.client.wait(job, use_events=False)
+        streamed = self.client.wait(job["id"])
+        self.assertEqual(polled["state"], "succeeded")
+        self.assertEqual(streamed["state"], "succeeded")
+        self.assertEqual(polled["filled_voxels"], streamed["filled_voxels"])
+        self.assertEqual(polled["values"]["quantity"], "signed distance")
+
+    def test_analysis_report_and_requested_analyses(self):
+        params = {"grid": {"voxel_size": 0.125, "padding": 1},
+                  "analyses": [{"kind": "analysis", "min_wall": 2.5},
+                               {"kind": "radiography", "axis": "z", "format": "json"}]}
+        job = self.client.run(BOX, params, filename="box.stl")
+        report = self.client.analysis(job, min_wall=2.5)
+        self.assertAlmostEqual(report["mass_properties"]["mesh"]["volume"], 24.0, places=9)
+        self.assertEqual(report["thickness"]["verdict"], "fail")  # 2 thick, 2.5 asked
+        self.assertEqual(json.loads(self.client.job_analysis(job, 0)), report)
+        radiography = json.loads(self.client.job_analysis(job, 1))
+        self.assertEqual(radiography["max"], 16.0)  # 2 / 0.125 voxels
+        png = self.client.download(job, "radiography", axis="z", measure="max")
+        self.assertEqual(png[:8], b"\x89PNG\r\n\x1a\n")
+
+    def test_bad_parameters_raise_invalid_params_with_their_paths(self):
+        with self.assertRaises(InvalidParams) as caught:
+            self.client.submit(BOX, {"grid": {"resolution": -3}, "mode": "nonsense"}, filename="box.stl")
+        e = caught.exception
+        self.assertEqual(e.status, 422)
+        self.assertEqual(e.slug, "invalid-params")
+        paths = sorted(err["path"] for err in e.errors)
+        self.assertEqual(paths, ["/grid/resolution", "/mode"])
+        self.assertIn("/grid/resolution", str(e))
+
+    def test_a_broken_mesh_raises_invalid_mesh(self):
+        with self.assertRaises(InvalidMesh) as caught:
+            self.client.submit(b"solid broken\n  facet normal 0 0 1\n", {"grid": {"resolution": 8}}, filename="x.stl")
+        self.assertEqual(caught.exception.status, 422)
+        self.assertTrue(caught.exception.detail)
+
+    def test_unknown_jobs_and_wrong_queries(self):
+        with self.assertRaises(NotFound):
+            self.client.job("0" * 32)
+        with self.assertRaises(NotFound):
+            self.client.wait("0" * 32)
+        job = self.client.run(BOX, {"grid": {"resolution": 8}}, filename="box.stl")
+        with self.assertRaises(InvalidQuery) as caught:
+            self.client.volume(job, "vox")
+        self.assertIn("vox", caught.exception.detail)
+        with self.assertRaises(InvalidQuery):
+            self.client.download(job, "palette")  # a solid job has no palette: wrong-mode
+
+    def test_jobs_lists_every_job_page_by_page(self):
+        ids = {self.client.submit(BOX, {"grid": {"resolution": 10 + i}}, filename="box.stl")["id"] for i in range(5)}
+        listed = [j["id"] for j in self.client.jobs(page_size=2)]
+        self.assertTrue(ids.issubset(listed))
+        self.assertEqual(len(listed), len(set(listed)))
+
+    def test_events_parser_reads_what_the_service_streams(self):
+        job = self.client.run(BOX, {"grid": {"resolution": 8}}, filename="box.stl")
+        with self.client.http.open("GET", f"/v1/jobs/{job['id']}/events") as stream:
+            events = list(read_events(stream))
+        self.assertEqual([e.name for e in events], ["job", "end"])  # already finished: its state, then the end
+        self.assertEqual(events[-1].data["id"], job["id"])
+        self.assertTrue(int(events[-1].id) > int(events[0].id))
+
+
+BIG_JOB = {"grid": {"resolution": 500}, "mode": "sdf", "sdf": {"band": "full"}}  # seconds of work
+
+
+class JobsThatDoNotSucceed(unittest.TestCase):
+    """One worker, so a second job waits in the queue behind a large one."""
+
+    def setUp(self):
+        self.server = VoxdServer(workers=1)
+        self.client = VoxdClient(self.server.url, timeout=30)
+
+    def tearDown(self):
+        self.server.stop()
+
+    def running(self, job):
+        for _ in range(600):
+            status = self.client.job(job)
+            if status["state"] == "running":
+                return status
+            threading.Event().wait(0.02)
+        self.fail(f"job {job['id']} never ran")
+
+    def test_a_cancelled_job_raises_job_cancelled_and_the_queue_goes_on(self):
+        big = self.client.submit(os.path.join(SHARED_MESHES, "M3x10_screw.stl"), BIG_JOB)
+        self.running(big)
+        queued = self.client.submit(BOX, {"grid": {"resolution": 9}}, filename="box.stl")
+        self.assertEqual(self.client.job(queued)["state"], "queued")
+        with self.assertRaises(NotFinished) as caught:
+            self.client.volume(queued)
+        self.assertEqual(caught.exception.status, 409)
+        with self.assertRaises(WaitTimeout) as timed_out:
+            self.client.wait(big, timeout=0.3, use_events=False)
+        self.assertEqual(timed_out.exception.job["state"], "running")
+        with self.assertRaises(WaitTimeout):
+            self.client.wait(big, timeout=0.3)  # the event stream gives up too
+        self.client.cancel(big)
+        with self.assertRaises(JobCancelled) as caught:
+            self.client.wait(big)
+        self.assertEqual(caught.exception.job["state"], "cancelled")
+        self.assertEqual(self.client.wait(queued)["state"], "succeeded")
+
+    def test_a_job_interrupted_by_a_restart_raises_job_failed_with_its_problem(self):
+        big = self.client.submit(os.path.join(SHARED_MESHES, "M3x10_screw.stl"), BIG_JOB)
+        self.running(big)
+        self.server.stop(kill=True, keep_data=True)
+        self.server = VoxdServer(workers=1, data_dir=self.server.data_dir)
+        client = VoxdClient(self.server.url, timeout=30)
+        with self.assertRaises(JobFailed) as caught:
+            client.wait(big)
+        e = caught.exception
+        self.assertEqual(e.job["state"], "failed")
+        self.assertEqual(e.problem, e.job["error"])
+        self.assertIn("interrupted", e.detail + e.slug)
+
+
+class BusyService(unittest.TestCase):
+    """The retry on 429 with Retry-After, against a stub that is busy twice."""
+
+    def test_busy_answers_are_retried_after_retry_after_then_raised(self):
+        answers = [429, 429, 200]
+        seen = []
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            def do_GET(self):  # noqa: N802
+                status = answers.pop(0) if answers else 429
+                seen.append(self.path)
+                body = json.dumps({"status": "ok"} if status == 200 else
+                                  {"type": "urn:voxd:problem:queue-full", "title": "Busy", "status": 429,
+                                   "detail": "the job queue is full"}).encode()
+                self.send_response(status)
+                self.send_header("Content-Type", "application/json" if status == 200 else "application/problem+json")
+                if status != 200:
+                    self.send_header("Retry-After", "7")
+                self.send_header("Content-Length", str(len(body)))
+                self.end_headers()
+                self.wfile.write(body)
+
+            def log_message(self, *args):
+                pass
+
+        stub = http.server.HTTPServer(("127.0.0.1", 0), Handler)
+        threading.Thread(target=stub.serve_forever, daemon=True).start()
+        try:
+            waits = []
+            client = VoxdClient(f"http://127.0.0.1:{stub.server_port}", retries=2)
+            client.http.sleep = waits.append
+            self.assertEqual(client.health(), {"status": "ok"})
+            self.assertEqual(len(seen), 3)
+            self.assertEqual(len(waits), 2)
+            self.assertTrue(all(7 <= w <= 7.7 for w in waits), waits)
+            answers.extend([429, 429, 429])
+            with self.assertRaises(Busy) as caught:
+                client.health()
+            self.assertEqual(caught.exception.retry_after, 7)
+            self.assertEqual(caught.exception.slug, "queue-full")
+        finally:
+            stub.shutdown()
+
+    def test_an_unreachable_server_is_a_transport_error(self):
+        with self.assertRaises(TransportError):
+            VoxdClient("http://127.0.0.1:9", timeout=2).health()
+
+
+if __name__ == "__main__":
+    unittest.main()
