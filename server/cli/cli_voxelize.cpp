@@ -9,6 +9,7 @@
 #include "api/job_params.h"
 #include "api/result_json.h"
 #include "server/cli/cli.h"
+#include "server/cli/cli_output.h"
 #include "server/cli/cli_args.h"
 #include "server/cli/cli_params.h"
 #include "server/mapped_file.h"
@@ -114,37 +115,15 @@ int voxelize_command(int argc, char** argv) {
     return 0;
   }
   if (args.positional().size() != 1) throw UsageError("voxelize takes exactly one mesh file (see voxd voxelize --help)");
-  const auto out_path = args.value("output");
-  if (!out_path || out_path->empty()) throw UsageError("voxelize needs -o OUT (see voxd voxelize --help)");
+  const OutputChoice output = read_output_choice(args, "voxelize");
+  const std::string* const out_path = &output.path;
+  const std::optional<VolumeFormat> format = output.format;
+  EncodeOptions encode_options = output.options;
 
   json params_json = load_params(args);
   apply_param_flags(args, params_json);
   api::JobParams params = api::parse_job_params(params_json);
 
-  std::optional<VolumeFormat> format;
-  if (auto f = args.value("format")) {
-    format = volume_format_from_string(*f);
-    if (!format) throw UsageError("--format must be rle, binvox, raw, nrrd, vox, png-stack, stl or glb, got '" + *f + "'");
-  } else {
-    format = volume_format_from_path(*out_path);
-    if (!format)
-      throw UsageError("cannot tell the output format from '" + *out_path +
-                       "'; use --format rle|binvox|raw|nrrd|vox|png-stack|stl|glb");
-  }
-  EncodeOptions encode_options;
-  if (auto p = args.value("raw-packing")) {
-    if (*p == "bits") encode_options.raw_packing = RawPacking::bits;
-    else if (*p != "bytes") throw UsageError("--raw-packing must be bytes or bits, got '" + *p + "'");
-  }
-  if (auto e = args.value("nrrd-encoding")) {
-    if (*e == "gzip") encode_options.nrrd_encoding = NrrdEncoding::gzip;
-    else if (*e != "raw") throw UsageError("--nrrd-encoding must be raw or gzip, got '" + *e + "'");
-  }
-  if (auto q = args.value("quantize")) {
-    if (*q == "u8") encode_options.quantize = Quantize::u8;
-    else if (*q == "u16") encode_options.quantize = Quantize::u16;
-    else if (*q != "none") throw UsageError("--quantize must be none, u8 or u16, got '" + *q + "'");
-  }
   if (encode_options.quantize != Quantize::none && !params.has_values())
     throw UsageError("--quantize applies to float values (a volume of type f32), not to bits");
   // A format that cannot hold the values is refused before any work.
@@ -189,35 +168,7 @@ int voxelize_command(int argc, char** argv) {
                       no_stream || user_limit ? "" : " (or --streaming on: slab by slab it needs the memory of one slab, not the grid's)");
   encode_options.content = "voxels (1 = filled)";
 
-  // Writes to a temporary file renamed into place, so OUT is never half
-  // written; the bytes written.
-  auto write_output = [&](const std::function<void(ByteSink&)>& encode) -> std::uint64_t {
-    if (*out_path == "-") {
-      struct StdoutSink final : ByteSink {
-        using ByteSink::write;
-        std::uint64_t n = 0;
-        void write(std::span<const std::uint8_t> b) override {
-          if (std::fwrite(b.data(), 1, b.size(), stdout) != b.size()) throw Error(ErrorCode::io_error, "cannot write to standard output");
-          n += b.size();
-        }
-      } sink;
-      encode(sink);
-      std::fflush(stdout);
-      return sink.n;
-    }
-    const std::string tmp = *out_path + ".partial";
-    try {
-      FileSink sink(tmp);
-      encode(sink);
-      sink.close();
-      std::filesystem::rename(tmp, *out_path);
-    } catch (...) {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-      throw;
-    }
-    return std::filesystem::file_size(*out_path);
-  };
+  auto write_output = [&](const std::function<void(ByteSink&)>& encode) { return cli::write_output(*out_path, encode); };
 
   VoxelJobResult result;
   std::uint64_t bytes_written = 0;
