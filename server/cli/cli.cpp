@@ -19,6 +19,7 @@ usage:
   voxd inspect MESH                    mesh report as JSON
   voxd voxelize MESH -o OUT [options]  voxelize to rle / binvox / raw
   voxd analyze MESH -o DIR [options]   manufacturing analysis into DIR (analysis.json)
+  voxd submit MESH -o OUT [options]    run the job on a voxd service (--server URL)
   voxd serve [options]                 the HTTP service (voxd serve --help)
   voxd --version
 
@@ -41,6 +42,7 @@ int run(int argc, char** argv) {
     if (command == "inspect") return inspect_command(argc, argv);
     if (command == "voxelize") return voxelize_command(argc, argv);
     if (command == "analyze") return analyze_command(argc, argv);
+    if (command == "submit") return submit_command(argc, argv);
     if (command == "serve") return serve_command(argc, argv);
     // Internal: the service's isolated Draco decoder (server/draco_isolation.h).
     if (command == "decode-draco-isolated") return server::decode_draco_child(argc, argv);

@@ -5,6 +5,7 @@ namespace voxd::cli {
 int run(int argc, char** argv);
 int inspect_command(int argc, char** argv);
 int voxelize_command(int argc, char** argv);
+int submit_command(int argc, char** argv);
 int analyze_command(int argc, char** argv);
 int serve_command(int argc, char** argv);
 

@@ -1,0 +1,342 @@
+// `voxd submit`: the CLI as a client of a running voxd service. The same job
+// flags and output flags as `voxd voxelize`; the job runs on the service,
+// its progress shows on a terminal, and its volume is written where -o says.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "api/error_table.h"
+#include "api/job_params.h"
+#include "server/cli/cli.h"
+#include "server/cli/cli_args.h"
+#include "server/cli/cli_output.h"
+#include "server/cli/cli_params.h"
+#include "server/mapped_file.h"
+#include "voxd/error.h"
+
+namespace voxd::cli {
+namespace {
+
+using nlohmann::json;
+
+constexpr const char* kUsage = R"(usage: voxd submit MESH -o OUT [options]
+
+Submits MESH to a running voxd service as a job, follows its progress (a bar
+on a terminal), and writes the job's volume to OUT ("-" for standard output).
+The job runs on the service, with its limits; the flags are voxd voxelize's.
+
+  --server URL           the service (default: $VOXD_SERVER, else
+                         http://127.0.0.1:8080)
+  --api-key KEY          its API key (default: $VOXD_API_KEY)
+  --params JSON|@FILE    job parameters, the same JSON the HTTP API takes
+  --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ,
+  --padding P, --mode M, --inside T, --streaming S
+                         as for voxd voxelize (they override --params)
+  --format F             rle | binvox | raw | nrrd | vox | png-stack | stl | glb
+                         (default: from OUT's extension)
+  --raw-packing P, --nrrd-encoding E, --quantize Q
+                         as for voxd voxelize
+  --report               include the mesh report in the summary
+  --json                 print the summary (the job's final status and the
+                         output) as JSON on standard output (on standard
+                         error when OUT is -)
+  --no-progress          no progress bar, even on a terminal
+
+Exit status as voxd voxelize's: 0 done, 2 a usage, parameter or limit
+error, 1 anything else (a bad mesh, a failed or cancelled job, a service
+that cannot be reached or is busy past its retries). Errors are one line on
+standard error that starts with the problem type the service answered.
+)";
+
+// An error answer of the service (or a failed job's error): its problem.
+struct ServiceProblem : std::runtime_error {
+  ServiceProblem(std::string slug, std::string message, int exit_code)
+      : std::runtime_error(std::move(message)), slug(std::move(slug)), exit_code(exit_code) {}
+  std::string slug;
+  int exit_code;
+};
+
+// The CLI exit status of a problem type: the error table's, else 1.
+int exit_code_of(const std::string& slug) {
+  for (const api::ErrorKind& kind : api::error_table())
+    if (slug == kind.slug) return kind.cli_exit;
+  return slug == "malformed-json" || slug == "params-too-large" ? api::kExitUsage : api::kExitFailure;
+}
+
+ServiceProblem problem_of(const json& problem, int status) {
+  const std::string type = problem.value("type", "");
+  std::string slug = type.substr(type.rfind(':') == std::string::npos ? 0 : type.rfind(':') + 1);
+  if (slug.empty()) slug = "http-" + std::to_string(status);
+  std::string message = problem.value("detail", problem.value("title", "HTTP " + std::to_string(status)));
+  if (problem.contains("errors") && problem["errors"].is_array())
+    for (const json& e : problem["errors"]) message += "; " + e.value("path", "") + ": " + e.value("message", "");
+  return ServiceProblem(slug, message, exit_code_of(slug));
+}
+
+ServiceProblem problem_of(const httplib::Result& res, const std::string& what) {
+  if (!res) return ServiceProblem("unreachable", what + ": " + httplib::to_string(res.error()), api::kExitFailure);
+  try {
+    return problem_of(json::parse(res->body), res->status);
+  } catch (const json::exception&) {
+    return ServiceProblem("http-" + std::to_string(res->status), what + ": HTTP " + std::to_string(res->status),
+                          api::kExitFailure);
+  }
+}
+
+class ServiceClient {
+ public:
+  ServiceClient(const std::string& url, std::string api_key) : api_key_(std::move(api_key)) {
+    if (url.rfind("http://", 0) != 0)
+      throw UsageError("--server must be an http:// URL (put TLS in front of voxd with a proxy), got '" + url + "'");
+    client_ = std::make_unique<httplib::Client>(url);
+    client_->set_connection_timeout(10);
+    client_->set_read_timeout(60);  // the event stream sends a keep-alive every 15 s
+    client_->set_write_timeout(60);
+  }
+
+  httplib::Headers headers() const {
+    httplib::Headers h = {{"User-Agent", "voxd-submit"}};
+    if (!api_key_.empty()) h.emplace("Authorization", "Bearer " + api_key_);
+    return h;
+  }
+
+  // A request retried while the service says it is busy (429/503 with
+  // Retry-After), a few times.
+  template <typename Send>
+  httplib::Result with_retries(Send send) {
+    for (int attempt = 0;; ++attempt) {
+      httplib::Result res = send();
+      if (!res || (res->status != 429 && res->status != 503) || attempt == 5) return res;
+      const int wait = std::clamp(std::atoi(res->get_header_value("Retry-After").c_str()), 1, 60);
+      std::this_thread::sleep_for(std::chrono::seconds(wait));
+    }
+  }
+
+  json submit(const std::string& mesh, const std::string& filename, const json& params) {
+    const httplib::MultipartFormDataItems items = {{"mesh", mesh, filename, "application/octet-stream"},
+                                                   {"params", params.dump(), "", "application/json"}};
+    auto res = with_retries([&] { return client_->Post("/v1/jobs", headers(), items); });
+    if (!res || (res->status != 200 && res->status != 202)) throw problem_of(res, "POST /v1/jobs");
+    return json::parse(res->body);
+  }
+
+  json status(const std::string& id) {
+    auto res = with_retries([&] { return client_->Get("/v1/jobs/" + id, headers()); });
+    if (!res || res->status != 200) throw problem_of(res, "GET /v1/jobs/" + id);
+    return json::parse(res->body);
+  }
+
+  // Follows the job's events, calling `on_change` with each state; returns
+  // the final status, or nullopt when the stream broke off (poll instead).
+  template <typename OnChange>
+  std::optional<json> follow(const std::string& id, OnChange on_change) {
+    std::string buffer;
+    json now = {{"id", id}};
+    std::optional<json> final;
+    auto handle_block = [&](const std::string& block) {
+      std::string name, data;
+      std::istringstream lines(block);
+      for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("event: ", 0) == 0) name = line.substr(7);
+        else if (line.rfind("data: ", 0) == 0) data += line.substr(6);
+      }
+      if (name.empty() || data.empty()) return;
+      const json d = json::parse(data, nullptr, false);
+      if (d.is_discarded()) return;
+      if (name == "job" || name == "end") now = d;
+      else if (name == "state" || name == "progress") now.update(d);
+      else if (name == "gone") throw ServiceProblem("not-found", "job " + id + " was deleted or has expired", api::kExitFailure);
+      on_change(now);
+      if (name == "end") final = now;
+    };
+    httplib::Headers h = headers();
+    h.emplace("Accept", "text/event-stream");
+    auto res = client_->Get(
+        "/v1/jobs/" + id + "/events", h, [&](const httplib::Response& r) { return r.status == 200; },
+        [&](const char* data, std::size_t n) {
+          buffer.append(data, n);
+          for (std::size_t cut; (cut = buffer.find("\n\n")) != std::string::npos;) {
+            handle_block(buffer.substr(0, cut));
+            buffer.erase(0, cut + 2);
+          }
+          return !final.has_value();
+        });
+    return final;
+  }
+
+  // The volume into OUT; its byte count.
+  std::uint64_t download(const std::string& id, const OutputChoice& output) {
+    std::string query = "format=" + std::string(to_string(output.format));
+    if (output.options.raw_packing == RawPacking::bits) query += "&packing=bits";
+    if (output.options.nrrd_encoding == NrrdEncoding::gzip) query += "&encoding=gzip";
+    if (output.options.quantize == Quantize::u8) query += "&quantize=u8";
+    if (output.options.quantize == Quantize::u16) query += "&quantize=u16";
+    std::optional<ServiceProblem> problem;
+    const std::uint64_t bytes = write_output(output.path, [&](ByteSink& sink) {
+      std::string error_body;
+      int status = 0;
+      auto res = with_retries([&] {
+        error_body.clear();
+        return client_->Get(
+            "/v1/jobs/" + id + "/volume?" + query, headers(),
+            [&](const httplib::Response& r) {
+              status = r.status;
+              return true;
+            },
+            [&](const char* data, std::size_t n) {
+              if (status == 200) sink.write(reinterpret_cast<const std::uint8_t*>(data), n);
+              else error_body.append(data, n);
+              return true;
+            });
+      });
+      if (!res || res->status != 200) {
+        if (res) res->body = error_body;
+        problem = problem_of(res, "GET /v1/jobs/" + id + "/volume");
+        throw *problem;  // write_output removes the partial file
+      }
+    });
+    return bytes;
+  }
+
+ private:
+  std::string api_key_;
+  std::unique_ptr<httplib::Client> client_;
+};
+
+// "[#########           ]  45% voxelize", redrawn in place on a terminal.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool on) : on_(on) {}
+  ~ProgressBar() { finish(); }
+  void show(const json& status) {
+    if (!on_) return;
+    const double p = std::clamp(status.value("progress", 0.0), 0.0, 1.0);
+    const std::string state = status.value("state", "");
+    std::string stage = state == "running" && status.contains("stage") && status["stage"].is_string()
+                            ? status["stage"].get<std::string>() : state;
+    const int filled = static_cast<int>(p * 30 + 0.5);
+    char line[160];
+    std::snprintf(line, sizeof line, "\r[%s%s] %3d%% %-28.28s", std::string(filled, '#').c_str(),
+                  std::string(30 - filled, ' ').c_str(), static_cast<int>(p * 100 + 0.5), stage.c_str());
+    std::cerr << line << std::flush;
+    drawn_ = true;
+  }
+  void finish() {
+    if (drawn_) std::cerr << '\n';
+    drawn_ = false;
+  }
+
+ private:
+  bool on_;
+  bool drawn_ = false;
+};
+
+int submit(int argc, char** argv) {
+  std::set<std::string> valued(std::begin(kParamFlags), std::end(kParamFlags));
+  valued.insert(std::begin(kOutputFlags), std::end(kOutputFlags));
+  valued.insert({"server", "api-key", "streaming"});
+  Args args(argc, argv, 2, valued, {"json", "report", "no-progress", "help"});
+  if (args.has("help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  if (args.positional().size() != 1) throw UsageError("submit takes exactly one mesh file (see voxd submit --help)");
+  const OutputChoice output = read_output_choice(args, "submit");
+  json params = load_params(args);
+  apply_param_flags(args, params);
+  if (auto s = args.value("streaming")) params["streaming"] = *s;
+  // The service checks both again; this says what is wrong before any upload.
+  const api::JobParams parsed = api::parse_job_params(params);
+  if (auto refusal = parsed.format_refusal(output.format, output.options))
+    throw UsageError("mode " + parsed.mode_name() + ": " + *refusal);
+
+  const char* env_server = std::getenv("VOXD_SERVER");
+  const char* env_key = std::getenv("VOXD_API_KEY");
+  const std::string server = args.value("server").value_or(env_server && *env_server ? env_server : "http://127.0.0.1:8080");
+  ServiceClient client(server, args.value("api-key").value_or(env_key ? env_key : ""));
+
+  const std::string& mesh_path = args.positional()[0];
+  MappedFile file(mesh_path);
+  const auto bytes = file.bytes();
+  const std::string filename = mesh_path.substr(mesh_path.find_last_of('/') == std::string::npos ? 0 : mesh_path.find_last_of('/') + 1);
+  const auto start = std::chrono::steady_clock::now();
+  json job = client.submit(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), filename, params);
+  const std::string id = job.at("id");
+
+  ProgressBar bar(!args.has("no-progress") && isatty(STDERR_FILENO));
+  const std::string state = job.value("state", "");
+  if (state != "succeeded" && state != "failed" && state != "cancelled") {
+    std::optional<json> final = client.follow(id, [&](const json& s) { bar.show(s); });
+    // No stream (an older service, a proxy that buffers): poll.
+    for (auto wait = std::chrono::milliseconds(200); !final; wait = std::min(wait * 3 / 2, std::chrono::milliseconds(5000))) {
+      json s = client.status(id);
+      bar.show(s);
+      const std::string st = s.value("state", "");
+      if (st == "succeeded" || st == "failed" || st == "cancelled") final = s;
+      else std::this_thread::sleep_for(wait);
+    }
+    job = *final;
+  }
+  bar.finish();
+  if (job.value("state", "") == "failed") {
+    const json error = job.contains("error") && job["error"].is_object() ? job["error"] : json::object();
+    throw problem_of(error, error.value("status", 500));
+  }
+  if (job.value("state", "") == "cancelled") throw ServiceProblem("cancelled", "job " + id + " was cancelled", api::kExitFailure);
+
+  const std::uint64_t written = client.download(id, output);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  json summary = {{"server", server},
+                  {"job", id},
+                  {"mesh", {{"path", mesh_path}, {"format", job.value("mesh_format", "")}, {"triangles", job.value("triangles", 0)}}},
+                  {"grid", job.value("grid", json())},
+                  {"mode", job.at("params").value("mode", "solid")},
+                  {"filled_voxels", job.value("filled_voxels", json())},
+                  {"filled_volume", job.value("filled_volume", json())},
+                  {"streamed", job.value("streamed", false)},
+                  {"cached", job.value("cached", false)},
+                  {"values", job.value("values", json())},
+                  {"timings", job.value("timings", json::object())},
+                  {"output", {{"path", output.path}, {"format", to_string(output.format)}, {"bytes", written}}},
+                  {"seconds", seconds}};
+  if (args.has("report")) summary["report"] = job.value("mesh", json());
+  std::ostream& out = output.path == "-" ? std::cerr : std::cout;
+  if (args.has("json")) {
+    out << summary.dump(2) << '\n';
+  } else {
+    std::ostringstream s;
+    const json& g = summary["grid"];
+    s << "job:     " << id << " on " << server << (summary["cached"].get<bool>() ? " (answered from an identical job)" : "") << '\n';
+    if (g.is_object())
+      s << "grid:    " << g["dims"][0] << " x " << g["dims"][1] << " x " << g["dims"][2] << " voxels of " << g["voxel_size"] << '\n';
+    s << "filled:  " << summary["filled_voxels"] << " voxels, volume " << summary["filled_volume"] << '\n';
+    if (args.has("report")) s << "mesh report: " << summary["report"].dump() << '\n';
+    s << "output:  " << output.path << " (" << to_string(output.format) << ", " << written << " bytes), " << seconds << " s\n";
+    std::cerr << s.str();
+  }
+  return 0;
+}
+
+}  // namespace
+
+int submit_command(int argc, char** argv) {
+  try {
+    return submit(argc, argv);
+  } catch (const ServiceProblem& e) {
+    std::cerr << "voxd: " << e.slug << ": " << e.what() << '\n';
+    return e.exit_code;
+  }
+}
+
+}  // namespace voxd::cli

@@ -1,0 +1,114 @@
+// `voxd submit` against a real `voxd serve`: the file it writes is the
+// bytes `voxd voxelize` writes for the same job, standard output holds only
+// the volume, errors exit as voxelize's do with the service's problem type,
+// and a terminal gets a progress bar.
+#include <filesystem>
+#include <fstream>
+
+#include "support/http_fixture.h"
+#include "support/run_process.h"
+#include "support/test_meshes.h"
+
+namespace voxd::test {
+namespace {
+
+using nlohmann::json;
+
+class SubmitCli : public HttpServiceTest {
+ protected:
+  std::string server_url() const { return "http://127.0.0.1:" + std::to_string(server_->port()); }
+  std::string mesh_file(const std::string& name, const std::vector<std::uint8_t>& bytes) {
+    write_file(dir_ + "/" + name, bytes);
+    return dir_ + "/" + name;
+  }
+  ProcessResult submit_cli(const std::string& flags, const std::string& env = "") {
+    return run_process(env + " " + std::string(VOXD_BINARY) + " submit " + flags);
+  }
+};
+
+TEST_F(SubmitCli, WritesTheBytesVoxelizeWrites) {
+  start();
+  const auto mesh = to_binary_stl(make_icosphere({1, 2, 3}, 4.0, 3));
+  const std::string path = mesh_file("ball.stl", mesh);
+  for (const auto& [params, format] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"grid":{"resolution":30,"padding":1}})", "rle"},
+           {R"({"grid":{"resolution":30,"padding":1}})", "binvox"},
+           {R"({"mode":"sdf","grid":{"resolution":24,"padding":2},"sdf":{"band":2}})", "nrrd"},
+           {R"({"mode":"coverage","grid":{"resolution":20}})", "raw"}}) {
+    SCOPED_TRACE(params + " " + format);
+    std::ofstream(dir_ + "/p.json") << params;
+    const std::string out = dir_ + "/submitted." + format;
+    const auto r = submit_cli(path + " -o " + out + " --params @" + dir_ + "/p.json --server " + server_url());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(text_of(read_file(out)), cli_volume(mesh, "ball.stl", params, format));
+    EXPECT_NE(r.err.find("output:  " + out), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out + ".partial"));
+  }
+}
+
+TEST_F(SubmitCli, StandardOutputHoldsOnlyTheVolumeAndTheServerComesFromTheEnvironment) {
+  start();
+  const auto mesh = to_binary_stl(make_box({0, 0, 0}, {2, 3, 4}));
+  const std::string path = mesh_file("box.stl", mesh);
+  const auto r = submit_cli(path + " -o - --format raw --resolution 16 --json --report", "VOXD_SERVER=" + server_url());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string expected = cli_volume(mesh, "box.stl", R"({"grid":{"resolution":16}})", "raw");
+  EXPECT_EQ(r.out, expected);
+  const json summary = json::parse(r.err);
+  EXPECT_EQ(summary.at("server"), server_url());
+  EXPECT_EQ(summary.at("output").at("bytes").get<std::size_t>(), expected.size());
+  EXPECT_EQ(summary.at("grid").at("dims"), json::array({8, 12, 16}));
+  EXPECT_EQ(summary.at("report").at("watertight"), true);
+  EXPECT_EQ(summary.at("filled_voxels"), 8 * 12 * 16);
+  // The job is the service's: its status says so.
+  auto res = http().Get(("/v1/jobs/" + summary.at("job").get<std::string>()).c_str());
+  ASSERT_TRUE(res);
+  EXPECT_EQ(json::parse(res->body).at("state"), "succeeded");
+}
+
+TEST_F(SubmitCli, ErrorsExitAsVoxelizeWithTheProblemType) {
+  start({"--max-voxels", "1000"});
+  const std::string box = mesh_file("box.stl", to_binary_stl(make_box({0, 0, 0}, {2, 3, 4})));
+  const std::string server = " --server " + server_url();
+  // Parameters and formats are checked before any upload: exit 2.
+  auto r = submit_cli(box + " -o " + dir_ + "/x.rle --resolution 0" + server);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/grid/resolution"), std::string::npos) << r.err;
+  r = submit_cli(box + " -o " + dir_ + "/x.vox" + server);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("vox holds colours"), std::string::npos) << r.err;
+  // The service's own limits: limit-exceeded exits 2 as voxelize's does.
+  r = submit_cli(box + " -o " + dir_ + "/x.rle --resolution 64 --streaming off" + server);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("voxd: limit-exceeded: ", 0), 0u) << r.err;
+  // A mesh the service cannot read: exit 1, its problem type first.
+  const std::string broken = mesh_file("broken.stl", {'s', 'o', 'l', 'i', 'd', '\n'});
+  r = submit_cli(broken + " -o " + dir_ + "/x.rle" + server);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.err.rfind("voxd: invalid-mesh: ", 0), 0u) << r.err;
+  // No service there: exit 1.
+  r = submit_cli(box + " -o " + dir_ + "/x.rle --server http://127.0.0.1:9");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.err.rfind("voxd: unreachable: ", 0), 0u) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/x.rle"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/x.rle.partial"));
+}
+
+TEST_F(SubmitCli, ATerminalGetsAProgressBarToTheEnd) {
+  start();
+  const std::string torus = std::string(VOXD_SHARED_MESHES) + "/torus.stl";
+  // util-linux's script(1) gives the command a terminal.
+  const auto r = run_process("script -qec '" + std::string(VOXD_BINARY) + " submit " + torus + " -o " + dir_ +
+                             "/t.rle --resolution 96 --server " + server_url() + "' /dev/null");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("\r["), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("] 100% succeeded"), std::string::npos) << r.out;
+  EXPECT_EQ(text_of(read_file(dir_ + "/t.rle")), cli_volume(read_file(torus), "torus.stl", R"({"grid":{"resolution":96}})"));
+  // Not a terminal: no bar.
+  const auto plain = run_process(std::string(VOXD_BINARY) + " submit " + torus + " -o " + dir_ + "/t2.rle --resolution 96 --server " + server_url());
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_EQ(plain.err.find('\r'), std::string::npos) << plain.err;
+}
+
+}  // namespace
+}  // namespace voxd::test
