@@ -456,6 +456,10 @@ TEST_F(HttpApiTest, MetricsCountJobsRequestsBytesAndStageDurations) {
   wait_for_job(http(), job.at("id"));
   const std::string vol = volume(job.at("id"));
   expect_problem(post_multipart(http(), "/v1/jobs", mesh, "b.stl", R"({"mode":1})"), 422, "invalid-params");
+  // Layer numbers and invented paths count under bounded labels.
+  const std::string id = job.at("id");
+  for (const char* k : {"999999", "123456"}) http().Get(("/v1/jobs/" + id + "/layers/" + k).c_str());
+  http().Get(("/v1/jobs/" + id + "/invented-path").c_str());
   // Metrics are updated just after a job's state or a request's answer is
   // visible (by the job listener and the request logger): poll briefly.
   std::map<std::string, double> values;
@@ -471,7 +475,8 @@ TEST_F(HttpApiTest, MetricsCountJobsRequestsBytesAndStageDurations) {
       values[line.substr(0, space)] = std::stod(line.substr(space + 1));
     }
     if (values["voxd_stage_duration_seconds_count{stage=\"voxelize\"}"] == 1 &&
-        values["voxd_http_requests_total{method=\"POST\",route=\"/v1/jobs\",status=\"422\"}"] == 1)
+        values["voxd_http_requests_total{method=\"POST\",route=\"/v1/jobs\",status=\"422\"}"] == 1 &&
+        values["voxd_http_requests_total{method=\"GET\",route=\"other\",status=\"404\"}"] == 1)
       break;
     std::this_thread::sleep_for(10ms);
   }
@@ -482,6 +487,9 @@ TEST_F(HttpApiTest, MetricsCountJobsRequestsBytesAndStageDurations) {
   EXPECT_EQ(values["voxd_http_requests_total{method=\"POST\",route=\"/v1/jobs\",status=\"202\"}"], 1);
   EXPECT_EQ(values["voxd_http_requests_total{method=\"POST\",route=\"/v1/jobs\",status=\"422\"}"], 1);
   EXPECT_EQ(values["voxd_rejected_requests_total{reason=\"invalid-params\"}"], 1);
+  EXPECT_EQ(values["voxd_http_requests_total{method=\"GET\",route=\"/v1/jobs/{id}/layers/{k}\",status=\"409\"}"], 2);
+  EXPECT_EQ(values["voxd_http_requests_total{method=\"GET\",route=\"other\",status=\"404\"}"], 1);
+  for (const auto& [series, value] : values) EXPECT_EQ(series.find("999999"), std::string::npos) << series;
   EXPECT_EQ(values["voxd_stage_duration_seconds_count{stage=\"voxelize\"}"], 1);
   EXPECT_EQ(values["voxd_stage_duration_seconds_bucket{stage=\"voxelize\",le=\"+Inf\"}"], 1);
   EXPECT_GT(values["voxd_stage_duration_seconds_sum{stage=\"voxelize\"}"], 0);
