@@ -3,12 +3,14 @@
 #include <httplib.h>
 
 #include "server/http/middleware.h"
+#include "server/http/route_label.h"
 #include "server/http/route_table.h"
 #include "server/http/routes.h"
 
 namespace voxd::server {
 
 void HttpApi::install(httplib::Server& server) {
+  prepare_route_labels();  // and with it the served OpenAPI document
   install_middleware(server, config_, metrics_);
   RouteTable routes(server, metrics_);
   install_service_routes(routes, jobs_, metrics_, config_, draining_);

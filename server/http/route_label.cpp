@@ -58,6 +58,8 @@ bool matches(const Template& t, const std::vector<std::string_view>& path) {
 
 }  // namespace
 
+void prepare_route_labels() { documented_paths(); }
+
 std::string route_label(const std::string& path) {
   const auto segments = segments_of(path);
   for (const Template& t : documented_paths())

@@ -10,4 +10,8 @@ namespace voxd::server {
 
 std::string route_label(const std::string& path);
 
+// Builds the label table now: it reads the served OpenAPI document, which
+// the first request's log line should not wait for.
+void prepare_route_labels();
+
 }  // namespace voxd::server
