@@ -230,6 +230,7 @@ class BusyService(unittest.TestCase):
             self.assertEqual(caught.exception.slug, "queue-full")
         finally:
             stub.shutdown()
+            stub.server_close()
 
     def test_an_unreachable_server_is_a_transport_error(self):
         with self.assertRaises(TransportError):
