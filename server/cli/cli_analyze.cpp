@@ -106,10 +106,10 @@ int analyze_command(int argc, char** argv) {
   }
   if (args.has("cleanup") || args.has("cleanup-sheets")) options.cleanup = CleanupOptions{true, true, args.has("cleanup-sheets")};
   // One wall thickness map for the report, the images and the volume.
-  std::optional<DenseVolume<float>> map;
+  std::shared_ptr<const DenseVolume<float>> map;
   if (options.thickness && !options.cleanup) {
-    map = wall_thickness(result.volume, threads);
-    options.thickness_map = &*map;
+    map = std::make_shared<const DenseVolume<float>>(wall_thickness(result.volume, threads));
+    options.thickness_map = map.get();
   }
   const AnalysisReport report = analyze_volume(result.volume, options);
   nlohmann::json doc = api::analysis_to_json(report, result.grid, result.report, result.mesh_mass);
@@ -125,18 +125,20 @@ int analyze_command(int argc, char** argv) {
   // Every file beside analysis.json is what the service answers for the
   // same job: made by the function its routes call (server::job_analysis)
   // from the request the route takes, so the bytes and their metadata agree.
-  // This run's wall-thickness map is handed over as a kept artifact.
+  // This run's wall-thickness map is handed over as it is.
   std::map<std::string, std::string> kept;
-  if (map && !options.cleanup)
-    kept[server::thickness_map_key(api::ThicknessMeasure::wall)] =
-        std::string(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float));
   const server::ArtifactAccess artifacts{
       "cli", [&kept](const std::string& key) -> std::optional<std::string> {
         auto it = kept.find(key);
         if (it == kept.end()) return std::nullopt;
         return it->second;
       },
-      [&kept](const std::string& key, const std::string& bytes) { kept[key] = bytes; }};
+      // Only the thickness maps are worth keeping: every other result is
+      // written once and never asked for again.
+      [&kept](const std::string& key, const std::string& bytes) {
+        if (key == server::thickness_map_key(api::ThicknessMeasure::local)) kept[key] = bytes;
+      },
+      map};
   server::JobSnapshot job;
   job.id = "cli";
   job.params = params_json;

@@ -78,13 +78,13 @@ std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, cons
   options.peel = r.peel_metric;
   options.min_wall_voxels = r.min_wall.value_or(0) / job.grid.voxel_size;
   options.max_wall_voxels = r.max_wall.value_or(0) / job.grid.voxel_size;
-  std::optional<DenseVolume<float>> map;
+  std::shared_ptr<const DenseVolume<float>> map;
   const bool map_first = r.thickness && !options.cleanup;
   if (map_first) {
     // The thickness map takes most of the time: most of the bar.
     const NestedSpan map_share(control, 0.0, 0.8);
     map = job_thickness_map(volume, artifacts, control);
-    options.thickness_map = &*map;
+    options.thickness_map = map.get();
   }
   const NestedSpan report_share(control, map_first ? 0.8 : 0.0, 1.0);
   const AnalysisReport report = analyze_volume(volume, options, control);
@@ -237,7 +237,7 @@ std::optional<std::string> value_job_section(const AnalysisRequest& r, const Job
 std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, const ArtifactAccess& artifacts,
                              JobControl* control) {
   const DenseVolume<float> map =
-      thickness_in(job_thickness_map(volume, artifacts, control, r.thickness_measure), r.unit);
+      thickness_in(*job_thickness_map(volume, artifacts, control, r.thickness_measure), r.unit);
   VectorSink out;
   if (r.format == "rle") {
     write_rle(map, out);
@@ -349,22 +349,24 @@ const char* thickness_map_key(api::ThicknessMeasure m) {
   return m == api::ThicknessMeasure::wall ? "wall-thickness-map.f32" : "local-thickness-map.f32";
 }
 
-DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control,
-                                     api::ThicknessMeasure measure) {
+std::shared_ptr<const DenseVolume<float>> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts,
+                                                            JobControl* control, api::ThicknessMeasure measure) {
+  if (measure == api::ThicknessMeasure::wall && artifacts.wall_map && artifacts.wall_map->grid().dims == volume.grid().dims)
+    return artifacts.wall_map;
   const char* key = thickness_map_key(measure);
   const auto lock = key_lock(artifacts, key);
   std::lock_guard guard(*lock);
-  DenseVolume<float> map(volume.grid(), 0.0f);
-  if (auto kept = artifacts.load(key); kept && kept->size() == map.values().size() * sizeof(float)) {
-    std::memcpy(map.values().data(), kept->data(), kept->size());
+  auto map = std::make_shared<DenseVolume<float>>(volume.grid(), 0.0f);
+  if (auto kept = artifacts.load(key); kept && kept->size() == map->values().size() * sizeof(float)) {
+    std::memcpy(map->values().data(), kept->data(), kept->size());
     return map;
   }
   const auto t0 = std::chrono::steady_clock::now();
-  map = measure == api::ThicknessMeasure::wall ? wall_thickness(volume, 0, control) : local_thickness(volume, 0, control);
+  *map = measure == api::ThicknessMeasure::wall ? wall_thickness(volume, 0, control) : local_thickness(volume, 0, control);
   spdlog::info("job {}: {} thickness computed in {:.3f} s", artifacts.scope, to_string(measure),
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  artifacts.save(key, std::string(reinterpret_cast<const char*>(map.values().data()),
-                                               map.values().size() * sizeof(float)));
+  artifacts.save(key, std::string(reinterpret_cast<const char*>(map->values().data()),
+                                  map->values().size() * sizeof(float)));
   return map;
 }
 
@@ -438,12 +440,12 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
         bytes = std::move(*values);
         break;
       }
-      std::optional<DenseVolume<float>> map;
+      std::shared_ptr<const DenseVolume<float>> map;
       if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
       const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
       std::vector<PngText> text = {{"voxd:job", job.id}};
       if (r.peel > 0) text.push_back({"voxd:peeled", std::to_string(r.peel) + " layers (" + to_string(r.peel_metric) + ")"});
-      bytes = to_bytes(section_png(peeled_model ? *peeled_model : volume, r.axis, layer, map ? &*map : nullptr, text));
+      bytes = to_bytes(section_png(peeled_model ? *peeled_model : volume, r.axis, layer, map.get(), text));
       break;
     }
     case AnalysisKind::preview: {
@@ -458,9 +460,9 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
                                             {{"voxd:job", job.id}}));
         break;
       }
-      std::optional<DenseVolume<float>> map;
+      std::shared_ptr<const DenseVolume<float>> map;
       if (r.colour == "thickness") map = job_thickness_map(volume, artifacts, control);
-      bytes = to_bytes(preview_png(volume, *parse_view(r.view), map ? &*map : nullptr, {{"voxd:job", job.id}}));
+      bytes = to_bytes(preview_png(volume, *parse_view(r.view), map.get(), {{"voxd:job", job.id}}));
       break;
     }
     case AnalysisKind::thickness: bytes = thickness_volume(r, volume, artifacts, control); break;

@@ -28,6 +28,9 @@ struct ArtifactAccess {
   std::string scope;
   std::function<std::optional<std::string>(const std::string& key)> load;
   std::function<void(const std::string& key, const std::string& bytes)> save;
+  // The job's wall-thickness map when the caller already holds it (the
+  // CLI): used as it is, neither loaded nor copied.
+  std::shared_ptr<const DenseVolume<float>> wall_map = nullptr;
 };
 ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id);
 
@@ -97,7 +100,8 @@ const char* thickness_map_key(api::ThicknessMeasure measure);
 
 // The job's thickness map (voxels) of `measure`, computed once and kept: the
 // wall thickness for the report, sections and previews.
-DenseVolume<float> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control,
-                                     api::ThicknessMeasure measure = api::ThicknessMeasure::wall);
+std::shared_ptr<const DenseVolume<float>> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts,
+                                                            JobControl* control,
+                                                            api::ThicknessMeasure measure = api::ThicknessMeasure::wall);
 
 }  // namespace voxd::server
