@@ -182,8 +182,7 @@ class ServiceClient {
     if (output.options.nrrd_encoding == NrrdEncoding::gzip) query += "&encoding=gzip";
     if (output.options.quantize == Quantize::u8) query += "&quantize=u8";
     if (output.options.quantize == Quantize::u16) query += "&quantize=u16";
-    std::optional<ServiceProblem> problem;
-    const std::uint64_t bytes = write_output(output.path, [&](ByteSink& sink) {
+    return write_output(output.path, [&](ByteSink& sink) {
       std::string error_body;
       int status = 0;
       auto res = with_retries([&] {
@@ -202,11 +201,9 @@ class ServiceClient {
       });
       if (!res || res->status != 200) {
         if (res) res->body = error_body;
-        problem = problem_of(res, "GET /v1/jobs/" + id + "/volume");
-        throw *problem;  // write_output removes the partial file
+        throw problem_of(res, "GET /v1/jobs/" + id + "/volume");  // write_output removes the partial file
       }
     });
-    return bytes;
   }
 
  private:
