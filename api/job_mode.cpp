@@ -31,6 +31,10 @@ nlohmann::json JobMode::run_streamed(const ModeInput&, std::int64_t, const BitSl
   throw std::logic_error("mode " + std::string(name()) + " does not stream");
 }
 
+void JobMode::run_runs(const ModeInput&, const RunSlabConsumer&) const {
+  throw std::logic_error("mode " + std::string(name()) + " does not make runs");
+}
+
 std::uint64_t JobMode::streamed_layer_bytes(const Grid& grid, const JobParams&) const {
   return bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
 }

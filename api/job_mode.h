@@ -37,6 +37,7 @@
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
+#include "voxd/run_slab.h"
 #include "voxd/voxelize/streamed.h"
 #include "voxd/voxelize/voxelize.h"
 
@@ -61,8 +62,8 @@ struct ModeInput {
   // The parity solid, made first when the mode asks for it (needs_parity_solid).
   const BitVolume* parity_solid = nullptr;
   // A streamed run of only these z layers (one part of a job spread over
-  // workers); honoured by run_streamed of the modes that say
-  // runs_in_layer_ranges, the whole grid for the others.
+  // workers); honoured by run_runs (JobMode::makes_runs), the whole grid
+  // for the other runs.
   LayerRange layers{};
 };
 
@@ -139,11 +140,15 @@ class JobMode {
   virtual std::optional<std::string> streaming_refusal(const JobParams& params) const;
   virtual nlohmann::json run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& bits,
                                       const ValueSlabConsumer& values) const;
-  // Whether a streamed run can make any range of z layers alone (ModeInput::
+  // Whether the job's bits can be made as runs (voxd/voxelize/runs.h): a
+  // job of bits only, each row of voxels made on its own from its crossings.
+  // Such a job is written to a format made of runs (the RLE) without a dense
+  // volume, and any range of its z layers can be made alone (ModeInput::
   // layers), bit for bit the whole run's, so that a huge job splits into
-  // slab tasks for many workers (server/jobs/slab_tasks.h): a job of bits
-  // only, each row of voxels made on its own.
-  virtual bool runs_in_layer_ranges(const JobParams&) const { return false; }
+  // slab tasks for many workers (server/jobs/slab_tasks.h). run_runs hands
+  // each slab of runs to `runs` in z order.
+  virtual bool makes_runs(const JobParams&) const { return false; }
+  virtual void run_runs(const ModeInput& in, const RunSlabConsumer& runs) const;
   // Bytes one z layer takes in a streamed run (what it holds per layer of a
   // slab at once), to size slabs and admit the job.
   virtual std::uint64_t streamed_layer_bytes(const Grid& grid, const JobParams& params) const;

@@ -246,21 +246,39 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
   return result;
 }
 
-VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,
-                                    const BitSlabConsumer& consume) {
+namespace {
+
+VoxelJobResult execute_runs(PreparedVoxelJob& job, bool with_report, LayerRange range, JobControl* control,
+                            int threads, const RunSlabConsumer& consume) {
   const api::JobMode& mode = *job.params.mode;
-  if (!mode.runs_in_layer_ranges(job.params))
-    throw Error(ErrorCode::invalid_argument, "mode " + std::string(mode.name()) + " cannot make a part of its grid alone");
+  if (!mode.makes_runs(job.params))
+    throw Error(ErrorCode::invalid_argument, "mode " + std::string(mode.name()) + " with the " +
+                                                 to_string(job.params.inside) + " inside test does not make runs");
   Stopwatch clock;
-  VoxelJobResult result = begin_voxel_job(job, /*with_report=*/false, control, clock);
-  result.streamed = true;
+  VoxelJobResult result = begin_voxel_job(job, with_report, control, clock);
+  result.streamed = job.streamed;
+  if (control) control->set_stage("voxelize");
   api::ModeInput in{job.mesh, job.grid, job.params, threads, control, nullptr};
   in.layers = range;
-  mode.run_streamed(in, job.slab_layers, [&](std::int64_t k0, const BitVolume& slab) {
+  mode.run_runs(in, [&](std::int64_t k0, const RunSlab& slab) {
     result.filled += slab.count();
     consume(k0, slab);
-  }, {});
+  });
   result.timings.add("voxelize+write", clock.lap());
+  return result;
+}
+
+}  // namespace
+
+VoxelJobResult execute_voxel_runs_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
+                                      const RunSlabConsumer& consume) {
+  return execute_runs(job, with_report, {}, control, threads, consume);
+}
+
+VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,
+                                    const RunSlabConsumer& consume) {
+  VoxelJobResult result = execute_runs(job, /*with_report=*/false, range, control, threads, consume);
+  result.streamed = true;
   return result;
 }
 

@@ -19,6 +19,7 @@
 #include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/mesh_report.h"
 #include "voxd/progress.h"
+#include "voxd/run_slab.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/voxelize/streamed.h"
 
@@ -134,13 +135,21 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
                                           std::int64_t slab_layers, const BitSlabConsumer& consume,
                                           const ValueSlabConsumer& values = {});
 
+// A job of bits whose output is made of runs (the RLE): its bits as runs
+// (voxd/voxelize/runs.h), slab by slab to `consume`, bit for bit those the
+// other paths make, without a dense volume; `filled` counts them, `streamed`
+// is the job's. Throws Error(invalid_argument) for a job whose mode does not
+// make runs (api::JobMode::makes_runs).
+VoxelJobResult execute_voxel_runs_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
+                                      const RunSlabConsumer& consume);
+
 // One part of a job spread over many workers (server/jobs/slab_tasks.h):
-// only the z layers `range` of its bits, slab by slab to `consume`, bit for
-// bit those execute_streamed_voxel_job makes; `filled` counts them. No mesh
-// report (describe_voxel_job gives it). Throws Error(invalid_argument) for a
-// job whose mode cannot (api::JobMode::runs_in_layer_ranges).
+// only the z layers `range` of its bits, as runs to `consume`, bit for bit
+// those of the whole job; `filled` counts them. No mesh report
+// (describe_voxel_job gives it). Throws Error(invalid_argument) for a job
+// whose mode does not make runs (api::JobMode::makes_runs).
 VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,
-                                    const BitSlabConsumer& consume);
+                                    const RunSlabConsumer& consume);
 
 // What a job's result says beside its voxels, without making them: the mesh
 // report, the rotation, the mass properties in the voxels' frame (for the

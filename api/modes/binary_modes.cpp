@@ -3,6 +3,7 @@
 // No options object; the three differ only in which voxels they fill.
 #include "api/job_mode.h"
 #include "api/job_params.h"
+#include "voxd/voxelize/runs.h"
 #include "voxd/voxelize/streamed.h"
 #include "voxd/voxelize/voxelize.h"
 
@@ -42,11 +43,24 @@ class BinaryMode final : public JobMode {
     options.mode = mode_;
     options.inside = in.params.inside;
     options.threads = in.threads;
-    voxelize_streamed(in.mesh, in.grid, options, slab_layers, bits, in.control, in.layers);
+    voxelize_streamed(in.mesh, in.grid, options, slab_layers, bits, in.control);
     return nullptr;
   }
 
-  bool runs_in_layer_ranges(const JobParams& params) const override { return !streaming_refusal(params); }
+  bool makes_runs(const JobParams& params) const override {
+    VoxelizeOptions options;
+    options.mode = mode_;
+    options.inside = params.inside;
+    return can_make_runs(options);
+  }
+
+  void run_runs(const ModeInput& in, const RunSlabConsumer& runs) const override {
+    VoxelizeOptions options;
+    options.mode = mode_;
+    options.inside = in.params.inside;
+    options.threads = in.threads;
+    voxelize_runs(in.mesh, in.grid, options, runs, in.control, in.layers);
+  }
 
  private:
   std::string_view name_, summary_;

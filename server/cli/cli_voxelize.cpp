@@ -172,7 +172,18 @@ int voxelize_command(int argc, char** argv) {
 
   VoxelJobResult result;
   std::uint64_t bytes_written = 0;
-  if (streamed) {
+  // An RLE of bits is made of runs: made straight from the crossings, the
+  // grid is never a dense volume, streamed or not (the bytes are the same).
+  if (!mode_writes && *format == VolumeFormat::rle && params.mode->makes_runs(params)) {
+    job.streamed = streamed;
+    const Grid grid = job.grid;
+    bytes_written = write_output([&](ByteSink& sink) {
+      BitSlabWriter writer(grid, *format, encode_options, sink);
+      result = execute_voxel_runs_job(std::move(job), args.has("report"), nullptr, threads,
+                                      [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); });
+      writer.finish();
+    });
+  } else if (streamed) {
     const Grid grid = job.grid;
     const std::int64_t slab_layers = streamed_job_slab_layers(grid, params, kStreamSlabBytes);
     bytes_written = write_output([&](ByteSink& sink) {

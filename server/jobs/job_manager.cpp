@@ -375,7 +375,7 @@ struct JobManager::Impl {
   // streamed job of bits of more than one task; true when it was: its tasks
   // are then on the queue for every replica, and it leaves this worker.
   bool split(Job& job, const PreparedVoxelJob& prepared) {
-    if (!config.slab_tasks || !prepared.streamed || !prepared.params.mode->runs_in_layer_ranges(prepared.params))
+    if (!config.slab_tasks || !prepared.streamed || !prepared.params.mode->makes_runs(prepared.params))
       return false;
     const std::optional<SlabTaskPlan> plan = plan_slab_tasks(prepared.grid, prepared.slab_layers, config.slab_task_bytes);
     if (!plan) return false;
@@ -456,7 +456,7 @@ struct JobManager::Impl {
         VoxelJobResult r;
         config.slab_tasks->write_blocks(id, ref.index, [&](ByteSink& sink) {
           r = execute_voxel_layers(std::move(*prepared), range, &job->control, engine_threads,
-                                   [&](std::int64_t k0, const BitVolume& slab) { write_rle_layer_blocks(k0, slab, sink); });
+                                   [&](std::int64_t k0, const RunSlab& slab) { write_rle_layer_blocks(k0, slab, sink); });
         });
         job->memory.release();
         done = config.slab_tasks->finish_task(id, ref.index, r.filled, tasks);
@@ -724,7 +724,11 @@ struct JobManager::Impl {
         store->write_volume(job->snap.id, [&](ByteSink& bits_sink) {
           BitSlabWriter bits(grid, VolumeFormat::rle, EncodeOptions{}, bits_sink);
           const BitSlabConsumer to_bits = [&](std::int64_t k0, const BitVolume& slab) { bits.write(k0, slab); };
-          if (!type) {
+          if (prepared.params.mode->makes_runs(prepared.params)) {
+            // Bits only, as runs: the stored RLE is written from them.
+            r = execute_voxel_runs_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
+                                       [&](std::int64_t k0, const RunSlab& slab) { bits.write(k0, slab); });
+          } else if (!type) {
             r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job->control, engine_threads,
                                            slab_layers, to_bits);
           } else {

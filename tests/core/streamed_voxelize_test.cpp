@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "support/test_meshes.h"
+#include "support/shared_meshes.h"
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/error.h"
@@ -20,17 +20,8 @@
 namespace voxd {
 namespace {
 
-Mesh shared_mesh(const std::string& name) {
-  const std::string path = std::string(VOXD_SHARED_MESHES) + "/" + name;
-  return decode_mesh(test::read_file(path), name);
-}
-
-Grid grid_for(const Mesh& mesh, std::int64_t resolution, std::int64_t padding) {
-  GridRequest r;
-  r.resolution = resolution;
-  r.padding = padding;
-  return resolve_grid(r, bounds(mesh));
-}
+using test::grid_for;
+using test::shared_mesh;
 
 // The streamed slabs put back together, checking their order and grids.
 BitVolume assembled(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, std::int64_t layers) {

@@ -91,7 +91,15 @@ TEST_F(CliTest, VoxelizeJsonSummaryMatchesTheEngineAndTheFile) {
   EXPECT_EQ(s.at("grid").at("dims"), json::array({42, 42, 42}));
   EXPECT_EQ(s.at("mode"), "solid");
   EXPECT_EQ(s.at("inside"), "parity");
-  for (const char* stage : {"parse", "voxelize", "encode", "total"}) EXPECT_TRUE(s.at("timings").contains(stage)) << stage;
+  // An RLE of bits is made from runs, in one stage; a binvox from the dense
+  // volume, voxelized then encoded.
+  for (const char* stage : {"parse", "voxelize+write", "total"}) EXPECT_TRUE(s.at("timings").contains(stage)) << stage;
+  EXPECT_FALSE(s.at("timings").contains("voxelize"));
+  const auto dense = run_process(kVoxd + " voxelize " + mesh + " --resolution 40 --padding 1 -o " + path("s.binvox") + " --json");
+  ASSERT_EQ(dense.exit_code, 0) << dense.err;
+  const json d = json::parse(dense.out);
+  for (const char* stage : {"parse", "voxelize", "encode", "total"}) EXPECT_TRUE(d.at("timings").contains(stage)) << stage;
+  EXPECT_EQ(d.at("filled_voxels"), s.at("filled_voxels"));
 
   const BitVolume from_file = read_rle_bits(test::read_file(path("s.rle")));
   EXPECT_EQ(from_file.count(), s.at("filled_voxels").get<std::uint64_t>());

@@ -15,6 +15,7 @@
 #include "encode/byte_cursor.h"
 #include "voxd/grid.h"
 #include "voxd/bit_volume.h"
+#include "voxd/run_slab.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/enum_names.h"
@@ -58,6 +59,7 @@ RleHeader read_rle_header(ByteCursor& in);
 // block after the last of the grid's nz layers. Byte for byte write_rle's.
 void write_rle_bit_header(const Grid& grid, ByteSink& sink);
 void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink);
+void write_rle_bit_layers(const RunSlab& slab, std::int64_t k0, ByteSink& sink);
 void write_rle_end(std::int64_t nz, ByteSink& sink);
 // The same for a volume of values (u8, f32 or rgba8: `slab`'s type).
 void write_rle_value_header(const ValueVolume& type, const Grid& grid, ByteSink& sink);

@@ -35,6 +35,22 @@ constexpr std::size_t kInFlightInputBytes = std::size_t{2} << 20;
 // Below this, starting threads costs more than the encoding.
 constexpr std::size_t kParallelMinBytes = std::size_t{256} << 10;
 
+// Writes layer k's block: its payload is in `buffer` after kBlockHeaderRoom
+// bytes left for the header, which goes just before it, so the block goes to
+// the sink in one write.
+void write_block(std::int64_t k, ByteBuffer& buffer, ByteSink& sink) {
+  const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
+  std::uint8_t header[kBlockHeaderRoom];
+  std::uint8_t* end = header;
+  *end++ = encode::kSlabTag;
+  end = encode::put_varint(end, static_cast<std::uint64_t>(k));
+  end = encode::put_varint(end, payload);
+  const auto header_size = static_cast<std::size_t>(end - header);
+  std::uint8_t* block = buffer.data() + kBlockHeaderRoom - header_size;
+  std::memcpy(block, header, header_size);
+  sink.write(block, header_size + payload);
+}
+
 // Encodes slabs [k_begin, k_end) with encode_slab(k, buffer), in parallel,
 // and writes their blocks in order.
 void write_slab_block_range(std::int64_t k_begin, std::int64_t k_end, std::size_t slab_input_bytes,
@@ -55,19 +71,7 @@ void write_slab_block_range(std::int64_t k_begin, std::int64_t k_end, std::size_
         buffer.reset(kBlockHeaderRoom);
         encode_slab(k_begin + i, buffer);
       },
-      [&](std::int64_t i, std::size_t slot) {
-        ByteBuffer& buffer = buffers[slot];
-        const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
-        std::uint8_t header[kBlockHeaderRoom];
-        std::uint8_t* end = header;
-        *end++ = encode::kSlabTag;
-        end = encode::put_varint(end, static_cast<std::uint64_t>(k_begin + i));
-        end = encode::put_varint(end, payload);
-        const auto header_size = static_cast<std::size_t>(end - header);
-        std::uint8_t* block = buffer.data() + kBlockHeaderRoom - header_size;
-        std::memcpy(block, header, header_size);
-        sink.write(block, header_size + payload);
-      });
+      [&](std::int64_t i, std::size_t slot) { write_block(k_begin + i, buffers[slot], sink); });
 }
 
 void write_end_block(std::int64_t nz, ByteSink& sink) {
@@ -96,6 +100,39 @@ void encode_bit_slab(const BitVolume& volume, std::int64_t k, ByteBuffer& out) {
   const auto put = [&out](bool, std::uint64_t length) { out.put_varint(length); };
   for (std::int64_t j = 0; j < volume.grid().dims.y; ++j) runs.add_row(volume.row(j, k), nx, put);
   runs.finish(put);
+}
+
+// The same payload from a slab's runs (layer k of it): the row's runs are
+// already maximal, and a run reaching a row's end joins one starting the
+// next row, as the bits' runs do.
+void encode_run_layer(const RunSlab& slab, std::int64_t k, ByteBuffer& out) {
+  const auto nx = static_cast<std::uint64_t>(slab.grid().dims.x);
+  const std::uint64_t total = nx * static_cast<std::uint64_t>(slab.grid().dims.y);
+  std::uint64_t emitted = 0;  // voxels [0, emitted) are in the payload
+  std::uint64_t begin = 0, end = 0;  // the ones run not yet written, when open
+  bool open = false;
+  const auto flush = [&] {
+    out.put_varint(begin - emitted);  // the 0s before it (0 only at the layer's start)
+    out.put_varint(end - begin);
+    emitted = end;
+  };
+  for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) {
+    const std::uint64_t base = static_cast<std::uint64_t>(j) * nx;
+    const auto runs = slab.row(j, k);
+    for (std::size_t r = 0; r < runs.size(); r += 2) {
+      const std::uint64_t b = base + runs[r], e = base + runs[r + 1];
+      if (open && b == end) {
+        end = e;
+        continue;
+      }
+      if (open) flush();
+      open = true;
+      begin = b;
+      end = e;
+    }
+  }
+  if (open) flush();
+  if (emitted < total || total == 0) out.put_varint(total - emitted);
 }
 
 // Length of the run of bytes equal to values[begin] starting at begin,
@@ -231,6 +268,17 @@ void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink
   write_slab_block_range(
       k0, k0 + slab.grid().dims.z, slab.slab_words() * sizeof(std::uint64_t),
       [&slab, k0](std::int64_t k, ByteBuffer& out) { encode_bit_slab(slab, k - k0, out); }, sink);
+}
+
+void write_rle_bit_layers(const RunSlab& slab, std::int64_t k0, ByteSink& sink) {
+  // On the calling thread: a slab of runs is small, and its maker keeps the
+  // other threads busy.
+  ByteBuffer buffer;
+  for (std::int64_t k = 0; k < slab.grid().dims.z; ++k) {
+    buffer.reset(kBlockHeaderRoom);
+    encode_run_layer(slab, k, buffer);
+    write_block(k0 + k, buffer, sink);
+  }
 }
 
 void write_rle_end(std::int64_t nz, ByteSink& sink) { write_end_block(nz, sink); }

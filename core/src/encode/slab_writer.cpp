@@ -100,6 +100,17 @@ void BitSlabWriter::write(std::int64_t k0, const BitVolume& slab) {
   s.next_layer = k0 + slab.grid().dims.z;
 }
 
+void BitSlabWriter::write(std::int64_t k0, const RunSlab& slab) {
+  State& s = *state_;
+  if (s.format != VolumeFormat::rle) {
+    write(k0, slab.to_bits());
+    return;
+  }
+  s.check(k0, slab.grid());
+  encode::write_rle_bit_layers(slab, k0, *s.sink);
+  s.next_layer = k0 + slab.grid().dims.z;
+}
+
 void BitSlabWriter::finish() {
   State& s = *state_;
   if (!s.begin_finish()) return;
@@ -122,6 +133,10 @@ void write_rle_head(const Grid& grid, ByteSink& sink) {
 }
 
 void write_rle_layer_blocks(std::int64_t k0, const BitVolume& slab, ByteSink& sink) {
+  encode::write_rle_bit_layers(slab, k0, sink);
+}
+
+void write_rle_layer_blocks(std::int64_t k0, const RunSlab& slab, ByteSink& sink) {
   encode::write_rle_bit_layers(slab, k0, sink);
 }
 

@@ -74,6 +74,27 @@ ParityVoxelizer::ParityVoxelizer(const Mesh& mesh, const Grid& grid, int ray_axi
   bins_ = bin_triangles(fixed_, axes_.v, rows, per_chunk, 0, threads_);
 }
 
+template <class Emit>
+void ParityVoxelizer::for_each_crossing(std::int64_t chunk, Emit&& emit) const {
+  const std::int64_t row0 = chunk * bins_.rows_per_chunk;
+  const std::int64_t row1 = std::min(row0 + bins_.rows_per_chunk, grid_.dims[axes_.v]);
+  const std::int64_t columns_u = grid_.dims[axes_.u];
+  const auto& tris = fixed_.triangles();
+  for (std::uint32_t n = bins_.offsets[chunk]; n < bins_.offsets[chunk + 1]; ++n) {
+    const auto& t = tris[bins_.triangles[n]];
+    scan_triangle(fixed_.vertex(t[0]), fixed_.vertex(t[1]), fixed_.vertex(t[2]), axes_, row0, row1, columns_u, emit);
+  }
+}
+
+void ParityVoxelizer::chunk_crossings(std::int64_t chunk, std::vector<RowCrossing>& out) const {
+  if (axes_.ray != 0) throw std::logic_error("crossings by row need rays along x");
+  const std::int64_t row0 = chunk * bins_.rows_per_chunk, ny = grid_.dims.y, nx = grid_.dims.x;
+  for_each_crossing(chunk, [&](std::int64_t j, std::int64_t k, std::int64_t c) {
+    if (c >= nx) return;  // past the grid: affects nothing
+    out.push_back({static_cast<std::uint32_t>((k - row0) * ny + j), static_cast<std::uint32_t>(std::max<std::int64_t>(c, 0))});
+  });
+}
+
 void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume, std::int64_t z_origin) const {
   if (z_origin != 0 && axes_.ray == 2) throw std::logic_error("rays along z need the whole grid's z layers");
   const std::int64_t row0 = chunk * bins_.rows_per_chunk;
@@ -81,17 +102,10 @@ void ParityVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& volume, std::int
   const std::int64_t nx = grid_.dims.x, ny = grid_.dims.y, nz = grid_.dims.z;
   const std::int64_t rw = volume.row_words();
   const std::int64_t ray_len = grid_.dims[axes_.ray];
-  const std::int64_t columns_u = grid_.dims[axes_.u];
   std::uint64_t* words = volume.data();
-  const auto& tris = fixed_.triangles();
 
   auto toggle = [words](std::int64_t word, std::int64_t bit) { words[word] ^= std::uint64_t{1} << bit; };
-  auto for_each_triangle = [&](auto&& emit) {
-    for (std::uint32_t n = bins_.offsets[chunk]; n < bins_.offsets[chunk + 1]; ++n) {
-      const auto& t = tris[bins_.triangles[n]];
-      scan_triangle(fixed_.vertex(t[0]), fixed_.vertex(t[1]), fixed_.vertex(t[2]), axes_, row0, row1, columns_u, emit);
-    }
-  };
+  auto for_each_triangle = [&](auto&& emit) { for_each_crossing(chunk, emit); };
   // A crossing before the grid toggles voxel 0; one past it affects nothing.
   // Rays along x also record each row's first and last toggled word, so the
   // prefix pass below touches only the words between them.

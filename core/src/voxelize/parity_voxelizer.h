@@ -9,6 +9,7 @@
 // axis; a chunk's output is final as soon as the chunk is done, so volumes can
 // be produced slab by slab.
 #include <cstdint>
+#include <vector>
 
 #include "voxd/bit_volume.h"
 #include "voxd/mesh.h"
@@ -36,11 +37,24 @@ class ParityVoxelizer {
   // slab of the grid, as streamed voxelization fills them).
   void fill_chunk(std::int64_t chunk, BitVolume& volume, std::int64_t z_origin = 0) const;
 
+  // The crossings of one chunk's rows, for runs made without a volume (rays
+  // along x only): `row` is (k - the chunk's first layer) * dims.y + j, `x`
+  // the first voxel whose state the crossing flips (0 for one before the
+  // grid; one past the grid is left out). In no particular order; a voxel is
+  // filled iff an odd number of its row's crossings have x at or before it.
+  struct RowCrossing {
+    std::uint32_t row, x;
+  };
+  void chunk_crossings(std::int64_t chunk, std::vector<RowCrossing>& out) const;
+
   // All chunks, in parallel, honouring cancellation and reporting progress
   // in [progress_from, progress_to].
   void fill(BitVolume& volume, JobControl* control, double progress_from = 0.0, double progress_to = 1.0) const;
 
  private:
+  template <class Emit>
+  void for_each_crossing(std::int64_t chunk, Emit&& emit) const;
+
   Grid grid_;
   ScanAxes axes_;
   int threads_;

@@ -6,6 +6,7 @@
 
 #include "voxd/error.h"
 #include "voxd/parallel.h"
+#include "voxelize/layer_range.h"
 #include "voxelize/parity_voxelizer.h"
 #include "voxelize/surface_voxelizer.h"
 
@@ -15,6 +16,22 @@ namespace {
 std::uint64_t layer_bytes(const Grid& grid) { return bit_volume_bytes({grid.dims.x, grid.dims.y, 1}); }
 
 }  // namespace
+
+namespace detail {
+
+LayerChunks layer_chunks(const Grid& grid, LayerRange range, std::int64_t wanted) {
+  const std::int64_t nz = grid.dims.z;
+  LayerChunks chunks;
+  chunks.first = range.begin;
+  chunks.end = range.end < 0 ? nz : range.end;
+  if (chunks.first < 0 || chunks.first >= chunks.end || chunks.end > nz)
+    throw Error(ErrorCode::invalid_argument, "layers " + std::to_string(chunks.first) + ".." + std::to_string(chunks.end) +
+                                                 " are not a part of a grid of " + std::to_string(nz) + " layers");
+  chunks.per_chunk = std::gcd(std::gcd(std::max<std::int64_t>(1, wanted), chunks.first), chunks.end == nz ? 0 : chunks.end);
+  return chunks;
+}
+
+}  // namespace detail
 
 bool can_stream(const VoxelizeOptions& options) {
   return options.mode == VoxelMode::surface || options.inside == InsideTest::parity;
@@ -30,19 +47,16 @@ void voxelize_streamed(const Mesh& mesh, const Grid& grid, const VoxelizeOptions
   if (!can_stream(options))
     throw Error(ErrorCode::invalid_argument, std::string("the ") + to_string(options.inside) +
                                                  " inside test needs the whole grid; only parity streams slab by slab");
-  const std::int64_t nz = grid.dims.z;
-  const std::int64_t first = range.begin, end = range.end < 0 ? nz : range.end;
-  if (first < 0 || first >= end || end > nz)
-    throw Error(ErrorCode::invalid_argument, "layers " + std::to_string(first) + ".." + std::to_string(end) +
-                                                 " are not a part of a grid of " + std::to_string(nz) + " layers");
-  if (grid.voxel_count() == 0) return;
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   // Chunks of a few rows, so each slab has work for every thread; a slab is
   // a whole number of chunks, and so are the range's ends (but the grid's
   // last layer): a chunk never reaches out of the slab it fills.
-  const std::int64_t layers_wanted = std::clamp<std::int64_t>(slab_layers, 1, end - first);
-  const std::int64_t per_chunk =
-      std::gcd(std::gcd(std::max<std::int64_t>(1, layers_wanted / (4 * threads)), first), end == nz ? 0 : end);
+  const std::int64_t nz = grid.dims.z;
+  const std::int64_t requested = range.end < 0 ? nz - range.begin : range.end - range.begin;
+  const std::int64_t layers_wanted = std::max<std::int64_t>(1, std::min(slab_layers, requested));
+  const detail::LayerChunks chunks = detail::layer_chunks(grid, range, std::max<std::int64_t>(1, layers_wanted / (4 * threads)));
+  if (grid.voxel_count() == 0) return;
+  const std::int64_t first = chunks.first, end = chunks.end, per_chunk = chunks.per_chunk;
   const std::int64_t layers = std::min(end - first, (layers_wanted + per_chunk - 1) / per_chunk * per_chunk);
 
   std::optional<detail::ParityVoxelizer> parity;

@@ -39,8 +39,11 @@ struct ProjectedEdges {
   }
 };
 
-void voxelize_triangle(const glm::dvec3 v[3], const Grid& grid, std::int64_t z0, std::int64_t z1, BitVolume& out,
-                       std::int64_t z_origin) {
+// Calls emit(i, j, k) for each voxel of z layers [z0, z1) the triangle
+// touches; a voxel may come more than once from one triangle's columns only
+// if the columns overlap, which they do not.
+template <class Emit>
+void voxelize_triangle(const glm::dvec3 v[3], const Grid& grid, std::int64_t z0, std::int64_t z1, Emit&& emit) {
   const glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
   if (n == glm::dvec3(0.0)) return;  // zero area: covers no surface
   const glm::dvec3 an = glm::abs(n);
@@ -89,7 +92,7 @@ void voxelize_triangle(const glm::dvec3 v[3], const Grid& grid, std::int64_t z0,
         const glm::dvec3 p(idx);
         if (!other_a.overlaps(p[other_a.c0], p[other_a.c1]) || !other_b.overlaps(p[other_b.c0], p[other_b.c1]))
           continue;
-        out.row(idx.y, idx.z - z_origin)[idx.x >> 6] |= std::uint64_t{1} << (idx.x & 63);
+        emit(idx.x, idx.y, idx.z);
       }
     }
   }
@@ -121,13 +124,34 @@ SurfaceVoxelizer::SurfaceVoxelizer(const Mesh& mesh, const Grid& grid, int threa
   }
 }
 
-void SurfaceVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& out, std::int64_t z_origin) const {
+template <class Emit>
+void SurfaceVoxelizer::for_each_voxel(std::int64_t chunk, Emit&& emit) const {
   const std::int64_t z0 = chunk * per_chunk_, z1 = std::min(grid_.dims.z, z0 + per_chunk_);
   for (std::uint32_t t : bins_[static_cast<std::size_t>(chunk)]) {
     const auto& tri = mesh_->triangles[t];
     const glm::dvec3 v[3] = {unit_[tri[0]], unit_[tri[1]], unit_[tri[2]]};
-    voxelize_triangle(v, grid_, z0, z1, out, z_origin);
+    voxelize_triangle(v, grid_, z0, z1, emit);
   }
+}
+
+void SurfaceVoxelizer::fill_chunk(std::int64_t chunk, BitVolume& out, std::int64_t z_origin) const {
+  for_each_voxel(chunk, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    out.row(j, k - z_origin)[i >> 6] |= std::uint64_t{1} << (i & 63);
+  });
+}
+
+void SurfaceVoxelizer::chunk_spans(std::int64_t chunk, std::vector<RowSpan>& out) const {
+  const std::int64_t z0 = chunk * per_chunk_, ny = grid_.dims.y;
+  // Voxels of a column along x come in order: they join the span before.
+  for_each_voxel(chunk, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    const auto row = static_cast<std::uint32_t>((k - z0) * ny + j);
+    const auto x = static_cast<std::uint32_t>(i);
+    if (!out.empty() && out.back().row == row && out.back().end == x) {
+      out.back().end = x + 1;
+      return;
+    }
+    out.push_back({row, x, x + 1});
+  });
 }
 
 }  // namespace detail

@@ -26,7 +26,18 @@ class SurfaceVoxelizer {
   // `out`, which holds the grid's z layers from `z_origin` on.
   void fill_chunk(std::int64_t chunk, BitVolume& out, std::int64_t z_origin = 0) const;
 
+  // The same voxels as spans of x-rows, for runs made without a volume:
+  // `row` is (k - the chunk's first layer) * dims.y + j, voxels [begin, end).
+  // In no particular order; spans may overlap and touch.
+  struct RowSpan {
+    std::uint32_t row, begin, end;
+  };
+  void chunk_spans(std::int64_t chunk, std::vector<RowSpan>& out) const;
+
  private:
+  template <class Emit>
+  void for_each_voxel(std::int64_t chunk, Emit&& emit) const;
+
   const Mesh* mesh_;
   Grid grid_;
   int threads_;

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "voxd/bit_volume.h"
+#include "voxd/run_slab.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/volume_format.h"
 
@@ -32,6 +33,9 @@ class BitSlabWriter {
   // The grid's z layers [k0, k0 + slab.grid().dims.z), right after the
   // previous slab's. Throws std::logic_error out of order.
   void write(std::int64_t k0, const BitVolume& slab);
+  // The same from runs (voxd/voxelize/runs.h): an RLE straight from them,
+  // other formats through the slab's bits.
+  void write(std::int64_t k0, const RunSlab& slab);
   // After the last layer: the format's trailer. Throws std::logic_error if
   // layers are missing.
   void finish();
@@ -49,6 +53,7 @@ class BitSlabWriter {
 void write_rle_head(const Grid& grid, ByteSink& sink);
 // The blocks of z layers [k0, k0 + slab.grid().dims.z).
 void write_rle_layer_blocks(std::int64_t k0, const BitVolume& slab, ByteSink& sink);
+void write_rle_layer_blocks(std::int64_t k0, const RunSlab& slab, ByteSink& sink);
 void write_rle_tail(const Grid& grid, ByteSink& sink);
 
 // The same for a volume of values (coverage bytes or fractions; u8, f32 or
