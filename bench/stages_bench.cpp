@@ -6,6 +6,8 @@
 #include "voxd/grid.h"
 #include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/encode/slab_writer.h"
+#include "voxd/voxelize/runs.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd::bench {
@@ -53,15 +55,32 @@ void BM_VoxelizeVote(benchmark::State& state) {
 }
 BENCHMARK(BM_VoxelizeVote)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+struct CountingSink final : ByteSink {
+  using ByteSink::write;
+  std::uint64_t n = 0;
+  void write(std::span<const std::uint8_t> b) override { n += b.size(); }
+};
+
+// The parity solid straight to its RLE (voxd/voxelize/runs.h): what
+// `voxd voxelize -o X.rle` runs after parsing; the dense path is
+// BM_VoxelizeParity plus BM_Encode's rle.
+void BM_VoxelizeRunsToRle(benchmark::State& state) {
+  const Grid g = grid_at(state.range(0));
+  for (auto _ : state) {
+    CountingSink sink;
+    BitSlabWriter writer(g, VolumeFormat::rle, {}, sink);
+    voxelize_runs(mesh(), g, {}, [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); });
+    writer.finish();
+    benchmark::DoNotOptimize(sink.n);
+    state.counters["bytes"] = static_cast<double>(sink.n);
+  }
+}
+BENCHMARK(BM_VoxelizeRunsToRle)->Arg(256)->Arg(512)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_Encode(benchmark::State& state) {
   const Grid g = grid_at(state.range(0));
   const BitVolume v = voxelize_parity(mesh(), g, 0, 0, nullptr);
   const auto format = static_cast<VolumeFormat>(state.range(1));
-  struct CountingSink final : ByteSink {
-    using ByteSink::write;
-    std::uint64_t n = 0;
-    void write(std::span<const std::uint8_t> b) override { n += b.size(); }
-  };
   for (auto _ : state) {
     CountingSink sink;
     encode_volume(v, format, sink);

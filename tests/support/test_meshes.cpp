@@ -67,7 +67,7 @@ Mesh make_icosphere(glm::dvec3 center, double radius, int level) {
   }
   Mesh m;
   for (const auto& p : v) add_vertex(m, center + radius * p);
-  m.triangles = std::move(f);
+  m.triangles.assign(f.begin(), f.end());
   return m;
 }
 

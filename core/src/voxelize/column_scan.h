@@ -52,16 +52,17 @@ template <typename Emit>
 inline void scan_triangle(const FixedPoint& A, const FixedPoint& B, const FixedPoint& C, const ScanAxes& axes,
                           std::int64_t row_begin, std::int64_t row_end, std::int64_t columns_u, Emit&& emit) {
   const std::int64_t au = A[axes.u], av = A[axes.v], bu = B[axes.u], bv = B[axes.v], cu = C[axes.u], cv = C[axes.v];
-  const i128 det = static_cast<i128>(bu - au) * (cv - av) - static_cast<i128>(bv - av) * (cu - au);
-  if (det == 0) return;  // edge-on to the rays: the displaced centres never hit it
-  const int sigma = det > 0 ? 1 : -1;
-
+  // Most triangles of a fine mesh cover no column centre at all: the box
+  // tests come first, before anything costs.
   const std::int64_t k0 = std::max(row_begin, ceil_fixed(std::min({av, bv, cv})));
   const std::int64_t k1 = std::min(row_end - 1, floor_fixed(std::max({av, bv, cv})));
   if (k0 > k1) return;
   const std::int64_t jbox0 = std::max<std::int64_t>(0, ceil_fixed(std::min({au, bu, cu})));
   const std::int64_t jbox1 = std::min<std::int64_t>(columns_u - 1, floor_fixed(std::max({au, bu, cu})));
   if (jbox0 > jbox1) return;
+  const i128 det = static_cast<i128>(bu - au) * (cv - av) - static_cast<i128>(bv - av) * (cu - au);
+  if (det == 0) return;  // edge-on to the rays: the displaced centres never hit it
+  const int sigma = det > 0 ? 1 : -1;
 
   // Plane of the triangle: x(u, v) = ax + gu * (u - au) + gv * (v - av),
   // from the normal (nx, nu, nv) in (ray, u, v) coordinates; nx == det.

@@ -9,6 +9,7 @@
 // and snaps CAD coordinates that lie on voxel-centre planes up to rounding
 // (e.g. 0.35 / 0.1) onto the exact plane, where the tie rule then applies.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -31,12 +32,29 @@ class FixedMesh {
  public:
   FixedMesh(const Mesh& mesh, const Grid& grid);
 
-  const std::vector<std::array<std::uint32_t, 3>>& triangles() const { return mesh_->triangles; }
+  const TriangleArray& triangles() const { return mesh_->triangles; }
   // Throws Error(invalid_argument) if the vertex lies absurdly far (2^40
-  // voxels) from the grid.
-  FixedPoint vertex(std::uint32_t v) const;
+  // voxels) from the grid. Inline: the scan converters call it for every
+  // corner of every triangle, and a call costs as much as the arithmetic.
+  FixedPoint vertex(std::uint32_t v) const {
+    FixedPoint out;
+    for (int a = 0; a < 3; ++a) out[a] = coordinate(v, a);
+    return out;
+  }
+  // Where the vertex's float coordinates are, to prefetch them.
+  const void* corner_address(std::uint32_t v) const { return &mesh_->vertices[v]; }
+  // One coordinate of it (binning needs only the partition axis's).
+  std::int64_t coordinate(std::uint32_t v, int axis) const {
+    constexpr double half = 0.5 * static_cast<double>(kFixedOne);
+    const double q = (static_cast<double>(mesh_->vertices[v][axis]) - origin_[axis]) * scale_ - half;
+    if (!(std::fabs(q) < static_cast<double>(kFixedLimit))) [[unlikely]]
+      throw_far_vertex();
+    return static_cast<std::int64_t>(std::floor(q + 0.5));  // floor inlines, unlike llround
+  }
 
  private:
+  [[noreturn]] static void throw_far_vertex();
+
   const Mesh* mesh_;
   glm::dvec3 origin_;
   double scale_;

@@ -80,7 +80,17 @@ void ParityVoxelizer::for_each_crossing(std::int64_t chunk, Emit&& emit) const {
   const std::int64_t row1 = std::min(row0 + bins_.rows_per_chunk, grid_.dims[axes_.v]);
   const std::int64_t columns_u = grid_.dims[axes_.u];
   const auto& tris = fixed_.triangles();
-  for (std::uint32_t n = bins_.offsets[chunk]; n < bins_.offsets[chunk + 1]; ++n) {
+  const std::uint32_t begin = bins_.offsets[chunk], end = bins_.offsets[chunk + 1];
+  // A chunk's triangles lie all over the mesh, and most take less work than
+  // a cache miss: the loop waits on memory unless the triangles a few
+  // ahead, and then their corners, are fetched early.
+  constexpr std::uint32_t kTriangleAhead = 16, kCornerAhead = 8;
+  for (std::uint32_t n = begin; n < end; ++n) {
+    if (n + kTriangleAhead < end) __builtin_prefetch(&tris[bins_.triangles[n + kTriangleAhead]]);
+    if (n + kCornerAhead < end) {
+      const auto& ahead = tris[bins_.triangles[n + kCornerAhead]];
+      for (int c = 0; c < 3; ++c) __builtin_prefetch(fixed_.corner_address(ahead[c]));
+    }
     const auto& t = tris[bins_.triangles[n]];
     scan_triangle(fixed_.vertex(t[0]), fixed_.vertex(t[1]), fixed_.vertex(t[2]), axes_, row0, row1, columns_u, emit);
   }
