@@ -24,7 +24,7 @@ std::uint64_t JobMode::memory_estimate(const Grid& grid, const JobParams& params
 bool JobMode::needs_parity_solid(const JobParams&) const { return false; }
 
 std::optional<std::string> JobMode::streaming_refusal(const JobParams&) const {
-  return "mode " + std::string(name()) + " makes values over the whole grid, so it runs in memory; only the modes of bits and coverage stream";
+  return "mode " + std::string(name()) + " makes values over the whole grid, so it runs in memory; only the modes of bits, coverage and the band sdf stream";
 }
 
 nlohmann::json JobMode::run_streamed(const ModeInput&, std::int64_t, const BitSlabConsumer&, const ValueSlabConsumer&) const {

@@ -138,6 +138,10 @@ class JobMode {
   // first: needs_parity_solid) and of its values to `values`, and returns
   // what run() says in ModeResult::values_info.
   virtual std::optional<std::string> streaming_refusal(const JobParams& params) const;
+  // Whether a job that can stream is faster slab by slab than in memory
+  // whatever its size (the band SDF: no whole float volume to clear), so an
+  // output that streams is made so even below the memory threshold.
+  virtual bool faster_in_slabs(const JobParams&) const { return false; }
   virtual nlohmann::json run_streamed(const ModeInput& in, std::int64_t slab_layers, const BitSlabConsumer& bits,
                                       const ValueSlabConsumer& values) const;
   // Whether the job's bits can be made as runs (voxd/voxelize/runs.h): a

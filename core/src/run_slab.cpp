@@ -13,6 +13,13 @@ void RunSlab::reset(const Grid& grid) {
   filled_ = 0;
 }
 
+void RunSlab::append_rows(const RunSlab& next) {
+  const auto base = static_cast<std::uint32_t>(bounds_.size());
+  bounds_.insert(bounds_.end(), next.bounds_.begin(), next.bounds_.end());
+  for (std::size_t r = 1; r < next.starts_.size(); ++r) starts_.push_back(base + next.starts_[r]);
+  filled_ += next.filled_;
+}
+
 BitVolume RunSlab::to_bits() const {
   BitVolume bits(grid_);
   for (std::int64_t k = 0; k < grid_.dims.z; ++k)

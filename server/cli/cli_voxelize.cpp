@@ -162,7 +162,11 @@ int voxelize_command(int argc, char** argv) {
   // too: the preparation only resolves the grid.
   params.streaming = api::Streaming::off;
   PreparedVoxelJob job = prepare_voxel_job(file.bytes(), mesh_path, params, limits);
-  const bool streamed = streaming == "on" || (streaming == "auto" && !no_stream && estimate_job_memory(job.grid, params) > kStreamAboveBytes);
+  // Auto: slab by slab past the memory threshold, or whenever the mode is
+  // faster so (the band SDF) and the output can take slabs.
+  const bool streamed =
+      streaming == "on" || (streaming == "auto" && !no_stream &&
+                            (params.mode->faster_in_slabs(params) || estimate_job_memory(job.grid, params) > kStreamAboveBytes));
   if (!streamed)  // the in-memory limit; a job that could stream is told so
     check_voxel_limit(job.grid, max_voxels,
                       no_stream || user_limit ? "" : " (or --streaming on: slab by slab it needs the memory of one slab, not the grid's)");

@@ -387,6 +387,8 @@ TEST(SignedDistanceField, SignConventionAndUnits) {
 
 // A mesh with a bit of everything, in disjoint parts: a torus, a sphere in
 // its hole, a box, and a degenerate (zero-area) triangle.
+Mesh mesh_of_box() { return test::make_box({0, 0, 0}, {1, 1, 1}); }
+
 Mesh mixed_mesh() {
   Mesh m = test::concat({test::make_torus({0.3, 0.1, 0.0}, 4.0, 1.3, 40, 20), test::make_icosphere({0.2, 0.3, 0.4}, 1.7, 3),
                          test::make_box({-5.5, 5.6, -1.2}, {-2.1, 6.8, 2.3})});
@@ -500,6 +502,79 @@ TEST(SignedDistanceField, ProgressReachesOneAndCancelThrows) {
     stop = true;
     canceller.join();
   }
+}
+
+// The band slab by slab: the whole field's bits for both conventions, both
+// units, band widths, thread counts and grids whose z size is no multiple of
+// the chunk; the solid handed on is the parity solid; slabs come in order.
+TEST(SignedDistanceFieldSlabs, SlabsAreTheWholeFieldBitForBit) {
+  const Mesh mesh = mixed_mesh();
+  for (const std::int64_t nz : {std::int64_t{30}, std::int64_t{37}, std::int64_t{5}}) {
+    const Grid g = make_grid({-7.3, -7.1, -4.2}, 0.3 * 30.0 / static_cast<double>(nz), 50, 48, nz);
+    for (const SignConvention sign : {SignConvention::inside_negative, SignConvention::inside_positive})
+      for (const bool model_units : {true, false})
+        for (const auto& [band, threads] : {std::pair{3.0, 2}, std::pair{1.5, 1}, std::pair{6.0, 5}}) {
+          SCOPED_TRACE("nz " + std::to_string(nz) + " " + to_string(sign) + (model_units ? " model" : " voxels") +
+                       " band " + std::to_string(band) + " threads " + std::to_string(threads));
+          SdfOptions o;
+          o.sign = sign;
+          o.model_units = model_units;
+          o.band = band;
+          o.threads = threads;
+          BitVolume expected_solid;
+          const DenseVolume<float> expected = signed_distance_field(mesh, g, o, nullptr, &expected_solid);
+          DenseVolume<float> got(g, std::nanf(""));
+          BitVolume solid(g);
+          std::int64_t next_solid = 0, next_values = 0;
+          signed_distance_field_slabs(
+              mesh, g, o,
+              [&](std::int64_t k0, const RunSlab& runs) {
+                EXPECT_EQ(k0, next_solid);
+                const BitVolume bits = runs.to_bits();
+                std::memcpy(solid.slab(k0), bits.data(), bits.byte_size());
+                next_solid = k0 + runs.grid().dims.z;
+              },
+              [&](std::int64_t k0, const ValueVolume& slab) {
+                EXPECT_EQ(k0, next_values);
+                const auto& v = std::get<DenseVolume<float>>(slab);
+                EXPECT_DOUBLE_EQ(v.grid().origin.z, g.origin.z + static_cast<double>(k0) * g.voxel_size);
+                std::memcpy(got.slab(k0), v.values().data(), v.values().size() * sizeof(float));
+                next_values = k0 + v.grid().dims.z;
+              });
+          EXPECT_EQ(next_solid, nz);
+          EXPECT_EQ(next_values, nz);
+          EXPECT_EQ(std::memcmp(got.values().data(), expected.values().data(), got.values().size() * sizeof(float)), 0);
+          EXPECT_EQ(std::memcmp(solid.data(), expected_solid.data(), solid.byte_size()), 0);
+        }
+  }
+}
+
+TEST(SignedDistanceFieldSlabs, RefusesWhatNeedsTheWholeGridAndClampsAnEmptyMesh) {
+  const Grid g = make_grid({-1, -1, -1}, 0.5, 6, 5, 4);
+  SdfOptions full, vote;
+  full.full = true;
+  vote.inside = InsideTest::vote;
+  for (const SdfOptions& o : {full, vote}) {
+    ASSERT_TRUE(sdf_slabs_refusal(o).has_value());
+    try {
+      signed_distance_field_slabs(mesh_of_box(), g, o, [](std::int64_t, const RunSlab&) {},
+                                  [](std::int64_t, const ValueVolume&) {});
+      ADD_FAILURE() << "accepted: " << *sdf_slabs_refusal(o);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+      EXPECT_EQ(e.what(), *sdf_slabs_refusal(o));
+    }
+  }
+  EXPECT_NE(sdf_slabs_refusal(vote)->find("vote"), std::string::npos);
+  std::uint64_t values = 0;
+  signed_distance_field_slabs(Mesh{}, g, {}, [](std::int64_t, const RunSlab& runs) { EXPECT_EQ(runs.count(), 0u); },
+                              [&](std::int64_t, const ValueVolume& slab) {
+                                for (const float v : std::get<DenseVolume<float>>(slab).values()) {
+                                  EXPECT_EQ(v, 1.5f);
+                                  ++values;
+                                }
+                              });
+  EXPECT_EQ(values, g.voxel_count());
 }
 
 TEST(SignedDistanceField, MeshWithoutTrianglesIsClampedEverywhere) {

@@ -184,6 +184,31 @@ TEST_F(CliTest, StreamedCoverageWritesTheInMemoryBytesAndSummary) {
   }
 }
 
+// The band SDF goes slab by slab whenever its output can take slabs (it is
+// faster so, whatever the grid): the same bytes, header and summary as in
+// memory, for each sign convention and unit.
+TEST_F(CliTest, StreamedSdfBandWritesTheInMemoryBytesAndSummary) {
+  const std::string mesh = shared_mesh("torus.stl");
+  for (const char* sdf : {"{}", "{\"units\":\"voxels\",\"sign_convention\":\"inside_positive\",\"band\":2}"}) {
+    for (const std::string& out : {std::string("d.rle"), std::string("d.raw"), std::string("d.nrrd")}) {
+      SCOPED_TRACE(out + " " + sdf);
+      const auto [a, b] = streamed_and_in_memory(
+          kVoxd + " voxelize " + mesh + " --resolution 70 --padding 3 --params '{\"mode\":\"sdf\",\"sdf\":" + sdf + "}'", out);
+      if (HasFatalFailure()) return;
+      EXPECT_EQ(a.at("filled_voxels"), b.at("filled_voxels"));
+      EXPECT_GT(a.at("filled_voxels").get<std::uint64_t>(), 1000u);
+      EXPECT_EQ(a.at("values"), b.at("values"));  // min and max to the last bit, unit, convention, band
+    }
+  }
+  const auto automatic = run_process(kVoxd + " voxelize " + mesh + " --resolution 70 --mode sdf --json -o " + path("auto.rle"));
+  ASSERT_EQ(automatic.exit_code, 0) << automatic.err;
+  EXPECT_TRUE(json::parse(automatic.out).at("streamed").get<bool>());
+  const auto quantized = run_process(kVoxd + " voxelize " + mesh + " --resolution 70 --mode sdf --quantize u16 --json -o " +
+                                     path("q.rle"));
+  ASSERT_EQ(quantized.exit_code, 0) << quantized.err;
+  EXPECT_FALSE(json::parse(quantized.out).at("streamed").get<bool>());  // its levels need the whole range
+}
+
 TEST_F(CliTest, AutoStreamsFromTheMemoryEstimateNotTheVoxelCount) {
   // 560 x 543 x 432 voxels: 16 MiB of bits stay in memory, while the same
   // grid's coverage (5 bytes a voxel in memory, past 512 MiB) streams.
@@ -209,7 +234,11 @@ TEST_F(CliTest, StreamingOnSaysWhyAJobCannotStream) {
   };
   for (const Case& c : {Case{"-o " + path("t.binvox"), "binvox does not stream slab by slab"},
                         Case{"--inside vote -o " + path("t.rle"), "the vote inside test needs the whole grid"},
-                        Case{"--mode sdf -o " + path("t.rle"), "mode sdf makes values over the whole grid"},
+                        Case{"--params '{\"mode\":\"slice\",\"slice\":{\"function\":\"marble\"}}' -o " + path("t.rle"),
+                             "mode slice makes values over the whole grid"},
+                        Case{"--params '{\"mode\":\"sdf\",\"sdf\":{\"band\":\"full\"}}' -o " + path("t.rle"),
+                             "the full field's nearest-triangle queries need the whole grid"},
+                        Case{"--mode sdf --inside winding -o " + path("t.rle"), "the winding inside test needs the whole grid"},
                         Case{"--params '{\"mode\":\"coverage\",\"coverage\":{\"values\":\"f32\"}}' --quantize u8 -o " +
                                  path("t.rle"),
                              "quantized RLE does not stream"},

@@ -41,6 +41,9 @@ class RunSlab {
     filled_ += end - begin;
   }
   void end_row() { starts_.push_back(static_cast<std::uint32_t>(bounds_.size())); }
+  // Appends the rows of `next`, a slab of the layers after this one's rows
+  // (a whole grid's runs gathered slab by slab).
+  void append_rows(const RunSlab& next);
 
   std::uint64_t count() const { return filled_; }
   std::size_t run_count() const { return bounds_.size() / 2; }

@@ -13,6 +13,8 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -21,6 +23,8 @@
 #include "analysis/progress_span.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
+#include "encode/ordered_pipeline.h"
+#include "voxd/voxelize/runs.h"
 #include "voxelize/sdf_band.h"
 #include "voxelize/sdf_embree.h"
 #include "voxelize/sdf_tree.h"
@@ -127,7 +131,109 @@ namespace {
 DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
                                const detail::SdfTuning& tuning, BitVolume* solid_out);
 
+BandSetup band_setup(const Grid& grid, const SdfOptions& options) {
+  if (!(options.band > 0.0) || !std::isfinite(options.band))
+    throw Error(ErrorCode::invalid_argument, "the distance band must be a positive number of voxels");
+  if (!(grid.voxel_size > 0.0) || !std::isfinite(grid.voxel_size))
+    throw Error(ErrorCode::invalid_argument, "the voxel size must be a positive number");
+  BandSetup s;
+  s.band = options.band * grid.voxel_size;
+  s.to_model = options.model_units ? 1.0 : grid.voxel_size;
+  s.to_output = options.model_units ? 1.0 : 1.0 / grid.voxel_size;
+  return s;
+}
+
+// Exactly +-band in the output unit, not band * voxel_size / voxel_size.
+float clamped_value(const SdfOptions& options, const BandSetup& s) {
+  return static_cast<float>(options.model_units ? s.band : options.band);
+}
+
+// Negates the nonzero values of a row's voxels [begin, end) (a value of 0, a
+// centre on the surface, stays +0).
+inline void negate_nonzero(float* row, std::int64_t begin, std::int64_t end) {
+  for (std::int64_t i = begin; i < end; ++i)
+    if (row[i] != 0.0f) row[i] = -row[i];
+}
+
 }  // namespace
+
+std::optional<std::string> sdf_slabs_refusal(const SdfOptions& options) {
+  if (options.full) return "the full field's nearest-triangle queries need the whole grid; only the band goes slab by slab";
+  if (options.inside != InsideTest::parity)
+    return "the " + std::string(to_string(options.inside)) + " inside test needs the whole grid; only parity signs slab by slab";
+  return std::nullopt;
+}
+
+void signed_distance_field_slabs(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                                 const RunSlabConsumer& solid, const ValueSlabConsumer& values, JobControl* control) {
+  if (auto refusal = sdf_slabs_refusal(options)) throw Error(ErrorCode::invalid_argument, *refusal);
+  const BandSetup s = band_setup(grid, options);
+  const float clamped = clamped_value(options, s);
+  const int threads = options.threads > 0 ? options.threads : default_thread_count();
+  const detail::ProgressSpan progress{control, 0.0, 1.0};
+  if (grid.voxel_count() == 0) return;
+
+  // The solid as runs, kept whole for the sign (about N^2 runs where its
+  // bits are N^3 / 8 bytes), and handed on.
+  RunSlab inside(grid);
+  VoxelizeOptions vo{VoxelMode::solid, InsideTest::parity, threads};
+  voxelize_runs(mesh, grid, vo, [&](std::int64_t k0, const RunSlab& slab) {
+    solid(k0, slab);
+    inside.append_rows(slab);
+  });
+  progress.check_cancelled();
+  progress.report(0.1);
+  const sdf::BandPlan plan = sdf::plan_band(mesh, grid, s, threads);
+  progress.check_cancelled();
+
+  // Chunk by chunk of the band's z-slabs, each in a buffer of its slot
+  // (reused: no fresh pages to clear), in order to the consumer.
+  const detail::ProgressSpan band = progress.part(0.15, 1.0);
+  const std::uint64_t total = std::max<std::uint64_t>(sdf::band_triangles(plan), 1);
+  std::atomic<std::uint64_t> done{0};
+  const bool negate_inside = options.sign == SignConvention::inside_negative;
+  const std::int64_t per_chunk = plan.bins.slabs_per_chunk, nx = grid.dims.x, ny = grid.dims.y;
+  // One slot a thread and one being written: each is a slab of fresh pages
+  // (16 MB at 512^3) the first time.
+  const std::size_t slot_count = static_cast<std::size_t>(std::min<std::int64_t>(plan.bins.chunk_count, threads + 1));
+  std::vector<ValueVolume> buffers(slot_count, ValueVolume(DenseVolume<float>()));
+  std::vector<sdf::BandScratch> scratch(slot_count);
+  encode::run_ordered_pipeline(
+      plan.bins.chunk_count, threads, slot_count,
+      [&](std::int64_t chunk, std::size_t slot) {
+        band.check_cancelled();
+        const std::int64_t z0 = chunk * per_chunk, n = std::min(per_chunk, grid.dims.z - z0);
+        const Grid slab = slab_grid(grid, z0, n);
+        auto& v = std::get<DenseVolume<float>>(buffers[slot]);
+        if (v.grid().dims != slab.dims) {
+          v = DenseVolume<float>(slab, clamped);
+        } else {
+          v.move_to(slab);
+          std::fill(v.values().begin(), v.values().end(), clamped);
+        }
+        sdf::scatter_band_chunk(mesh, grid, s, plan, chunk, v, z0, scratch[slot], [&](std::uint64_t d) {
+          band.check_cancelled();
+          band.report(static_cast<double>(done.fetch_add(d) + d) / static_cast<double>(total));
+        });
+        // Sign: inside (or outside) runs of each row negated.
+        for (std::int64_t k = 0; k < n; ++k)
+          for (std::int64_t j = 0; j < ny; ++j) {
+            float* row = v.slab(k) + j * nx;
+            const auto runs = inside.row(j, z0 + k);
+            std::int64_t from = 0;  // outside voxels start here
+            for (std::size_t r = 0; r < runs.size(); r += 2) {
+              if (negate_inside)
+                negate_nonzero(row, runs[r], runs[r + 1]);
+              else
+                negate_nonzero(row, from, runs[r]);
+              from = runs[r + 1];
+            }
+            if (!negate_inside) negate_nonzero(row, from, nx);
+          }
+      },
+      [&](std::int64_t chunk, std::size_t slot) { values(chunk * per_chunk, buffers[slot]); });
+  progress.report(1.0);
+}
 
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control) {
@@ -148,19 +254,10 @@ namespace {
 
 DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
                                const detail::SdfTuning& tuning, BitVolume* solid_out) {
-  if (!(options.band > 0.0) || !std::isfinite(options.band))
-    throw Error(ErrorCode::invalid_argument, "the distance band must be a positive number of voxels");
-  if (!(grid.voxel_size > 0.0) || !std::isfinite(grid.voxel_size))
-    throw Error(ErrorCode::invalid_argument, "the voxel size must be a positive number");
+  const BandSetup s = band_setup(grid, options);
+  const float clamped = clamped_value(options, s);
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   const detail::ProgressSpan progress{control, 0.0, 1.0};
-
-  BandSetup s;
-  s.band = options.band * grid.voxel_size;
-  s.to_model = options.model_units ? 1.0 : grid.voxel_size;
-  s.to_output = options.model_units ? 1.0 : 1.0 / grid.voxel_size;
-  // Exactly +-band in the output unit, not band * voxel_size / voxel_size.
-  const auto clamped = static_cast<float>(options.model_units ? s.band : options.band);
 
   if (grid.voxel_count() == 0) return DenseVolume<float>(grid, clamped);
   // The output is filled on a thread of its own meanwhile: one thread

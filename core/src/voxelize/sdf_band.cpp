@@ -47,7 +47,7 @@ inline dvec3 corner(const Mesh& mesh, std::size_t tri, int c) { return dvec3(mes
 // triangles have been by, the sphere skips most voxels (the plane alone does
 // not: along a curved surface the neighbours' planes pass close to a voxel).
 void scatter_triangle(const Triangle& t, const Grid& g, const BandSetup& s, std::int64_t z0, std::int64_t z1,
-                      DenseVolume<float>& values) {
+                      DenseVolume<float>& values, std::int64_t z_origin) {
   const IndexSpace index_of(g);
   const double band = s.band * index_of.inv_voxel, band2 = band * band;  // voxels
   const dvec3 lo = index_of(glm::min(glm::min(t.a, t.b), t.c)), hi = index_of(glm::max(glm::max(t.a, t.b), t.c));
@@ -69,7 +69,7 @@ void scatter_triangle(const Triangle& t, const Grid& g, const BandSetup& s, std:
     const auto kk = static_cast<double>(k);
     const double dz = std::max({lo.z - kk, kk - hi.z, 0.0}), sz = kk - centroid_i.z;
     const double cz = centre_coordinate(g, 2, k);
-    float* slab = values.slab(k);
+    float* slab = values.slab(k - z_origin);
     for (std::int64_t j = j0; j <= j1; ++j) {
       const auto jj = static_cast<double>(j);
       const double dy = std::max({lo.y - jj, jj - hi.y, 0.0}), sy = jj - centroid_i.y;
@@ -252,6 +252,9 @@ inline float round_up(double v) {
 // voxel against all of them are then one straight loop the compiler turns
 // into vector code (lower_bounds), where an array of triangle structs kept it
 // scalar. Lanes past `count` hold zeros; their bounds are ignored.
+}  // namespace
+
+// Named outside the anonymous namespace: BandScratch (sdf_band.h) holds one.
 struct ProbeBlock {
   std::size_t count = 0;
   std::vector<Triangle> triangles;  // for the exact distances
@@ -296,6 +299,8 @@ struct ProbeBlock {
     cax[x] = ica.x, cay[x] = ica.y, caz[x] = ica.z;
   }
 };
+
+namespace {
 
 // Lower bounds of distance2(triangle, p) for every lane, without branches or
 // divisions: the point's height over the plane and, in the plane, how far
@@ -408,7 +413,7 @@ void box_mask(const RowBox& b, const float* row, std::int64_t i0, std::int64_t n
 // oriented box bounds all its triangles'.
 template <bool kSeed>
 void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, const BandSetup& s, std::int64_t z0,
-                     std::int64_t z1, DenseVolume<float>& values, std::vector<std::uint64_t>& mask) {
+                     std::int64_t z1, DenseVolume<float>& values, std::int64_t z_origin, std::vector<std::uint64_t>& mask) {
   const IndexSpace index_of(g);
   const double band = s.band * index_of.inv_voxel;  // voxels
   const dvec3 centre_i = index_of(c.centre);
@@ -431,7 +436,7 @@ void scatter_cluster(const Cluster& c, const ProbeBlock& probes, const Grid& g, 
     std::array<double, 3> zpart{};
     for (int a = 0; a < 3; ++a) zpart[a] = axes[a].z * (kk - centre_i.z);
     const double cz = centre_coordinate(g, 2, k);
-    float* slab_values = values.slab(k);
+    float* slab_values = values.slab(k - z_origin);
     for (std::int64_t j = j0; j <= j1; ++j) {
       const auto jj = static_cast<double>(j);
       // The row within the band of the box's bounds and of its three slabs
@@ -549,53 +554,73 @@ BandPlan plan_band(const Mesh& mesh, const Grid& g, const BandSetup& s, int thre
   return plan;
 }
 
-void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const BandPlan& plan, int threads,
-                  DenseVolume<float>& values, const detail::ProgressSpan& progress) {
+void scatter_band_chunk(const Mesh& mesh, const Grid& g, const BandSetup& s, const BandPlan& plan, std::int64_t chunk,
+                        DenseVolume<float>& values, std::int64_t z_origin, BandScratch& scratch,
+                        const std::function<void(std::uint64_t)>& tick) {
   const ClusterSet& set = plan.set;
   const SlabBins& bins = plan.bins;
   // Cancellation and progress every this many triangles (~1 ms of work).
   constexpr std::uint64_t kTick = 512;
+  ProbeBlock& probes = *scratch.probes;
+  std::vector<std::uint64_t>& mask = scratch.mask;
+  const std::int64_t z0 = chunk * bins.slabs_per_chunk, z1 = std::min(g.dims.z, z0 + bins.slabs_per_chunk);
+  std::uint64_t pending = 0;
+  for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
+       x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
+    const Cluster& c = set.clusters[bins.clusters[x]];
+    if (!c.flat) continue;
+    probes.clear();
+    for (std::uint32_t y = c.begin; y < c.end; ++y) {
+      const std::size_t t = set.order[y];
+      probes.add_centroid((corner(mesh, t, 0) + corner(mesh, t, 1) + corner(mesh, t, 2)) / 3.0);
+    }
+    scatter_cluster<true>(c, probes, g, s, z0, z1, values, z_origin, mask);
+  }
+  for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
+       x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
+    const Cluster& c = set.clusters[bins.clusters[x]];
+    if (c.flat) {
+      load(mesh, set, c, probes);
+      scatter_cluster<false>(c, probes, g, s, z0, z1, values, z_origin, mask);
+    } else {
+      for (std::uint32_t y = c.begin; y < c.end; ++y) {
+        const std::size_t t = set.order[y];
+        scatter_triangle(Triangle(corner(mesh, t, 0), corner(mesh, t, 1), corner(mesh, t, 2)), g, s, z0, z1, values,
+                         z_origin);
+      }
+    }
+    pending += c.end - c.begin;
+    if (pending >= kTick) {
+      tick(pending);
+      pending = 0;
+    }
+  }
+  tick(pending);
+}
+
+std::uint64_t band_triangles(const BandPlan& plan) {
   std::uint64_t total = 0;
-  for (const std::uint32_t c : bins.clusters) total += set.clusters[c].end - set.clusters[c].begin;
+  for (const std::uint32_t c : plan.bins.clusters) total += plan.set.clusters[c].end - plan.set.clusters[c].begin;
+  return total;
+}
+
+BandScratch::BandScratch() : probes(std::make_unique<ProbeBlock>()) {}
+BandScratch::~BandScratch() = default;
+BandScratch::BandScratch(BandScratch&&) noexcept = default;
+BandScratch& BandScratch::operator=(BandScratch&&) noexcept = default;
+
+void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const BandPlan& plan, int threads,
+                  DenseVolume<float>& values, const detail::ProgressSpan& progress) {
+  const std::uint64_t total = std::max<std::uint64_t>(band_triangles(plan), 1);
   std::atomic<std::uint64_t> done{0};
-  parallel_for(0, bins.chunk_count, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
-    ProbeBlock probes;
-    std::vector<std::uint64_t> mask;  // scatter_cluster's box test of a row
+  parallel_for(0, plan.bins.chunk_count, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
+    BandScratch scratch;
     for (std::int64_t chunk = c0; chunk < c1; ++chunk) {
       progress.check_cancelled();
-      const std::int64_t z0 = chunk * bins.slabs_per_chunk, z1 = std::min(g.dims.z, z0 + bins.slabs_per_chunk);
-      std::uint64_t pending = 0;
-      for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
-           x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
-        const Cluster& c = set.clusters[bins.clusters[x]];
-        if (!c.flat) continue;
-        probes.clear();
-        for (std::uint32_t y = c.begin; y < c.end; ++y) {
-          const std::size_t t = set.order[y];
-          probes.add_centroid((corner(mesh, t, 0) + corner(mesh, t, 1) + corner(mesh, t, 2)) / 3.0);
-        }
-        scatter_cluster<true>(c, probes, g, s, z0, z1, values, mask);
-      }
-      for (std::uint64_t x = bins.offsets[static_cast<std::size_t>(chunk)];
-           x < bins.offsets[static_cast<std::size_t>(chunk) + 1]; ++x) {
-        const Cluster& c = set.clusters[bins.clusters[x]];
-        if (c.flat) {
-          load(mesh, set, c, probes);
-          scatter_cluster<false>(c, probes, g, s, z0, z1, values, mask);
-        } else {
-          for (std::uint32_t y = c.begin; y < c.end; ++y) {
-            const std::size_t t = set.order[y];
-            scatter_triangle(Triangle(corner(mesh, t, 0), corner(mesh, t, 1), corner(mesh, t, 2)), g, s, z0, z1, values);
-          }
-        }
-        pending += c.end - c.begin;
-        if (pending >= kTick) {
-          progress.check_cancelled();
-          progress.report(static_cast<double>(done.fetch_add(pending) + pending) / static_cast<double>(std::max<std::uint64_t>(total, 1)));
-          pending = 0;
-        }
-      }
-      progress.report(static_cast<double>(done.fetch_add(pending) + pending) / static_cast<double>(std::max<std::uint64_t>(total, 1)));
+      scatter_band_chunk(mesh, g, s, plan, chunk, values, 0, scratch, [&](std::uint64_t n) {
+        progress.check_cancelled();
+        progress.report(static_cast<double>(done.fetch_add(n) + n) / static_cast<double>(total));
+      });
     }
   });
   progress.report(1.0);

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -83,6 +85,28 @@ struct BandPlan {
   SlabBins bins;
 };
 BandPlan plan_band(const Mesh& mesh, const Grid& g, const BandSetup& s, int threads);
+
+// A thread's scratch for scattering (the probes of a cluster, a row's mask).
+struct ProbeBlock;
+struct BandScratch {
+  BandScratch();
+  ~BandScratch();
+  BandScratch(BandScratch&&) noexcept;
+  BandScratch& operator=(BandScratch&&) noexcept;
+  std::unique_ptr<ProbeBlock> probes;
+  std::vector<std::uint64_t> mask;
+};
+
+// The triangles the scatter goes through (progress's whole).
+std::uint64_t band_triangles(const BandPlan& plan);
+
+// Lowers the voxels of one chunk of z-slabs (plan.bins) within the band to
+// their exact distance. `values` holds the grid's z layers from `z_origin`
+// on (the whole grid, or the chunk's slab alone) and starts at the clamped
+// band value. tick(n) reports n more triangles done, every millisecond or so.
+void scatter_band_chunk(const Mesh& mesh, const Grid& g, const BandSetup& s, const BandPlan& plan, std::int64_t chunk,
+                        DenseVolume<float>& values, std::int64_t z_origin, BandScratch& scratch,
+                        const std::function<void(std::uint64_t)>& tick);
 
 // Lowers every voxel within the band of the mesh to its exact distance (in
 // the output unit; `values` start at the clamped band value). Threads own

@@ -39,12 +39,18 @@
 // triangles (bench/sdf_bench.cpp). Memory: the float result, the solid's bit
 // per voxel and the triangle bins; with `full`, the hierarchy (about 70
 // bytes per triangle, 120 while it is built).
+#include <functional>
+#include <optional>
+#include <string>
+
 #include <glm/vec3.hpp>
 
 #include "voxd/dense_volume.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 #include "voxd/progress.h"
+#include "voxd/encode/slab_writer.h"
+#include "voxd/run_slab.h"
 #include "voxd/voxelize/voxelize.h"
 #include "voxd/enum_names.h"
 
@@ -78,6 +84,20 @@ DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, con
 // both (a job keeps the solid for its analyses) voxelizes once.
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control, BitVolume* solid);
+
+// The band slab by slab, for outputs written as they come (an RLE, where the
+// clamped background is a handful of runs): never the whole float volume,
+// whose fresh pages alone cost about as much as the band (0.4 GB at 512^3).
+// Why options cannot (the full field, the vote or winding sign), else nullopt.
+std::optional<std::string> sdf_slabs_refusal(const SdfOptions& options);
+// First the solid that signs the field, as runs (every layer, in z order, to
+// `solid`), then the field's slabs (to `values`, each a DenseVolume<float>
+// reused after the call returns): bit for bit
+// signed_distance_field's. Memory: the solid's runs, the band's clusters and
+// a few slabs. Throws Error(invalid_argument) where sdf_slabs_refusal says.
+void signed_distance_field_slabs(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                                 const RunSlabConsumer& solid, const ValueSlabConsumer& values,
+                                 JobControl* control = nullptr);
 
 
 // Exact squared distance from p to the triangle (a, b, c), in double: the
