@@ -24,6 +24,8 @@
 #include <cstdlib>
 #include <limits>
 #include <random>
+#include <string>
+#include <cstring>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -165,13 +167,35 @@ int face_side(const Mesh& m, std::uint32_t t, const glm::dvec3& p, double d2) {
 
 }  // namespace
 
+// Wall time of one whole `voxd voxelize` run (a fresh process: map the STL,
+// parse, the solid for the sign, the band, write the output).
+double voxd_cli_seconds(const std::string& voxd, const std::string& stl, std::int64_t n, const std::string& out) {
+  const std::string command = voxd + " voxelize " + stl + " --resolution " + std::to_string(n) +
+                              " --padding 3 --mode sdf -o " + out + " > /dev/null 2>&1";
+  const auto t0 = std::chrono::steady_clock::now();
+  if (std::system(command.c_str()) != 0) {
+    std::fprintf(stderr, "failed: %s\n", command.c_str());
+    std::exit(1);
+  }
+  return seconds_since(t0);
+}
+
 int main(int argc, char** argv) {
   std::vector<std::int64_t> resolutions;
-  for (int a = 1; a < argc; ++a) resolutions.push_back(std::atoll(argv[a]));
+  std::string voxd_cli;  // --cli PATH: also time whole voxd voxelize runs
+  for (int a = 1; a < argc; ++a) {
+    if (std::string(argv[a]) == "--cli" && a + 1 < argc) {
+      voxd_cli = argv[++a];
+      continue;
+    }
+    resolutions.push_back(std::atoll(argv[a]));
+  }
   if (resolutions.empty()) resolutions = {256, 512};
 
   openvdb::initialize();
   const Mesh& mesh = bench::benchmark_mesh();
+  const std::string stl = "/tmp/openvdb_sdf_bench_mesh.stl";
+  if (!voxd_cli.empty()) test::write_file(stl, test::to_binary_stl(mesh));
 
   // OpenVDB's input, in its own types (built once, outside the timings).
   std::vector<openvdb::Vec3s> points;
@@ -331,6 +355,17 @@ int main(int argc, char** argv) {
         static_cast<long long>(n), voxd_s, vdb_s, voxd_s / vdb_s, all.max, all.rms(),
         static_cast<unsigned long long>(sign_diff), millions(voxd_band), millions(vdb_band));
     std::printf("  first runs: voxd %.2f s  openvdb %.2f s  ratio %.2f\n", voxd_first, vdb_first, voxd_first / vdb_first);
+    if (!voxd_cli.empty()) {
+      // The whole command against OpenVDB's meshToVolume alone, right after
+      // it, best of 2 each: to the sparse f32 RLE (the clamped background as
+      // runs) and to the dense f32 NRRD.
+      for (const char* out : {"/tmp/openvdb_sdf_bench_out.rle", "/tmp/openvdb_sdf_bench_out.nrrd"}) {
+        const double t = std::min(voxd_cli_seconds(voxd_cli, stl, n, out), voxd_cli_seconds(voxd_cli, stl, n, out));
+        std::printf("  whole voxd voxelize to %s: %.2f s, %.2f of openvdb's meshToVolume\n", std::strrchr(out, '.') + 1, t,
+                    t / vdb_s);
+        std::remove(out);
+      }
+    }
     std::printf("  grid alignment: largest centre offset %.3g (model units)\n", centre_offset);
     std::printf("  voxd exactness: %llu band voxels sampled, %llu equal to the brute force bit for bit, max diff %.3g voxel"
                 " (%.0f candidate triangles a voxel, %llu with none)\n",
