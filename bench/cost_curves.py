@@ -33,7 +33,9 @@ FLAGS = {
     "sdf": ["--padding", "3", "--mode", "sdf"],
 }
 # Inclusive instruction counts of these functions are the stages' (names as
-# callgrind_annotate prints them; a stage whose function is absent is left out).
+# callgrind_annotate prints them; a stage whose function is absent is left
+# out). Work a pool thread does is its own function's, not its caller's, so
+# the stages are named where the work is, not by the CLI's phases.
 STAGES = [
     ("decode STL", r"voxd::mesh_io::decode_stl_binary\("),
     ("bounds", r"voxd::bounds\("),
@@ -44,7 +46,8 @@ STAGES = [
     ("parity solid (dense)", r"voxd::detail::ParityVoxelizer::fill\("),
     ("coverage", r"voxd::voxelize_coverage(_streamed)?\("),
     ("sdf", r"voxd::signed_distance_field\("),
-    ("write", r"voxd::cli::write_output\("),
+    ("sdf slabs", r"voxd::signed_distance_field_slabs\("),
+    ("band scatter (chunks)", r"voxd::sdf::scatter_band_chunk\("),
 ]
 
 
@@ -123,7 +126,8 @@ def main():
                 points.append((res, secs))
                 print(f"{job:9} {res:>5} {1100000:>9} {secs:>8.3f} {mib:>9} {size / 2**20:>8.1f}", flush=True)
             big = [p for p in points if p[0] >= 512]
-            print(f"{job:9} time ~ N^{exponent(big):.2f} over N = {big[0][0]}..{big[-1][0]}", flush=True)
+            print(f"{job:9} time ~ N^{exponent(big):.2f} over N = {big[0][0]}..{big[-1][0]}, "
+                  f"N^{exponent(points[-2:]):.2f} over the last doubling", flush=True)
             tri_points = []
             res = TRIANGLE_GRID[job]
             for n in TRIANGLES:
