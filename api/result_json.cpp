@@ -8,7 +8,7 @@ nlohmann::json vec(const glm::dvec3& v) { return nlohmann::json::array({v.x, v.y
 }  // namespace
 
 nlohmann::json to_json(const MeshReport& r) {
-  return {
+  nlohmann::json out = {
       {"triangles", r.triangles},
       {"vertices", r.vertices},
       {"bbox_min", vec(r.bbox.min)},
@@ -22,6 +22,8 @@ nlohmann::json to_json(const MeshReport& r) {
       // A signed volume of an open mesh means nothing; say so with null.
       {"volume", r.watertight ? nlohmann::json(r.volume) : nlohmann::json(nullptr)},
   };
+  if (!r.warnings.empty()) out["warnings"] = r.warnings;
+  return out;
 }
 
 nlohmann::json to_json(const Grid& g) {

@@ -21,6 +21,7 @@ packages=(
   libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libhiredis-dev redis-server
+  assimp-testmodels  # real STL/OBJ/PLY files the decoder and open-mesh tests read
   python3 python3-numpy python3-jsonschema python3-yaml python3-venv python3-pip python3-setuptools
   clang libclang-rt-14-dev util-linux
   chromium

@@ -90,7 +90,7 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
   job.params = params;
   Stopwatch clock;
   job.format = detect_mesh_format(mesh_bytes, name_hint);
-  job.mesh = decode_mesh(mesh_bytes, name_hint, limits.decode);
+  job.mesh = decode_mesh(mesh_bytes, name_hint, limits.decode, &job.decode_warnings);
   job.triangles = job.mesh.triangle_count();
   job.timings.add("parse", clock.lap());
 
@@ -154,6 +154,7 @@ VoxelJobResult begin_voxel_job(PreparedVoxelJob& job, bool with_report, JobContr
   if (with_report) {
     if (control) control->set_stage("mesh report");
     result.report = make_mesh_report(job.mesh);
+    result.report->warnings = job.decode_warnings;
     result.timings.add("report", clock.lap());
   }
   if (job.rotation != glm::dmat3(1.0)) {

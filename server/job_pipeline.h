@@ -57,6 +57,7 @@ struct PreparedVoxelJob {
   api::JobParams params;
   Mesh mesh;  // as uploaded; execute_voxel_job rotates it
   MeshFormat format = MeshFormat::unknown;
+  DecodeWarnings decode_warnings;  // for the mesh report
   std::uint64_t triangles = 0;
   glm::dmat3 rotation{1.0};  // applied before voxelization (rotation, then orient)
   Grid grid;

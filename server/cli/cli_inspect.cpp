@@ -21,8 +21,11 @@ int inspect_command(int argc, char** argv) {
   if (args.positional().size() != 1) throw UsageError("inspect takes exactly one mesh file");
   const std::string& path = args.positional()[0];
   MappedFile file(path);
-  const Mesh mesh = decode_mesh(file.bytes(), path);
-  nlohmann::json out = api::to_json(make_mesh_report(mesh));
+  DecodeWarnings warnings;
+  const Mesh mesh = decode_mesh(file.bytes(), path, {}, &warnings);
+  MeshReport report = make_mesh_report(mesh);
+  report.warnings = std::move(warnings);
+  nlohmann::json out = api::to_json(report);
   out["format"] = to_string(detect_mesh_format(file.bytes(), path));
   std::cout << out.dump(2) << '\n';
   return 0;

@@ -2,6 +2,8 @@
 // Topology and geometry report of a mesh: what a user needs to know before
 // trusting a voxelization (is it closed? oriented? how big?).
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "voxd/mesh.h"
 
@@ -18,6 +20,9 @@ struct MeshReport {
   bool watertight = false;                // has edges, none boundary, non-manifold or inconsistent
   double surface_area = 0.0;
   double volume = 0.0;                    // signed, by the divergence theorem; meaningful when watertight
+  // What decoding the file noticed (DecodeWarnings): set by whoever decoded
+  // it, as make_mesh_report sees only the mesh.
+  std::vector<std::string> warnings;
 };
 
 // Merges vertices with bit-identical positions; triangles keep their order.

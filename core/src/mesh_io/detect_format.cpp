@@ -6,10 +6,13 @@
 // what is wrong with it. The name hint only decides when content cannot.
 #include <algorithm>
 #include <cstring>
+#include <string>
 #include <string_view>
 
 #include "mesh_io/detect_format.h"
+#include "mesh_io/text_encoding.h"
 #include "mesh_io/text_lines.h"
+#include "voxd/error.h"
 #include "voxd/mesh_io/mesh_decode.h"
 
 namespace voxd {
@@ -128,6 +131,21 @@ MeshFormat detect_mesh_format(std::span<const std::uint8_t> data, std::string_vi
   if (head.starts_with("DRACO")) return MeshFormat::draco;
   if (starts_with_magic_line(head, "ply")) return MeshFormat::ply;
   if (is_exact_size_binary_stl(data)) return MeshFormat::stl_binary;
+  // UTF-16 text: told apart by its first characters as UTF-8.
+  if (const auto order = mesh_io::utf16_byte_order(data)) {
+    std::size_t sniff = std::min(data.size() & ~std::size_t{1}, 2 * kObjSniffBytes);
+    // Not half a surrogate pair at the window's end.
+    const std::size_t last = sniff - 2;
+    const unsigned lead = *order == mesh_io::Utf16Order::big_endian ? data[last] : data[last + 1];
+    if (sniff < data.size() && lead >= 0xD8 && lead <= 0xDB) sniff -= 2;
+    try {
+      const std::string text = mesh_io::utf16_to_utf8(data.first(sniff), *order);
+      if (text.empty()) return MeshFormat::unknown;
+      return detect_mesh_format({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}, name_hint);
+    } catch (const Error&) {
+      return MeshFormat::unknown;  // a broken surrogate: decode_mesh says where
+    }
+  }
   // Well-known other formats would otherwise pass for a broken binary STL.
   if (!mesh_io::foreign_format_name(data).empty()) return MeshFormat::unknown;
   if (has_binary_bytes(head)) {

@@ -15,7 +15,7 @@ namespace voxd::mesh_io {
 Mesh decode_stl_binary(std::span<const std::uint8_t> data, const DecodeLimits& limits);
 Mesh decode_stl_ascii(std::string_view text, const DecodeLimits& limits);
 Mesh decode_obj(std::string_view text, const DecodeLimits& limits);
-Mesh decode_ply(std::span<const std::uint8_t> data, const DecodeLimits& limits);
+Mesh decode_ply(std::span<const std::uint8_t> data, const DecodeLimits& limits, DecodeWarnings* warnings);
 Mesh decode_draco(std::span<const std::uint8_t> data, const DecodeLimits& limits);
 
 }  // namespace voxd::mesh_io

@@ -218,10 +218,11 @@ class AsciiSource {
 
 class PlyParser {
  public:
-  PlyParser(std::span<const std::uint8_t> data, const DecodeLimits& limits)
+  PlyParser(std::span<const std::uint8_t> data, const DecodeLimits& limits, DecodeWarnings* warnings)
       : data_(data),
         lines_(std::string_view(reinterpret_cast<const char*>(data.data()), data.size())),
-        limits_(limits) {}
+        limits_(limits),
+        warnings_(warnings) {}
 
   Mesh parse() {
     parse_header();
@@ -266,7 +267,15 @@ class PlyParser {
       } else if (keyword == "property") {
         parse_property_line();
       } else {
-        header_error("unknown header keyword " + quote_token(keyword));
+        // Blender 2.4x wrote its name on a line of its own ("Created by
+        // Blender3D 247 ..."), which assimp and MeshLab read past: a line
+        // of no known keyword says nothing of the data's layout, so it is
+        // read as a comment, and said.
+        if (warnings_)
+          warnings_->push_back("PLY header, line " + std::to_string(lines_.line_number()) + ": unknown keyword " +
+                               quote_token(keyword) + " read as a comment; a PLY header line starts with ply, format, " +
+                               "element, property, comment, obj_info or end_header");
+        lines_.skip_rest_of_line();
       }
     }
     if (!has_format) header_error("the header has no 'format' line");
@@ -484,6 +493,7 @@ class PlyParser {
   std::span<const std::uint8_t> data_;
   TextLines lines_;
   const DecodeLimits& limits_;
+  DecodeWarnings* warnings_;
   PlyHeader header_;
   std::optional<std::size_t> vertex_element_, face_element_;
   std::size_t coordinate_property_[3] = {0, 0, 0};
@@ -493,8 +503,8 @@ class PlyParser {
 
 }  // namespace
 
-Mesh decode_ply(std::span<const std::uint8_t> data, const DecodeLimits& limits) {
-  return PlyParser(data, limits).parse();
+Mesh decode_ply(std::span<const std::uint8_t> data, const DecodeLimits& limits, DecodeWarnings* warnings) {
+  return PlyParser(data, limits, warnings).parse();
 }
 
 }  // namespace voxd::mesh_io

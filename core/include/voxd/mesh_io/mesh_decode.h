@@ -5,7 +5,9 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "voxd/mesh.h"
 #include "voxd/enum_names.h"
@@ -30,17 +32,24 @@ struct DecodeLimits {
   std::function<Mesh(std::span<const std::uint8_t>)> draco_decoder;
 };
 
+// What a decoder read otherwise than the file says outright, as sentences a
+// user can act on: UTF-16 text decoded, a header line it did not know taken
+// as a comment. The geometry is the file's; the source may want a look.
+using DecodeWarnings = std::vector<std::string>;
+
 // Detection only; never throws. Returns MeshFormat::unknown when nothing fits.
 MeshFormat detect_mesh_format(std::span<const std::uint8_t> data, std::string_view name_hint = {});
 
 // Decodes, validates (finite coordinates, indices in range, limits) and drops
-// triangles whose indices repeat. Throws voxd::Error with a user-actionable
-// message; never crashes or hangs on hostile input.
+// triangles whose indices repeat. Text in UTF-16 (with its byte order mark,
+// as Windows tools save it) is decoded as UTF-8. Throws voxd::Error with a
+// user-actionable message; never crashes or hangs on hostile input. Adds to
+// `warnings`, when given, what the file should have said otherwise.
 Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint = {},
-                 const DecodeLimits& limits = {});
+                 const DecodeLimits& limits = {}, DecodeWarnings* warnings = nullptr);
 
 // Decodes with an already known format (used by tests and by decode_mesh).
 Mesh decode_mesh_as(MeshFormat format, std::span<const std::uint8_t> data,
-                    const DecodeLimits& limits = {});
+                    const DecodeLimits& limits = {}, DecodeWarnings* warnings = nullptr);
 
 }  // namespace voxd
