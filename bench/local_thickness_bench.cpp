@@ -1,17 +1,15 @@
 // Distance transform and local thickness of the benchmark mesh (a thick
 // tilted torus) voxelized at 256^3 and 512^3: the thickness analyses a
-// part review runs after voxelizing. Also two machined parts from shared/
-// meshes (a hex nut and a screw: for local thickness, sharp edges and
-// thread crests keep voxels unpainted until the smallest balls, its slow
-// case; for wall thickness, the nut's thick flat plate is a large medial
-// sheet) at 512^3.
+// part review runs after voxelizing. Also two machined parts made in code
+// (tests/support/test_parts.h: a hex nut and a screw: for local thickness,
+// sharp edges and thread crests keep voxels unpainted until the smallest
+// balls, its slow case; for wall thickness, the nut's flat plate is a large
+// medial sheet) at 512^3.
 // Counters: filled voxels.
 #include <benchmark/benchmark.h>
 
-#include <filesystem>
-
 #include "bench_mesh.h"
-#include "voxd/mesh_io/mesh_decode.h"
+#include "support/test_parts.h"
 #include "voxd/analysis/distance_transform.h"
 #include "voxd/grid.h"
 #include "voxd/analysis/local_thickness.h"
@@ -59,15 +57,10 @@ void BM_WallThickness(benchmark::State& state) {
 }
 BENCHMARK(BM_WallThickness)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The CAD-like parts of tests/support/test_parts.h.
 template <bool kWall>
 void BM_ThicknessPart(benchmark::State& state, const char* file) {
-  const std::filesystem::path path = std::filesystem::path(VOXD_SHARED_MESHES) / file;
-  if (!std::filesystem::exists(path)) {
-    state.SkipWithError("shared/meshes not found");
-    return;
-  }
-  const std::vector<std::uint8_t> bytes = test::read_file(path.string());
-  const Mesh m = decode_mesh(bytes, file);
+  const Mesh m = test::part_mesh(file);
   GridRequest r;
   r.resolution = state.range(0);
   r.padding = 1;
@@ -80,10 +73,10 @@ void BM_ThicknessPart(benchmark::State& state, const char* file) {
 }
 void BM_LocalThicknessPart(benchmark::State& state, const char* file) { BM_ThicknessPart<false>(state, file); }
 void BM_WallThicknessPart(benchmark::State& state, const char* file) { BM_ThicknessPart<true>(state, file); }
-BENCHMARK_CAPTURE(BM_LocalThicknessPart, hex_nut, "M3_hex_nut.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_LocalThicknessPart, screw, "M3x10_screw.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_WallThicknessPart, hex_nut, "M3_hex_nut.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_WallThicknessPart, screw, "M3x10_screw.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_LocalThicknessPart, hex_nut, "hex_nut.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_LocalThicknessPart, screw, "screw.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_WallThicknessPart, hex_nut, "hex_nut.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_WallThicknessPart, screw, "screw.stl")->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace voxd::bench

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (tests/fuzz, clang with ASan+UBSan) and runs
-# each one for SECONDS (default 4) on its seed corpus: real meshes from
-# ../shared/meshes, Draco files made from them by draco_encoder, RLE volumes
-# made by voxd, and the small files in tests/fuzz/seeds. Exits non-zero on
+# each one for SECONDS (default 4) on its seed corpus: the CAD-like parts the
+# main build writes (BUILD/test-parts), the real STL, OBJ and PLY files of
+# Debian's assimp-testmodels, Draco files made from the parts by
+# draco_encoder, RLE volumes made by voxd, and the small files in
+# tests/fuzz/seeds. Exits non-zero on
 # the first crash, sanitizer report, out-of-memory or hang, leaving the input
 # in build-fuzz/findings/. What a run learns stays in build-fuzz/corpus/.
 #   scripts/fuzz.sh            the short run the test suite makes
@@ -27,12 +29,21 @@ cp tests/fuzz/seeds/obj/* "$seeds/obj/"
 cp tests/fuzz/seeds/ply/* "$seeds/ply/"
 cp tests/fuzz/seeds/job_params/* "$seeds/job_params/"
 cp tests/fuzz/seeds/analysis_query/* "$seeds/analysis_query/"
-# Real meshes, small enough for a fuzzer's input length (../shared/meshes
-# where the checkout has it beside it; else the committed PLY box).
+# Meshes small enough for a fuzzer's input length: the parts the main build
+# writes (else the committed PLY box), and assimp's corpus of real files.
 shopt -s nullglob
-for m in ../shared/meshes/*.stl; do
-  if [[ $(stat -c %s "$m") -le 65536 ]]; then cp "$m" "$seeds/stl_binary/"; fi
-done
+copy_small() {  # DEST FILE...
+  local dest="$1" m
+  shift
+  for m in "$@"; do
+    if [[ $(stat -c %s "$m") -le 65536 ]]; then cp "$m" "$dest/"; fi
+  done
+}
+copy_small "$seeds/stl_binary" "$main_build"/test-parts/*.stl
+assimp=/usr/share/assimp/models
+copy_small "$seeds/stl_ascii" "$assimp"/STL/triangle*.stl "$assimp"/STL/sphereWithHole.stl
+copy_small "$seeds/obj" "$assimp"/OBJ/*.obj
+copy_small "$seeds/ply" "$assimp"/PLY/*.ply
 sources=("$seeds"/stl_binary/*.stl)
 ((${#sources[@]})) || sources=(tests/fuzz/seeds/ply/box_le.ply)
 for m in "${sources[@]}"; do

@@ -1,6 +1,6 @@
 // Voxelization straight to runs (voxd/voxelize/runs.h) and the RLE written
 // from them: the voxels of the dense path and its bytes, in every mode that
-// makes runs, on real meshes, with grids that cut the part, over layer ranges
+// makes runs, on CAD-like parts and an organic blob, with grids that cut the part, over layer ranges
 // and thread counts; and the RLE of hand-made runs (rows that end full, layers
 // full or empty) against the encoder of bits.
 #include <cstring>
@@ -10,7 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "support/shared_meshes.h"
+#include "support/test_meshes.h"
+#include "support/test_parts.h"
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/error.h"
@@ -23,7 +24,7 @@ namespace voxd {
 namespace {
 
 using test::grid_for;
-using test::shared_mesh;
+using test::part_mesh;
 
 // The middle two thirds of the part: rows start and end inside it, so
 // crossings fall before and past the grid.
@@ -85,8 +86,8 @@ struct Case {
 };
 
 TEST(RunVoxelize, RunsAreTheDenseVoxelsAndTheirRleTheSameBytesInEveryMode) {
-  for (const Case c : {Case{"bunny.stl", 97, 1}, Case{"M3_hex_nut.stl", 64, 0}, Case{"torus.stl", 131, 2}}) {
-    const Mesh mesh = shared_mesh(c.mesh);
+  for (const Case c : {Case{"blob.stl", 97, 1}, Case{"hex_nut.stl", 64, 0}, Case{"torus.stl", 131, 2}}) {
+    const Mesh mesh = part_mesh(c.mesh);
     for (const bool cut : {false, true}) {
       const Grid grid = cut ? cutting_grid(mesh, c.resolution) : grid_for(mesh, c.resolution, c.padding);
       for (VoxelMode mode : {VoxelMode::solid, VoxelMode::surface, VoxelMode::solid_and_surface}) {
@@ -107,7 +108,7 @@ TEST(RunVoxelize, RunsAreTheDenseVoxelsAndTheirRleTheSameBytesInEveryMode) {
 }
 
 TEST(RunVoxelize, LayerRangesSideBySideAreTheWholeRun) {
-  const Mesh mesh = shared_mesh("bunny.stl");
+  const Mesh mesh = part_mesh("blob.stl");
   const Grid grid = grid_for(mesh, 97, 1);
   const std::int64_t nz = grid.dims.z;
   for (VoxelMode mode : {VoxelMode::solid, VoxelMode::solid_and_surface}) {
@@ -137,7 +138,7 @@ TEST(RunVoxelize, LayerRangesSideBySideAreTheWholeRun) {
 }
 
 TEST(RunVoxelize, InsideTestsThatNeedTheWholeGridAreRefusedByName) {
-  const Mesh mesh = shared_mesh("torus.stl");
+  const Mesh mesh = part_mesh("torus.stl");
   const Grid grid = grid_for(mesh, 16, 0);
   for (InsideTest inside : {InsideTest::vote, InsideTest::winding}) {
     VoxelizeOptions options;

@@ -1,8 +1,9 @@
 // A stored RLE result replayed slab by slab (voxd/encode/rle_slabs.h) and the
 // analyses that take slabs (mass properties, radiography, parts and voids,
-// sections, shaded previews): on real meshes, whatever the slab size (including grids whose z
-// size is not a multiple of it), the slabs are the stored voxels and every
-// streamed analysis is exactly its in-memory counterpart.
+// sections, shaded previews): on CAD-like parts and an organic blob,
+// whatever the slab size (including grids whose z size is not a multiple of
+// it), the slabs are the stored voxels and every streamed analysis is
+// exactly its in-memory counterpart.
 #include <cstring>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "support/test_meshes.h"
+#include "support/test_parts.h"
 #include "voxd/analysis/analysis_images.h"
 #include "voxd/analysis/components.h"
 #include "voxd/analysis/mass_properties.h"
@@ -32,7 +34,7 @@ struct Stored {
 };
 
 Stored stored(const std::string& name, std::int64_t resolution) {
-  const Mesh mesh = decode_mesh(test::read_file(std::string(VOXD_SHARED_MESHES) + "/" + name), name);
+  const Mesh mesh = test::part_mesh(name);
   GridRequest r;
   r.resolution = resolution;
   r.padding = 1;
@@ -43,13 +45,13 @@ Stored stored(const std::string& name, std::int64_t resolution) {
   return s;
 }
 
-// Each shared mesh once, at a resolution whose nz is prime-ish against the
+// Each part once, at a resolution whose nz is prime-ish against the
 // slab sizes below.
 const std::vector<Stored>& cases() {
   static const std::vector<Stored> all = [] {
     std::vector<Stored> v;
-    v.push_back(stored("bunny.stl", 83));
-    v.push_back(stored("M3_hex_nut.stl", 70));
+    v.push_back(stored("blob.stl", 83));
+    v.push_back(stored("hex_nut.stl", 70));
     v.push_back(stored("torus.stl", 101));
     return v;
   }();

@@ -1,6 +1,6 @@
 // Slab-streamed coverage (voxelize_coverage_streamed) and the writer that
 // takes slabs of values (ValueSlabWriter): every slab's floats are bit for
-// bit voxelize_coverage()'s, for each sampling, on real meshes, whatever the
+// bit voxelize_coverage()'s, for each sampling, on CAD-like parts and an organic blob, whatever the
 // slab size (including grids whose z size is not a multiple of it), and the
 // files are byte for byte encode_volume()'s in every format that streams;
 // a stored values RLE replays as those slabs, and its sections gathered over
@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "support/test_meshes.h"
+#include "support/test_parts.h"
 #include "voxd/analysis/value_images.h"
 #include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/slab_writer.h"
@@ -28,9 +29,6 @@
 namespace voxd {
 namespace {
 
-Mesh shared_mesh(const std::string& name) {
-  return decode_mesh(test::read_file(std::string(VOXD_SHARED_MESHES) + "/" + name), name);
-}
 
 Grid grid_for(const Mesh& mesh, std::int64_t resolution) {
   GridRequest r;
@@ -65,8 +63,8 @@ TEST(StreamedCoverage, EverySlabSizeGivesTheInMemoryValuesForEachSampling) {
     const char* mesh;
     std::int64_t resolution;
   };
-  for (const Case c : {Case{"bunny.stl", 61}, Case{"torus.stl", 47}}) {
-    const Mesh mesh = shared_mesh(c.mesh);
+  for (const Case c : {Case{"blob.stl", 61}, Case{"torus.stl", 47}}) {
+    const Mesh mesh = test::part_mesh(c.mesh);
     const Grid grid = grid_for(mesh, c.resolution);
     for (CoverageSampling sampling : {CoverageSampling::exact, CoverageSampling::uniform, CoverageSampling::stochastic}) {
       CoverageOptions options;
@@ -87,7 +85,7 @@ TEST(StreamedCoverage, EverySlabSizeGivesTheInMemoryValuesForEachSampling) {
 }
 
 TEST(StreamedCoverage, CoveredVoxelsOverSlabsIsTheWholeVolumesSum) {
-  const Mesh mesh = shared_mesh("bunny.stl");
+  const Mesh mesh = test::part_mesh("blob.stl");
   const Grid grid = grid_for(mesh, 53);
   const DenseVolume<float> whole = voxelize_coverage(mesh, grid, CoverageOptions{});
   for (std::int64_t layers : {1, 6, 100}) {
@@ -99,7 +97,7 @@ TEST(StreamedCoverage, CoveredVoxelsOverSlabsIsTheWholeVolumesSum) {
 }
 
 TEST(ValueSlabWriter, StreamedFilesAreByteForByteTheInMemoryOnes) {
-  const Mesh mesh = shared_mesh("M3_hex_nut.stl");
+  const Mesh mesh = test::part_mesh("hex_nut.stl");
   const Grid grid = grid_for(mesh, 45);
   const DenseVolume<float> fractions = voxelize_coverage(mesh, grid, CoverageOptions{});
   const DenseVolume<std::uint8_t> bytes = coverage_bytes(fractions);
@@ -165,7 +163,7 @@ TEST(ValueSlabWriter, RefusesWhatCannotStreamAndSlabsOutOfOrderOrOfAnotherType) 
 }
 
 TEST(ValueSlabs, AStoredRleReplaysAsItsSlabsAndItsSectionsAreTheWholeVolumes) {
-  const Mesh mesh = shared_mesh("bunny.stl");
+  const Mesh mesh = test::part_mesh("blob.stl");
   const Grid grid = grid_for(mesh, 57);
   const DenseVolume<float> fractions = voxelize_coverage(mesh, grid, CoverageOptions{});
   const DenseVolume<std::uint8_t> bytes = coverage_bytes(fractions);
@@ -221,7 +219,7 @@ TEST(ValueSlabs, AStoredRleReplaysAsItsSlabsAndItsSectionsAreTheWholeVolumes) {
 // grows to the slab's share of the grid, and a cancel asked for in the third
 // slab's consumer is the last slab handed on.
 TEST(StreamedProgress, EachSlabAdvancesTheProgressAndACancelStopsWithinTheNext) {
-  const Mesh mesh = shared_mesh("bunny.stl");
+  const Mesh mesh = test::part_mesh("blob.stl");
   const Grid grid = grid_for(mesh, 64);
   const std::int64_t layers = 8, slabs = (grid.dims.z + layers - 1) / layers;
   ASSERT_GE(slabs, 5);

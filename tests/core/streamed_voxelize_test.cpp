@@ -9,7 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "support/shared_meshes.h"
+#include "support/test_meshes.h"
+#include "support/test_parts.h"
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/error.h"
@@ -21,7 +22,7 @@ namespace voxd {
 namespace {
 
 using test::grid_for;
-using test::shared_mesh;
+using test::part_mesh;
 
 // The streamed slabs put back together, checking their order and grids.
 BitVolume assembled(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, std::int64_t layers) {
@@ -58,8 +59,8 @@ struct Case {
 };
 
 TEST(StreamedVoxelize, EverySlabSizeGivesTheInMemoryVoxelsInEveryMode) {
-  for (const Case c : {Case{"bunny.stl", 97, 1}, Case{"M3_hex_nut.stl", 64, 0}, Case{"torus.stl", 131, 2}}) {
-    const Mesh mesh = shared_mesh(c.mesh);
+  for (const Case c : {Case{"blob.stl", 97, 1}, Case{"hex_nut.stl", 64, 0}, Case{"torus.stl", 131, 2}}) {
+    const Mesh mesh = part_mesh(c.mesh);
     const Grid grid = grid_for(mesh, c.resolution, c.padding);
     for (VoxelMode mode : {VoxelMode::solid, VoxelMode::surface, VoxelMode::solid_and_surface}) {
       VoxelizeOptions options;
@@ -79,7 +80,7 @@ TEST(StreamedVoxelize, EverySlabSizeGivesTheInMemoryVoxelsInEveryMode) {
 }
 
 TEST(StreamedVoxelize, StreamedFilesAreByteForByteTheInMemoryOnes) {
-  const Mesh mesh = shared_mesh("bunny.stl");
+  const Mesh mesh = part_mesh("blob.stl");
   for (std::int64_t resolution : {40, 113}) {
     const Grid grid = grid_for(mesh, resolution, 1);
     VoxelizeOptions options;
@@ -110,8 +111,8 @@ TEST(StreamedVoxelize, StreamedFilesAreByteForByteTheInMemoryOnes) {
 // side by side must be the whole run's voxels, whatever the ranges' ends
 // (not multiples of anything) and the threads.
 TEST(StreamedVoxelize, LayerRangesSideBySideAreTheWholeRunWhateverTheirEndsAndThreads) {
-  for (const Case c : {Case{"bunny.stl", 97, 1}, Case{"torus.stl", 131, 2}}) {
-    const Mesh mesh = shared_mesh(c.mesh);
+  for (const Case c : {Case{"blob.stl", 97, 1}, Case{"torus.stl", 131, 2}}) {
+    const Mesh mesh = part_mesh(c.mesh);
     const Grid grid = grid_for(mesh, c.resolution, c.padding);
     const std::int64_t nz = grid.dims.z;
     for (VoxelMode mode : {VoxelMode::solid, VoxelMode::surface, VoxelMode::solid_and_surface}) {
@@ -144,7 +145,7 @@ TEST(StreamedVoxelize, LayerRangesSideBySideAreTheWholeRunWhateverTheirEndsAndTh
       }
     }
   }
-  const Mesh mesh = shared_mesh("torus.stl");
+  const Mesh mesh = part_mesh("torus.stl");
   const Grid grid = grid_for(mesh, 20, 0);
   for (const LayerRange off : {LayerRange{-1, 4}, LayerRange{4, 4}, LayerRange{0, grid.dims.z + 1}}) {
     try {
@@ -163,7 +164,7 @@ TEST(StreamedVoxelize, LayerRangesSideBySideAreTheWholeRunWhateverTheirEndsAndTh
 // blocks (written apart, as each worker stores its own) and the tail are
 // the whole stream's bytes.
 TEST(StreamedVoxelize, RleWrittenInPartsOfLayersIsTheWholeStream) {
-  const Mesh mesh = shared_mesh("bunny.stl");
+  const Mesh mesh = part_mesh("blob.stl");
   const Grid grid = grid_for(mesh, 97, 1);
   const std::int64_t nz = grid.dims.z;
   VoxelizeOptions options;

@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "support/run_process.h"
+#include "support/assimp_models.h"
 #include "support/test_meshes.h"
+#include "support/test_parts.h"
 
 namespace voxd {
 namespace {
@@ -117,7 +119,8 @@ TEST_F(AnalyzeCli, WritesPreviewsTheThicknessVolumeAndTheRequestedAnalyses) {
 }
 
 TEST_F(AnalyzeCli, AnOpenMeshSaysItIsOpenInsteadOfAVolume) {
-  const json a = analyze(std::string(VOXD_SHARED_MESHES) + "/pelvis.stl", "--resolution 48 --inside winding");
+  // assimp's sphere of radius 1.5 with a hole of 9 edges in it.
+  const json a = analyze(test::assimp_model("STL/sphereWithHole.stl"), "--resolution 48 --inside winding");
   const json& mesh = a.at("mass_properties").at("mesh");
   EXPECT_FALSE(mesh.at("available"));
   EXPECT_NE(mesh.at("reason").get<std::string>().find("not closed"), std::string::npos);

@@ -96,7 +96,7 @@ TEST_F(SubmitCli, ErrorsExitAsVoxelizeWithTheProblemType) {
 
 TEST_F(SubmitCli, ATerminalGetsAProgressBarToTheEnd) {
   start();
-  const std::string torus = std::string(VOXD_SHARED_MESHES) + "/torus.stl";
+  const std::string torus = std::string(VOXD_TEST_PARTS) + "/torus.stl";
   // util-linux's script(1) gives the command a terminal.
   const auto r = run_process("script -qec '" + std::string(VOXD_BINARY) + " submit " + torus + " -o " + dir_ +
                              "/t.rle --resolution 96 --server " + server_url() + "' /dev/null");

@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "support/run_process.h"
+#include "support/assimp_models.h"
 #include "support/test_meshes.h"
+#include "support/test_parts.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/voxelize/voxelize.h"
 
@@ -19,7 +21,6 @@ using nlohmann::json;
 using test::run_process;
 
 const std::string kVoxd = VOXD_BINARY;
-const std::string kMeshes = VOXD_SHARED_MESHES;
 
 class CliTest : public ::testing::Test {
  protected:
@@ -50,9 +51,10 @@ class CliTest : public ::testing::Test {
   std::string dir_;
 };
 
-std::string shared_mesh(const std::string& name) {
-  const std::string p = kMeshes + "/" + name;
-  if (!std::filesystem::exists(p)) throw std::runtime_error("shared test mesh missing (expected at ../shared/meshes next to the repo): " + p);
+// The file of a part of test_parts.h, written by the build (tests/CMakeLists.txt).
+std::string part_file(const std::string& name) {
+  const std::string p = std::string(VOXD_TEST_PARTS) + "/" + name;
+  if (!std::filesystem::exists(p)) throw std::runtime_error("test part missing (the build writes it): " + p);
   return p;
 }
 
@@ -73,13 +75,35 @@ TEST_F(CliTest, InspectPrintsTheMeshReportAsJson) {
   EXPECT_EQ(report.at("format"), "stl_binary");
 }
 
-TEST_F(CliTest, InspectReportsTheOpenSharedPelvis) {
-  const auto r = run_process(kVoxd + " inspect " + shared_mesh("pelvis.stl"));
+// Blender's Wuson (assimp-testmodels), open at its seams: 412 edges used
+// once, counted apart (mesh_report_test).
+TEST_F(CliTest, InspectReportsTheOpenRealWuson) {
+  const auto r = run_process(kVoxd + " inspect " + test::assimp_model("STL/Wuson.stl"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json report = json::parse(r.out);
-  EXPECT_EQ(report.at("boundary_edges"), 291);
+  EXPECT_EQ(report.at("boundary_edges"), 412);
   EXPECT_EQ(report.at("watertight"), false);
   EXPECT_TRUE(report.at("volume").is_null());
+}
+
+// What decoding noticed comes with the report: Blender 2.47's PLY header
+// line, and UTF-16 text (assimp-testmodels); a plain file has no warnings.
+TEST_F(CliTest, InspectSaysWhatDecodingNoticed) {
+  const auto ply = run_process(kVoxd + " inspect " + test::assimp_model("PLY/Wuson.ply"));
+  ASSERT_EQ(ply.exit_code, 0) << ply.err;
+  const json p = json::parse(ply.out);
+  ASSERT_EQ(p.at("warnings").size(), 1u) << ply.out;
+  EXPECT_NE(p.at("warnings")[0].get<std::string>().find("unknown keyword 'Created' read as a comment"), std::string::npos);
+  const auto obj = run_process(kVoxd + " inspect " + test::assimp_model("OBJ/box_UTF16BE.obj"));
+  ASSERT_EQ(obj.exit_code, 0) << obj.err;
+  const json o = json::parse(obj.out);
+  EXPECT_EQ(o.at("format"), "obj");
+  EXPECT_EQ(o.at("triangles"), 12);
+  ASSERT_EQ(o.at("warnings").size(), 1u) << obj.out;
+  EXPECT_NE(o.at("warnings")[0].get<std::string>().find("UTF-16"), std::string::npos);
+  const auto plain = run_process(kVoxd + " inspect " + test::assimp_model("OBJ/box.obj"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_FALSE(json::parse(plain.out).contains("warnings"));
 }
 
 TEST_F(CliTest, VoxelizeJsonSummaryMatchesTheEngineAndTheFile) {
@@ -152,7 +176,7 @@ TEST_F(CliTest, AllFormatsHoldTheSameVoxels) {
 }
 
 TEST_F(CliTest, StreamingWritesTheInMemoryBytesSlabBySlab) {
-  const std::string mesh = shared_mesh("bunny.stl");
+  const std::string mesh = part_file("blob.stl");
   for (const std::string& out : {std::string("v.rle"), std::string("v.raw"), std::string("v.nrrd")}) {
     for (const char* extra : {"", " --raw-packing bits", " --nrrd-encoding gzip"}) {
       if (std::string(extra).find("raw-packing") != std::string::npos && out != "v.raw") continue;
@@ -168,7 +192,7 @@ TEST_F(CliTest, StreamingWritesTheInMemoryBytesSlabBySlab) {
 }
 
 TEST_F(CliTest, StreamedCoverageWritesTheInMemoryBytesAndSummary) {
-  const std::string mesh = shared_mesh("torus.stl");
+  const std::string mesh = part_file("torus.stl");
   for (const char* coverage : {"{}", "{\"values\":\"f32\"}", "{\"threshold\":0.25}"}) {
     for (const std::string& out : {std::string("c.rle"), std::string("c.raw"), std::string("c.nrrd")}) {
       SCOPED_TRACE(out + " " + coverage);
@@ -188,7 +212,7 @@ TEST_F(CliTest, StreamedCoverageWritesTheInMemoryBytesAndSummary) {
 // faster so, whatever the grid): the same bytes, header and summary as in
 // memory, for each sign convention and unit.
 TEST_F(CliTest, StreamedSdfBandWritesTheInMemoryBytesAndSummary) {
-  const std::string mesh = shared_mesh("torus.stl");
+  const std::string mesh = part_file("torus.stl");
   for (const char* sdf : {"{}", "{\"units\":\"voxels\",\"sign_convention\":\"inside_positive\",\"band\":2}"}) {
     for (const std::string& out : {std::string("d.rle"), std::string("d.raw"), std::string("d.nrrd")}) {
       SCOPED_TRACE(out + " " + sdf);
@@ -212,7 +236,7 @@ TEST_F(CliTest, StreamedSdfBandWritesTheInMemoryBytesAndSummary) {
 TEST_F(CliTest, AutoStreamsFromTheMemoryEstimateNotTheVoxelCount) {
   // 560 x 543 x 432 voxels: 16 MiB of bits stay in memory, while the same
   // grid's coverage (5 bytes a voxel in memory, past 512 MiB) streams.
-  const std::string mesh = shared_mesh("bunny.stl");
+  const std::string mesh = part_file("blob.stl");
   const auto bits = run_process(kVoxd + " voxelize " + mesh + " --resolution 560 --json -o " + path("b.rle"));
   ASSERT_EQ(bits.exit_code, 0) << bits.err;
   EXPECT_FALSE(nlohmann::json::parse(bits.out).at("streamed").get<bool>());
@@ -228,7 +252,7 @@ TEST_F(CliTest, AutoStreamsFromTheMemoryEstimateNotTheVoxelCount) {
 }
 
 TEST_F(CliTest, StreamingOnSaysWhyAJobCannotStream) {
-  const std::string mesh = shared_mesh("torus.stl");
+  const std::string mesh = part_file("torus.stl");
   struct Case {
     std::string flags, says;
   };
@@ -252,7 +276,7 @@ TEST_F(CliTest, StreamingOnSaysWhyAJobCannotStream) {
 }
 
 TEST_F(CliTest, InMemoryGridsPastTheVoxelLimitPointToStreaming) {
-  const std::string mesh = shared_mesh("torus.stl");
+  const std::string mesh = part_file("torus.stl");
   // 8192 x 8192 x ~1700 voxels: past 2^36, refused before any work.
   const auto r = run_process(kVoxd + " voxelize " + mesh + " --resolution 8192 --streaming off -o " + path("t.rle"));
   EXPECT_EQ(r.exit_code, 2);
@@ -339,23 +363,23 @@ TEST_F(CliTest, ErrorsExitNonZeroWithOneLineMessages) {
   EXPECT_FALSE(std::filesystem::exists(path("x.rle.partial")));
 }
 
-TEST_F(CliTest, SharedClosedMeshesVoxelizeToTheirMeshVolume) {
-  for (const char* name : {"bunny.stl", "torus.stl", "M3_hex_nut.stl", "helper_disk.stl", "M3x10_screw.stl"}) {
-    const auto inspect = run_process(kVoxd + " inspect " + shared_mesh(name));
+TEST_F(CliTest, ClosedPartsVoxelizeToTheirMeshVolume) {
+  for (const char* name : {"blob.stl", "torus.stl", "hex_nut.stl", "disk.stl", "screw.stl", "flanged_bushing.stl"}) {
+    const auto inspect = run_process(kVoxd + " inspect " + part_file(name));
     ASSERT_EQ(inspect.exit_code, 0) << inspect.err;
     const json report = json::parse(inspect.out);
     ASSERT_TRUE(report.at("watertight").get<bool>()) << name;
     const double volume = report.at("volume").get<double>();
     const double area = report.at("surface_area").get<double>();
-    const auto r = run_process(kVoxd + " voxelize " + shared_mesh(name) + " --resolution 160 -o " + path("m.rle") + " --json");
+    const auto r = run_process(kVoxd + " voxelize " + part_file(name) + " --resolution 160 -o " + path("m.rle") + " --json");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const json s = json::parse(r.out);
     const double filled = s.at("filled_volume").get<double>();
     const double h = s.at("grid").at("voxel_size").get<double>();
     // Centre sampling can only err in voxels the surface cuts: half a voxel
-    // of the surface's area at most (helper_disk is 0.2 mm thick: ~2 voxels).
+    // of the surface's area at most (the disk is 0.2 mm thick: ~2 voxels).
     EXPECT_LE(std::abs(filled - volume), 0.5 * area * h) << name;
-    if (std::string(name) != "helper_disk.stl") {
+    if (std::string(name) != "disk.stl") {
       EXPECT_NEAR(filled / volume, 1.0, 0.02) << name;
     }
   }

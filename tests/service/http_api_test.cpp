@@ -26,6 +26,7 @@
 #include "support/run_process.h"
 #include "support/server_process.h"
 #include "support/test_meshes.h"
+#include "support/test_parts.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd::test {
@@ -38,10 +39,11 @@ using namespace std::chrono_literals;
 std::vector<std::uint8_t> sphere_stl(double r = 1.0, int level = 3) {
   return to_binary_stl(make_icosphere({0, 0, 0}, r, level));
 }
-std::vector<std::uint8_t> bunny_stl() { return read_file(std::string(VOXD_SHARED_MESHES) + "/bunny.stl"); }
+// An organic closed part (test_parts.h) as a user uploads it.
+std::vector<std::uint8_t> blob_stl() { return to_binary_stl(test::part_mesh("blob.stl")); }
 
 // A job that runs for minutes unless cancelled: generalized winding numbers
-// at 1024 voxels along the bunny.
+// at 1024 voxels along the blob.
 const char* const kSlowParams = R"({"grid":{"resolution":1024},"inside":"winding"})";
 
 class HttpApiTest : public HttpServiceTest {};
@@ -84,7 +86,7 @@ TEST_F(HttpApiTest, MultipartJobRunsAndItsVolumeEqualsTheCliInEveryFormat) {
 
 TEST_F(HttpApiTest, RawBodyUploadAsCurlSendsItIsTheSameJobAndIsAnsweredFromTheFinishedResult) {
   start();
-  const auto mesh = bunny_stl();
+  const auto mesh = blob_stl();
   const std::string params = R"({"grid":{"resolution":48}})";
   const json first = submit(mesh, params);
   ASSERT_EQ(wait_for_job(http(), first.at("id")).at("state"), "succeeded");
@@ -100,17 +102,17 @@ TEST_F(HttpApiTest, RawBodyUploadAsCurlSendsItIsTheSameJobAndIsAnsweredFromTheFi
                                  "JobStatus");
   EXPECT_FALSE(other.at("cached"));
   EXPECT_NE(other.at("content_hash"), first.at("content_hash"));
-  EXPECT_EQ(volume(wait_for_job(http(), other.at("id")).at("id")), cli_volume(mesh, "bunny.stl", R"({"grid":{"resolution":49}})"));
+  EXPECT_EQ(volume(wait_for_job(http(), other.at("id")).at("id")), cli_volume(mesh, "blob.stl", R"({"grid":{"resolution":49}})"));
 }
 
 TEST_F(HttpApiTest, CurlAsUsersTypeItMultipartDataBinaryAndCompressed) {
   start();
-  const auto mesh = bunny_stl();
+  const auto mesh = blob_stl();
   const std::string params = R"({"grid":{"resolution":64,"padding":1}})";
-  write_file(dir_ + "/bunny.stl", mesh);
+  write_file(dir_ + "/blob.stl", mesh);
   std::ofstream(dir_ + "/job.json") << params;
   const std::string base = "http://127.0.0.1:" + std::to_string(server_->port());
-  auto r = run_process("curl -sS --fail-with-body -F mesh=@" + dir_ + "/bunny.stl -F 'params=<" + dir_ +
+  auto r = run_process("curl -sS --fail-with-body -F mesh=@" + dir_ + "/blob.stl -F 'params=<" + dir_ +
                        "/job.json;type=application/json' " + base + "/v1/jobs");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   schemas_->add("JobStatus", r.out);
@@ -118,12 +120,12 @@ TEST_F(HttpApiTest, CurlAsUsersTypeItMultipartDataBinaryAndCompressed) {
   ASSERT_EQ(wait_for_job(http(), id).at("state"), "succeeded");
   r = run_process("curl -sS --fail --compressed -o " + dir_ + "/curl.rle " + base + "/v1/jobs/" + id + "/volume");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(text_of(read_file(dir_ + "/curl.rle")), cli_volume(mesh, "bunny.stl", params));
+  EXPECT_EQ(text_of(read_file(dir_ + "/curl.rle")), cli_volume(mesh, "blob.stl", params));
   // --data-binary with params in the query string (curl sends it as a form).
-  r = run_process("curl -sS --fail -o " + dir_ + "/sync.binvox --data-binary @" + dir_ + "/bunny.stl '" + base +
+  r = run_process("curl -sS --fail -o " + dir_ + "/sync.binvox --data-binary @" + dir_ + "/blob.stl '" + base +
                   "/v1/voxelize?format=binvox&params=" + url_encode(params) + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(text_of(read_file(dir_ + "/sync.binvox")), cli_volume(mesh, "bunny.stl", params, "binvox"));
+  EXPECT_EQ(text_of(read_file(dir_ + "/sync.binvox")), cli_volume(mesh, "blob.stl", params, "binvox"));
 }
 
 TEST_F(HttpApiTest, EveryMeshFormatIsDetectedFromContentAndMatchesTheCli) {
@@ -150,7 +152,7 @@ TEST_F(HttpApiTest, EveryMeshFormatIsDetectedFromContentAndMatchesTheCli) {
 
 TEST_F(HttpApiTest, VolumesAreGzippedWhenTheClientAcceptsIt) {
   start();
-  const json job = submit(bunny_stl(), R"({"grid":{"resolution":96}})");
+  const json job = submit(blob_stl(), R"({"grid":{"resolution":96}})");
   wait_for_job(http(), job.at("id"));
   const std::string plain = volume(job.at("id"), "?format=raw");
   http().set_decompress(false);
@@ -223,7 +225,7 @@ TEST_F(HttpApiTest, JobListIsPaginatedNewestFirst) {
 
 TEST_F(HttpApiTest, CancellingStopsARunningJobPromptlyAndDeletingRemovesAFinishedOne) {
   start({"--workers", "1"});
-  const json slow = submit(bunny_stl(), kSlowParams);
+  const json slow = submit(blob_stl(), kSlowParams);
   const std::string slow_id = slow.at("id");
   const json queued = submit(sphere_stl(), R"({"grid":{"resolution":16}})");
   const std::string queued_id = queued.at("id");
@@ -256,7 +258,7 @@ TEST_F(HttpApiTest, CancellingStopsARunningJobPromptlyAndDeletingRemovesAFinishe
 
 TEST_F(HttpApiTest, AFullQueueAnswers429WithRetryAfterAndEveryoneElseIsStillServed) {
   start({"--workers", "1", "--queue-size", "2"});
-  const json running = submit(bunny_stl(), kSlowParams);
+  const json running = submit(blob_stl(), kSlowParams);
   wait_for_state(http(), running.at("id"), "running");
   std::vector<std::string> queued;
   for (int i = 0; i < 2; ++i) queued.push_back(submit(sphere_stl(1.0 + i), R"({"grid":{"resolution":16}})").at("id"));
@@ -283,7 +285,7 @@ TEST_F(HttpApiTest, FinishedJobsSurviveARestartAndUnfinishedOnesAreReportedInter
   const json done = submit(mesh, R"({"grid":{"resolution":24}})");
   ASSERT_EQ(wait_for_job(http(), done.at("id")).at("state"), "succeeded");
   const std::string before = volume(done.at("id"));
-  const json running = submit(bunny_stl(), kSlowParams);
+  const json running = submit(blob_stl(), kSlowParams);
   const json queued = submit(sphere_stl(2.0), R"({"grid":{"resolution":24}})");
   wait_for_state(http(), running.at("id"), "running");
 
@@ -309,7 +311,7 @@ TEST_F(HttpApiTest, FinishedJobsSurviveARestartAndUnfinishedOnesAreReportedInter
   server_->stop();
   server_.reset();
   start({"--workers", "1", "--shutdown-grace", "0"});
-  const json slow = submit(bunny_stl(), kSlowParams);
+  const json slow = submit(blob_stl(), kSlowParams);
   wait_for_state(http(), slow.at("id"), "running");
   EXPECT_EQ(server_->stop(), 0);
   server_.reset();
@@ -321,7 +323,7 @@ TEST_F(HttpApiTest, FinishedJobsSurviveARestartAndUnfinishedOnesAreReportedInter
 
 TEST_F(HttpApiTest, ASigtermDrainsAndExitsZero) {
   start({"--shutdown-grace", "0"});
-  const json slow = submit(bunny_stl(), kSlowParams);
+  const json slow = submit(blob_stl(), kSlowParams);
   wait_for_state(http(), slow.at("id"), "running");
   const auto t0 = std::chrono::steady_clock::now();
   EXPECT_EQ(server_->stop(), 0) << server_->log();
@@ -451,7 +453,7 @@ TEST_F(HttpApiTest, CorsAllowsOnlyTheConfiguredOrigins) {
 
 TEST_F(HttpApiTest, MetricsCountJobsRequestsBytesAndStageDurations) {
   start();
-  const auto mesh = bunny_stl();
+  const auto mesh = blob_stl();
   const json job = submit(mesh, R"({"grid":{"resolution":32}})");
   wait_for_job(http(), job.at("id"));
   const std::string vol = volume(job.at("id"));
@@ -685,7 +687,7 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
   expect_problem(http().Get(("/v1/jobs/" + id + "/section?axis=z&coordinate=99").c_str()), 400, "invalid-query");
   expect_problem(http().Get("/v1/jobs/0123456789abcdef0123456789abcdef/radiography"), 404, "not-found");
   expect_problem(http().Delete(("/v1/jobs/" + id + "/section").c_str()), 405, "method-not-allowed");
-  const json slow = submit(bunny_stl(), kSlowParams);
+  const json slow = submit(blob_stl(), kSlowParams);
   wait_for_state(http(), slow.at("id"), "running");
   expect_problem(http().Get(("/v1/jobs/" + slow.at("id").get<std::string>() + "/analysis").c_str()), 409, "job-not-finished");
   http().Delete(("/v1/jobs/" + slow.at("id").get<std::string>()).c_str());

@@ -7,6 +7,7 @@
 #include "support/http_fixture.h"
 #include "support/redis_process.h"
 #include "support/run_process.h"
+#include "support/test_parts.h"
 #include "voxd/encode/volume_format.h"
 
 namespace voxd::test {
@@ -15,7 +16,8 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-std::vector<std::uint8_t> bunny() { return read_file(std::string(VOXD_SHARED_MESHES) + "/bunny.stl"); }
+// An organic closed part (test_parts.h) as a user uploads it.
+std::vector<std::uint8_t> blob() { return to_binary_stl(test::part_mesh("blob.stl")); }
 
 // How many times `needle` occurs in `text`.
 std::size_t occurrences(const std::string& text, const std::string& needle) {
@@ -160,12 +162,12 @@ TEST_F(ScaleOutTest, SixtyJobsOverThreeReplicasEachRunOnceWithTheCliBytes) {
 // once its lease runs out and finishes it with the same bytes.
 TEST_F(ScaleOutTest, JobsOfAKilledReplicaAreFinishedByAnotherWithTheSameBytes) {
   start_replicas(3);
-  const auto mesh = bunny();
+  const auto mesh = blob();
   const std::vector<std::string> params = {R"({"grid":{"resolution":520},"inside":"winding"})",
                                            R"({"grid":{"resolution":500},"inside":"winding"})"};
   std::vector<std::string> ids;
   for (const std::string& p : params)
-    ids.push_back(expect_json(post_multipart(at(0), "/v1/jobs", mesh, "bunny.stl", p), 202, "JobStatus").at("id"));
+    ids.push_back(expect_json(post_multipart(at(0), "/v1/jobs", mesh, "blob.stl", p), 202, "JobStatus").at("id"));
   wait_for_state(at(0), ids[0], "running");
   const int victim = running_on(ids[0]);
   ASSERT_GE(victim, 0);
@@ -176,7 +178,7 @@ TEST_F(ScaleOutTest, JobsOfAKilledReplicaAreFinishedByAnotherWithTheSameBytes) {
     ASSERT_EQ(done.at("state"), "succeeded") << done.dump();
     const int ran = runner(ids[i]);
     EXPECT_NE(ran, victim);
-    EXPECT_EQ(volume_from(survivor, ids[i]), cli_volume(mesh, "bunny.stl", params[i])) << "job " << i;
+    EXPECT_EQ(volume_from(survivor, ids[i]), cli_volume(mesh, "blob.stl", params[i])) << "job " << i;
   }
   std::string takeovers;
   for (const auto& r : replicas_)
@@ -189,7 +191,7 @@ TEST_F(ScaleOutTest, JobsOfAKilledReplicaAreFinishedByAnotherWithTheSameBytes) {
 // DELETE on one replica stops the job another replica runs, promptly.
 TEST_F(ScaleOutTest, DeleteOnOneReplicaStopsAJobRunningOnAnother) {
   start_replicas(3);
-  const std::string id = expect_json(post_multipart(at(0), "/v1/jobs", bunny(), "bunny.stl",
+  const std::string id = expect_json(post_multipart(at(0), "/v1/jobs", blob(), "blob.stl",
                                                     R"({"grid":{"resolution":900},"inside":"winding"})"),
                                      202, "JobStatus")
                              .at("id");
@@ -224,8 +226,8 @@ TEST_F(ScaleOutTest, RedisRestartLosesNoAcceptedJobAndNoResult) {
   for (int i = 0; i < 4; ++i) {
     const std::string p = i == 0 ? R"({"grid":{"resolution":420},"inside":"winding"})"
                                  : R"({"grid":{"resolution":)" + std::to_string(30 + i) + "}}";
-    accepted.emplace_back(expect_json(post_multipart(at(static_cast<std::size_t>(i % 2)), "/v1/jobs", i == 0 ? bunny() : torus,
-                                                     i == 0 ? "bunny.stl" : "torus.stl", p),
+    accepted.emplace_back(expect_json(post_multipart(at(static_cast<std::size_t>(i % 2)), "/v1/jobs", i == 0 ? blob() : torus,
+                                                     i == 0 ? "blob.stl" : "torus.stl", p),
                                       202, "JobStatus")
                               .at("id"),
                           p);
@@ -261,8 +263,8 @@ TEST_F(ScaleOutTest, RedisRestartLosesNoAcceptedJobAndNoResult) {
   for (const auto& [id, p] : accepted) {
     const json done = wait_for_job(at(1), id, 180);
     ASSERT_EQ(done.at("state"), "succeeded") << done.dump();
-    const bool is_bunny = p.find("winding") != std::string::npos;
-    EXPECT_EQ(volume_from(0, id), cli_volume(is_bunny ? bunny() : torus, is_bunny ? "bunny.stl" : "torus.stl", p));
+    const bool is_blob = p.find("winding") != std::string::npos;
+    EXPECT_EQ(volume_from(0, id), cli_volume(is_blob ? blob() : torus, is_blob ? "blob.stl" : "torus.stl", p));
   }
   EXPECT_EQ(volume_from(0, before), before_bytes);
 }
@@ -299,7 +301,7 @@ TEST_F(ScaleOutTest, CachedResultsArtifactsCancellationAndMetricsAreShared) {
   // A job queued behind long ones is cancelled from the other replica at once.
   std::vector<std::string> long_jobs;
   for (int i = 0; i < 2; ++i)
-    long_jobs.push_back(expect_json(post_multipart(at(0), "/v1/jobs", bunny(), "bunny.stl",
+    long_jobs.push_back(expect_json(post_multipart(at(0), "/v1/jobs", blob(), "blob.stl",
                                                    R"({"grid":{"resolution":)" + std::to_string(600 + i) +
                                                        R"(},"inside":"winding"})"),
                                     202, "JobStatus")

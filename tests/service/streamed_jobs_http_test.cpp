@@ -12,13 +12,15 @@
 #include "support/http_client.h"
 #include "support/http_fixture.h"
 #include "support/test_meshes.h"
+#include "support/test_parts.h"
 
 namespace voxd::test {
 namespace {
 
 using nlohmann::json;
 
-std::vector<std::uint8_t> bunny_stl() { return read_file(std::string(VOXD_SHARED_MESHES) + "/bunny.stl"); }
+// An organic closed part (test_parts.h) as a user uploads it.
+std::vector<std::uint8_t> blob_stl() { return test::to_binary_stl(test::part_mesh("blob.stl")); }
 
 // A PNG without its tEXt chunks: two jobs' images differ only in the job id
 // they carry.
@@ -48,7 +50,7 @@ class StreamedJobsHttpTest : public HttpServiceTest {
 
 TEST_F(StreamedJobsHttpTest, AStreamedJobAnswersWithTheInMemoryJobsBytes) {
   start();
-  const auto mesh = bunny_stl();
+  const auto mesh = blob_stl();
   // 91 x 89 x 71: z is not a multiple of any slab the service picks.
   const json in_memory = submit(mesh, R"({"grid":{"resolution":91,"padding":1},"streaming":"off"})");
   const json streamed = submit(mesh, R"({"grid":{"resolution":91,"padding":1},"streaming":"on"})");
@@ -66,7 +68,7 @@ TEST_F(StreamedJobsHttpTest, AStreamedJobAnswersWithTheInMemoryJobsBytes) {
     ASSERT_GT(expected.size(), 100u) << query;
     EXPECT_TRUE(volume(b, query) == expected) << query;
   }
-  EXPECT_EQ(volume(b), cli_volume(mesh, "bunny.stl", R"({"grid":{"resolution":91,"padding":1}})"));
+  EXPECT_EQ(volume(b), cli_volume(mesh, "blob.stl", R"({"grid":{"resolution":91,"padding":1}})"));
 
   // What streams: every radiography, sections along each axis, shaded
   // previews from every side, the analysis without thickness and skin. What
@@ -102,7 +104,7 @@ TEST_F(StreamedJobsHttpTest, AStreamedJobAnswersWithTheInMemoryJobsBytes) {
 
 TEST_F(StreamedJobsHttpTest, AStreamedCoverageJobAnswersWithTheInMemoryJobsBytes) {
   start();
-  const auto mesh = bunny_stl();
+  const auto mesh = blob_stl();
   for (const char* coverage : {"{}", R"({"values":"f32"})", R"({"threshold":0.3})"}) {
     SCOPED_TRACE(coverage);
     const std::string params = std::string(R"({"grid":{"resolution":67,"padding":1},"mode":"coverage","coverage":)") + coverage;
@@ -141,18 +143,18 @@ TEST_F(StreamedJobsHttpTest, AStreamedCoverageJobAnswersWithTheInMemoryJobsBytes
 }
 
 TEST_F(StreamedJobsHttpTest, PastThePerJobMemoryAJobStreamsAndWholeGridAnalysesAnswer422NamingTheLargestGrid) {
-  // 24 MiB a job: the bunny at 700 (700 x 686 x 544 voxels, 33 MB of bits)
+  // 24 MiB a job: the blob at 700 (700 x 686 x 544 voxels, 33 MB of bits)
   // does not fit in memory, so it streams by itself.
   start({"--max-job-memory", "25165824"});
-  const auto mesh = bunny_stl();
+  const auto mesh = blob_stl();
   const json job = submit(mesh, R"({"grid":{"resolution":700}})");
   EXPECT_TRUE(job.at("streamed")) << job.dump();
   const std::string id = finished(job);
 
   // The volume streams in every format that streams, as the CLI writes it.
   const std::string rle = volume(id);
-  EXPECT_TRUE(rle == cli_volume(mesh, "bunny.stl", R"({"grid":{"resolution":700}})"));
-  EXPECT_TRUE(volume(id, "?format=nrrd") == cli_volume(mesh, "bunny.stl", R"({"grid":{"resolution":700}})", "nrrd"));
+  EXPECT_TRUE(rle == cli_volume(mesh, "blob.stl", R"({"grid":{"resolution":700}})"));
+  EXPECT_TRUE(volume(id, "?format=nrrd") == cli_volume(mesh, "blob.stl", R"({"grid":{"resolution":700}})", "nrrd"));
   const json binvox = expect_problem(http().Get(("/v1/jobs/" + id + "/volume?format=binvox").c_str()), 422, "limit-exceeded");
   EXPECT_NE(binvox.at("detail").get<std::string>().find("ask for format rle, raw or nrrd"), std::string::npos) << binvox.dump();
 
@@ -182,7 +184,7 @@ TEST_F(StreamedJobsHttpTest, PastThePerJobMemoryAJobStreamsAndWholeGridAnalysesA
   }
   // Asked for up front, the job is refused at submission with the same reason.
   const json refused = expect_problem(
-      post_multipart(http(), "/v1/jobs", mesh, "bunny.stl", R"({"grid":{"resolution":700},"analyses":[{"kind":"thickness"}]})"),
+      post_multipart(http(), "/v1/jobs", mesh, "blob.stl", R"({"grid":{"resolution":700},"analyses":[{"kind":"thickness"}]})"),
       422, "limit-exceeded");
   EXPECT_NE(refused.at("detail").get<std::string>().find("the wall thickness volume needs the whole grid"), std::string::npos)
       << refused.dump();
@@ -195,11 +197,11 @@ TEST_F(StreamedJobsHttpTest, PastThePerJobMemoryAJobStreamsAndWholeGridAnalysesA
 
 TEST_F(StreamedJobsHttpTest, StreamingOnForAJobThatCannotStreamSaysWhy) {
   start();
-  const json p = expect_problem(post_multipart(http(), "/v1/jobs", bunny_stl(), "bunny.stl",
+  const json p = expect_problem(post_multipart(http(), "/v1/jobs", blob_stl(), "blob.stl",
                                                R"({"grid":{"resolution":32},"inside":"winding","streaming":"on"})"),
                                 422, "invalid-params");
   EXPECT_NE(p.at("detail").get<std::string>().find("\"streaming\": \"on\""), std::string::npos) << p.dump();
-  const json sync = expect_problem(post_multipart(http(), "/v1/voxelize", bunny_stl(), "bunny.stl",
+  const json sync = expect_problem(post_multipart(http(), "/v1/voxelize", blob_stl(), "blob.stl",
                                                   R"({"grid":{"resolution":32},"streaming":"on"})"),
                                    422, "invalid-params");
   EXPECT_NE(sync.at("detail").get<std::string>().find("POST /v1/jobs"), std::string::npos) << sync.dump();

@@ -29,6 +29,13 @@ inline Grid unit_grid(glm::i64vec3 dims) { return make_grid(dims); }
 inline Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz, glm::dvec3 origin = glm::dvec3(0.0)) {
   return make_grid({nx, ny, nz}, origin);
 }
+// `resolution` voxels along the mesh's longest axis, `padding` more around.
+inline Grid grid_for(const Mesh& mesh, std::int64_t resolution, std::int64_t padding) {
+  GridRequest r;
+  r.resolution = resolution;
+  r.padding = padding;
+  return resolve_grid(r, bounds(mesh));
+}
 // Icosahedron subdivided `level` times, projected on a sphere (20 * 4^level triangles).
 Mesh make_icosphere(glm::dvec3 center, double radius, int level);
 // Torus around z: major radius R, minor radius r, with nu x nv quads.

@@ -2,12 +2,13 @@
 """Every code block of README.md, run as a reader would against a real
 `voxd serve` on a loopback ephemeral port.
 
-check_readme.py REPO VOXD_BINARY SHARED_MESHES
+check_readme.py REPO VOXD_BINARY TEST_PARTS
 
 - ```json blocks are job parameters: valid under job-params.schema.json and
   accepted by `voxd voxelize`.
 - ```sh blocks run line by line in a scratch folder where part.stl is a real
-  mesh (the shared M3 screw), part.drc its Draco encoding, job.json a job
+  mesh (the screw the build writes, tests/support/test_parts.h), part.drc its
+  Draco encoding, job.json a job
   and parts/ a folder of meshes; `voxd` is the built binary,
   http://127.0.0.1:8080 the test's server, and ID the id of the job the
   last submission answered (the test waits for it to end, as a reader
@@ -31,7 +32,7 @@ import urllib.request
 
 import jsonschema
 
-repo, voxd, shared = (os.path.abspath(a) for a in sys.argv[1:4])
+repo, voxd, parts = (os.path.abspath(a) for a in sys.argv[1:4])
 README = os.path.join(repo, "README.md")
 SKIPPED = {
     "./scripts/start.sh": "builds and starts the service on port 8080: what CI's own build and these tests start",
@@ -122,13 +123,13 @@ def main():
     os.symlink(os.path.abspath(voxd), os.path.join(bin_dir, "voxd"))
     scratch = os.path.join(work, "scratch")
     os.mkdir(scratch)
-    shutil.copy(os.path.join(shared, "M3x10_screw.stl"), os.path.join(scratch, "part.stl"))
+    shutil.copy(os.path.join(parts, "screw.stl"), os.path.join(scratch, "part.stl"))
     subprocess.run(["draco_encoder", "-i", "part.stl", "-o", "part.drc"], cwd=scratch, check=True, capture_output=True)
     with open(os.path.join(scratch, "job.json"), "w") as f:
         json.dump({"grid": {"resolution": 64, "padding": 1}}, f)
     os.mkdir(os.path.join(scratch, "parts"))
-    for name in ("M3_hex_nut.stl", "M3x10_screw.stl"):
-        shutil.copy(os.path.join(shared, name), os.path.join(scratch, "parts", name))
+    for name in ("hex_nut.stl", "screw.stl"):
+        shutil.copy(os.path.join(parts, name), os.path.join(scratch, "parts", name))
     server, base = start_server(os.path.join(work, "data"))
     env = dict(os.environ, PATH=bin_dir + os.pathsep + os.environ["PATH"])
     env.pop("VOXD_SERVER", None)

@@ -9,7 +9,7 @@ import sys
 import tempfile
 import unittest
 
-from voxd_server import SHARED_MESHES, VOXD, VoxdServer, box_stl
+from voxd_server import TEST_PARTS, VOXD, VoxdServer, box_stl
 
 EXAMPLE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples", "batch_thickness.py")
 
@@ -33,17 +33,17 @@ class BatchThicknessExample(unittest.TestCase):
             return r, {row["part"]: row for row in csv.DictReader(f)}
 
     def test_a_row_per_part_with_volume_mass_walls_and_verdict(self):
-        # A slab 2 thick (volume 8 x 6 x 2 = 96), the shared hex nut, and a broken file.
+        # A slab 2 thick (volume 8 x 6 x 2 = 96), a thin hex nut, and a broken file.
         with open(os.path.join(self.parts, "slab.stl"), "wb") as f:
             f.write(box_stl((0, 0, 0), (8, 6, 2)))
-        shutil.copy(os.path.join(SHARED_MESHES, "M3_hex_nut.stl"), self.parts)
+        shutil.copy(os.path.join(TEST_PARTS, "hex_nut.stl"), self.parts)
         with open(os.path.join(self.parts, "broken.stl"), "w") as f:
             f.write("solid broken\n")
         with open(os.path.join(self.parts, "notes.txt"), "w") as f:
             f.write("not a mesh\n")
         r, rows = self.run_example("--voxel-size", "0.25", "--min-wall", "2.5", "--density", "0.5")
         self.assertEqual(r.returncode, 1, r.stderr)  # the slab fails its check
-        self.assertEqual(sorted(rows), ["M3_hex_nut.stl", "broken.stl", "slab.stl"])
+        self.assertEqual(sorted(rows), ["hex_nut.stl", "broken.stl", "slab.stl"])
 
         slab = rows["slab.stl"]
         self.assertEqual(slab["volume_source"], "mesh")
@@ -58,11 +58,11 @@ class BatchThicknessExample(unittest.TestCase):
         self.assertEqual(float(slab["thinnest_region_wall"]), 2.0)
 
         # The nut's volume is its mesh's, as `voxd inspect` computes it.
-        inspect = subprocess.run([VOXD, "inspect", os.path.join(SHARED_MESHES, "M3_hex_nut.stl")],
+        inspect = subprocess.run([VOXD, "inspect", os.path.join(TEST_PARTS, "hex_nut.stl")],
                                  capture_output=True, text=True)
 
-        self.assertAlmostEqual(float(rows["M3_hex_nut.stl"]["volume"]), json.loads(inspect.stdout)["volume"], places=9)
-        self.assertEqual(rows["M3_hex_nut.stl"]["verdict"], "fail")  # 1.8 thick, under 2.5
+        self.assertAlmostEqual(float(rows["hex_nut.stl"]["volume"]), json.loads(inspect.stdout)["volume"], places=9)
+        self.assertEqual(rows["hex_nut.stl"]["verdict"], "fail")  # 1.2 thick, under 2.5
 
         broken = rows["broken.stl"]
         self.assertEqual(broken["verdict"], "error")

@@ -13,7 +13,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from voxd_client import (Busy, InvalidMesh, InvalidParams, InvalidQuery, JobCancelled, JobFailed, NotFinished,  # noqa: E402
                          NotFound, TransportError, VoxdClient, WaitTimeout)
 from voxd_client.events import read_events  # noqa: E402
-from voxd_server import SHARED_MESHES, VOXD, VoxdServer, box_stl  # noqa: E402
+from voxd_server import TEST_PARTS, VOXD, VoxdServer, box_stl  # noqa: E402
 
 BOX = box_stl((0, 0, 0), (4, 3, 2))  # volume 24
 
@@ -38,7 +38,7 @@ class ClientAgainstVoxd(unittest.TestCase):
             return f.read()
 
     def test_run_from_a_path_and_fetch_the_volume_the_cli_writes(self):
-        mesh = os.path.join(SHARED_MESHES, "torus.stl")
+        mesh = os.path.join(TEST_PARTS, "torus.stl")
         params = {"grid": {"resolution": 40, "padding": 1}}
         progress = []
         job = self.client.run(mesh, params, on_progress=progress.append)
@@ -156,7 +156,7 @@ class JobsThatDoNotSucceed(unittest.TestCase):
         self.fail(f"job {job['id']} never ran")
 
     def test_a_cancelled_job_raises_job_cancelled_and_the_queue_goes_on(self):
-        big = self.client.submit(os.path.join(SHARED_MESHES, "M3x10_screw.stl"), BIG_JOB)
+        big = self.client.submit(os.path.join(TEST_PARTS, "screw.stl"), BIG_JOB)
         self.running(big)
         queued = self.client.submit(BOX, {"grid": {"resolution": 9}}, filename="box.stl")
         self.assertEqual(self.client.job(queued)["state"], "queued")
@@ -175,7 +175,7 @@ class JobsThatDoNotSucceed(unittest.TestCase):
         self.assertEqual(self.client.wait(queued)["state"], "succeeded")
 
     def test_a_job_interrupted_by_a_restart_raises_job_failed_with_its_problem(self):
-        big = self.client.submit(os.path.join(SHARED_MESHES, "M3x10_screw.stl"), BIG_JOB)
+        big = self.client.submit(os.path.join(TEST_PARTS, "screw.stl"), BIG_JOB)
         self.running(big)
         self.server.stop(kill=True, keep_data=True)
         self.server = VoxdServer(workers=1, data_dir=self.server.data_dir)

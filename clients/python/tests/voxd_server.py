@@ -10,7 +10,8 @@ import threading
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 VOXD = os.environ.get("VOXD_BINARY", os.path.join(REPO, "build", "server", "voxd"))
-SHARED_MESHES = os.environ.get("VOXD_SHARED_MESHES", os.path.join(REPO, "..", "shared", "meshes"))
+# The CAD-like parts the build writes (tests/support/test_parts.h).
+TEST_PARTS = os.environ.get("VOXD_TEST_PARTS", os.path.join(REPO, "build", "test-parts"))
 
 
 class VoxdServer:
