@@ -14,6 +14,15 @@ if [[ -e "$work/prefix/include/voxd/detail" ]]; then
   echo "FAIL: voxd/detail/ was installed" >&2
   exit 1
 fi
+# The package names its license, and its text comes with it.
+if ! grep -q 'set(voxd_LICENSE "Apache-2.0")' "$(find "$work/prefix" -name voxdConfig.cmake)"; then
+  echo "FAIL: voxdConfig.cmake does not name the license" >&2
+  exit 1
+fi
+if ! cmp -s "$source/../../../LICENSE" "$work/prefix/share/doc/voxd/LICENSE"; then
+  echo "FAIL: the LICENSE was not installed as share/doc/voxd/LICENSE" >&2
+  exit 1
+fi
 cmake -S "$source" -B "$work/build" -DCMAKE_PREFIX_PATH="$work/prefix" \
   -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" > "$work/configure.log"
 cmake --build "$work/build" > "$work/build.log"

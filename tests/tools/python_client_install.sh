@@ -17,5 +17,7 @@ import sys
 import voxd_client
 assert voxd_client.__file__.startswith(sys.argv[1]), voxd_client.__file__
 assert voxd_client.VoxdClient("http://127.0.0.1:1").server == "http://127.0.0.1:1"
+from importlib.metadata import metadata
+assert metadata("voxd-client")["License"] == "Apache-2.0", metadata("voxd-client")["License"]
 print("installed voxd_client", voxd_client.__version__, "at", voxd_client.__file__)
 PY
