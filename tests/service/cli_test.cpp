@@ -377,11 +377,13 @@ TEST_F(CliTest, ClosedPartsVoxelizeToTheirMeshVolume) {
     const double filled = s.at("filled_volume").get<double>();
     const double h = s.at("grid").at("voxel_size").get<double>();
     // Centre sampling can only err in voxels the surface cuts: half a voxel
-    // of the surface's area at most (the disk is 0.2 mm thick: ~2 voxels).
+    // of the surface's area at most. Within 2% where the part is 40 voxels
+    // thick or more (not the 0.2 mm disk, nor the 1.2 mm nut: 30 voxels, one
+    // layer more is 3%).
     EXPECT_LE(std::abs(filled - volume), 0.5 * area * h) << name;
-    if (std::string(name) != "disk.stl") {
-      EXPECT_NEAR(filled / volume, 1.0, 0.02) << name;
-    }
+    const double wall = test::part_named(name).thinnest_wall;  // 0: the blob, thick throughout
+    if (wall > 0 && wall < 40 * h) continue;
+    EXPECT_NEAR(filled / volume, 1.0, 0.02) << name;
   }
 }
 

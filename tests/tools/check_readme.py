@@ -128,7 +128,9 @@ def main():
     with open(os.path.join(scratch, "job.json"), "w") as f:
         json.dump({"grid": {"resolution": 64, "padding": 1}}, f)
     os.mkdir(os.path.join(scratch, "parts"))
-    for name in ("hex_nut.stl", "screw.stl"):
+    # Parts the README's batch example passes (walls 1.2 and 5.66 mm, within
+    # its --min-wall 0.8 --max-wall 6).
+    for name in ("hex_nut.stl", "torus.stl"):
         shutil.copy(os.path.join(parts, name), os.path.join(scratch, "parts", name))
     server, base = start_server(os.path.join(work, "data"))
     env = dict(os.environ, PATH=bin_dir + os.pathsep + os.environ["PATH"])

@@ -43,7 +43,7 @@ class BatchThicknessExample(unittest.TestCase):
             f.write("not a mesh\n")
         r, rows = self.run_example("--voxel-size", "0.25", "--min-wall", "2.5", "--density", "0.5")
         self.assertEqual(r.returncode, 1, r.stderr)  # the slab fails its check
-        self.assertEqual(sorted(rows), ["hex_nut.stl", "broken.stl", "slab.stl"])
+        self.assertEqual(sorted(rows), ["broken.stl", "hex_nut.stl", "slab.stl"])
 
         slab = rows["slab.stl"]
         self.assertEqual(slab["volume_source"], "mesh")
