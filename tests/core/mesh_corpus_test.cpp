@@ -121,7 +121,7 @@ const std::map<std::string, Expected>& corpus() {
 // PLY files of invalid/.
 std::vector<std::string> corpus_files() {
   std::vector<std::string> files;
-  const std::filesystem::path root = std::filesystem::path(test::assimp_model("STL")).parent_path();
+  const std::filesystem::path root = test::assimp_model(".");
   for (const char* folder : {"STL", "OBJ", "PLY", "invalid"}) {
     for (const auto& entry : std::filesystem::directory_iterator(root / folder)) {
       if (!entry.is_regular_file()) continue;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
@@ -220,20 +221,32 @@ Part make_blob(int level) {
   return part;
 }
 
+namespace {
+
+// Each part's file name and its maker (defaults for every argument).
+const std::vector<std::pair<std::string, Part (*)()>>& part_makers() {
+  static const std::vector<std::pair<std::string, Part (*)()>> makers = {
+      {"hex_nut.stl", [] { return make_hex_nut(); }},
+      {"screw.stl", [] { return make_screw(); }},
+      {"flanged_bushing.stl", [] { return make_flanged_bushing(); }},
+      {"disk.stl", [] { return make_disk(); }},
+      {"torus.stl", make_torus_part},
+      {"blob.stl", [] { return make_blob(); }},
+  };
+  return makers;
+}
+
+}  // namespace
+
 std::vector<Part> all_parts() {
   std::vector<Part> parts;
-  parts.push_back(make_hex_nut());
-  parts.push_back(make_screw());
-  parts.push_back(make_flanged_bushing());
-  parts.push_back(make_disk());
-  parts.push_back(make_torus_part());
-  parts.push_back(make_blob());
+  for (const auto& [name, make] : part_makers()) parts.push_back(make());
   return parts;
 }
 
 Part part_named(const std::string& name) {
-  for (Part& p : all_parts())
-    if (p.name == name) return std::move(p);
+  for (const auto& [file, make] : part_makers())
+    if (file == name) return make();
   throw std::invalid_argument("no test part named " + name);
 }
 

@@ -1,12 +1,8 @@
-// Writes every part of test_parts.h as binary STL into a folder, with a
-// parts.json of what each measures in closed form: the files the tests hand
-// to the CLI, the service, the Python client and the fuzzers.
+// Writes every part of test_parts.h as binary STL into a folder: the files
+// the tests hand to the CLI, the service, the Python client and the fuzzers.
 //   write_test_parts DIR
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-
-#include <nlohmann/json.hpp>
 
 #include "support/test_meshes.h"
 #include "support/test_parts.h"
@@ -18,13 +14,8 @@ int main(int argc, char** argv) {
   }
   const std::filesystem::path dir = argv[1];
   std::filesystem::create_directories(dir);
-  nlohmann::json index = nlohmann::json::object();
   for (const voxd::test::Part& part : voxd::test::all_parts()) {
     voxd::test::write_file((dir / part.name).string(), voxd::test::to_binary_stl(part.mesh, "voxd test part " + part.name));
-    index[part.name] = {{"triangles", part.mesh.triangles.size()}, {"volume", part.volume},
-                        {"surface_area", part.surface_area}, {"thinnest_wall", part.thinnest_wall},
-                        {"largest_ball", part.largest_ball}, {"genus", part.genus}};
   }
-  std::ofstream(dir / "parts.json") << index.dump(2) << '\n';
   return 0;
 }
