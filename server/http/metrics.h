@@ -9,7 +9,7 @@
 #include <tuple>
 #include <vector>
 
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 
 namespace voxd::server {
 

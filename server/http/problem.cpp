@@ -5,7 +5,8 @@
 
 #include "api/error_table.h"
 #include "api/param_error.h"
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
+#include "server/jobs/memory_budget.h"
 #include "server/jobs/job_store.h"
 #include "server/log_safe.h"
 #include "voxd/error.h"

@@ -8,7 +8,7 @@
 #include <httplib.h>
 
 #include "api/job_params.h"
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 #include "server/mapped_file.h"
 #include "voxd/encode/volume_format.h"
 

@@ -9,6 +9,7 @@
 #include "server/http/server_config.h"
 #include "server/http/submission.h"
 #include "server/http/volume_request.h"
+#include "server/jobs/job_manager.h"
 
 namespace voxd::server {
 namespace {

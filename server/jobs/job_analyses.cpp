@@ -1,4 +1,5 @@
 #include "server/jobs/job_analyses.h"
+#include "server/jobs/job_manager.h"
 #include "server/jobs/job_store.h"
 
 #include <climits>

@@ -12,12 +12,14 @@
 #include <vector>
 
 #include "api/analysis_request.h"
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 #include "voxd/bit_volume.h"
 #include "voxd/dense_volume.h"
 #include "voxd/progress.h"
 
 namespace voxd::server {
+
+class JobManager;  // server/jobs/job_manager.h
 
 // Where a job's kept results live (the job store's artifacts folder).
 // `scope` names the job: requests for the same key of the same scope are

@@ -10,7 +10,7 @@
 #include <functional>
 #include <mutex>
 
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 
 namespace voxd::server {
 

@@ -18,86 +18,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "voxd/analysis/mass_properties.h"
-
-#include "api/job_params.h"
-#include "server/job_pipeline.h"
-#include "server/mapped_file.h"
+#include "server/jobs/job.h"
 #include "server/jobs/memory_budget.h"
-#include "voxd/bit_volume.h"
-#include "voxd/encode/volume_format.h"
-#include "voxd/enum_names.h"
 
 namespace voxd::server {
-
-enum class JobState { queued, running, succeeded, failed, cancelled };
-inline constexpr EnumNames<JobState, 5> kJobStateNames{{
-    {JobState::queued, "queued"}, {JobState::running, "running"}, {JobState::succeeded, "succeeded"},
-    {JobState::failed, "failed"}, {JobState::cancelled, "cancelled"}}};
-inline const char* to_string(JobState state) noexcept { return name_of(kJobStateNames, state); }
-// Succeeded, failed or cancelled: the state will not change again.
-inline bool finished(JobState s) { return s == JobState::succeeded || s == JobState::failed || s == JobState::cancelled; }
-
-// Why a job failed, in the terms of an RFC 9457 problem ("type" is a short
-// slug such as "interrupted", "invalid-mesh", "limit-exceeded", "internal").
-struct JobFailure {
-  std::string type;
-  std::string title;
-  std::string detail;
-};
-
-// A consistent copy of one job, safe to use after the job table changes.
-struct JobSnapshot {
-  std::string id;  // 32 lowercase hex characters, random
-  JobState state = JobState::queued;
-  double progress = 0.0;  // 0..1, never going back while the job runs
-  // What a running job is doing now ("mesh report", "voxelize" or the mode's
-  // stage, "store", "analysis: radiography"); empty otherwise.
-  std::string stage;
-  std::string created_at, started_at, finished_at;  // RFC 3339 UTC, empty until reached
-  nlohmann::json params;                            // the job JSON as submitted
-  // The job JSON parsed, once, when the job is accepted or its record read:
-  // its mode (params->mode) says what the job makes and serves.
-  std::shared_ptr<const api::JobParams> job;
-  std::string mesh_format;
-  std::uint64_t triangles = 0;
-  std::optional<MeshReport> mesh;  // set once the worker made it
-  std::optional<MassProperties> mesh_mass;  // exact, voxel frame; kept in the record, not in the status JSON
-  Grid grid;                       // resolved at submission
-  std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
-  std::optional<std::uint64_t> filled_voxels;           // when succeeded
-  std::optional<JobFailure> failure;                    // when failed
-  std::string content_hash;  // SHA-256 of mesh bytes + canonical params JSON (hex)
-  bool cached = false;       // answered from an identical earlier job's result
-  // The volume was made slab by slab and is kept only as its stored RLE:
-  // it is re-encoded and analysed slab by slab, never loaded whole past
-  // the per-job memory.
-  bool streamed = false;
-  // The job JSON's "analyses", one entry each: {"request", "url", "state",
-  // "error"}; state pending -> ready | failed, or on_request for a job
-  // answered from an earlier one's result (computed when first asked).
-  nlohmann::json analyses = nlohmann::json::array();
-  // A value job's values once succeeded: {"type": "u8"|"f32"|"rgba8",
-  // "quantity", "unit", ...} (VoxelJobResult::values_info); null otherwise.
-  // A mode that makes bits from its values (a threshold) gives no "type".
-  nlohmann::json values = nullptr;
-  // Whether the job's result is a volume of values rather than bits.
-  bool has_value_volume() const { return values.is_object() && values.contains("type"); }
-};
-
-// What a succeeded job produced: its binary volume (the result of a job of
-// bits, the solid of a value job) and, for a value job, its values, which are
-// then the job's result, and the layers its mode keeps beside them.
-struct JobOutput {
-  std::shared_ptr<const BitVolume> solid;
-  std::shared_ptr<const ValueVolume> values;
-  std::vector<std::pair<std::string, std::shared_ptr<const ValueVolume>>> layers;
-  // A streamed job's volume as stored (solid is then null): what streams is
-  // answered by replaying it slab by slab (voxd/encode/rle_slabs.h); and a
-  // streamed job's values as stored (values is then null).
-  std::shared_ptr<const MappedFile> rle;
-  std::shared_ptr<const MappedFile> values_rle;
-};
 
 class JobQueue;          // server/jobs/job_queue.h
 class JobStore;          // server/jobs/job_store.h
@@ -142,33 +66,6 @@ struct JobManagerConfig {
   // Called (from worker or submitting threads, never under the table's lock)
   // on every state change, for logs and metrics.
   std::function<void(const JobSnapshot&)> on_state_change;
-};
-
-// Submission refused because the queue is full: HTTP 429 with Retry-After.
-class QueueFull : public std::runtime_error {
- public:
-  QueueFull(const std::string& message, int retry_after_seconds)
-      : std::runtime_error(message), retry_after_seconds_(retry_after_seconds) {}
-  int retry_after_seconds() const { return retry_after_seconds_; }
-
- private:
-  int retry_after_seconds_;
-};
-
-// Submission refused because the service is shutting down: HTTP 503.
-class NotAccepting : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-// Embedded: every job the service keeps, by state. Shared: this replica's
-// jobs (queued by it and waiting here for nothing: 0; running here; and
-// finished by its workers since it started), the shared queue's depth and
-// the replicas alive.
-struct JobCounts {
-  std::uint64_t queued = 0, running = 0, succeeded = 0, failed = 0, cancelled = 0;
-  std::size_t queue_depth = 0;
-  std::optional<std::size_t> live_replicas;  // shared backends only
 };
 
 class JobManager {

@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 
 namespace voxd::server {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 #include "server/mapped_file.h"
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 
 namespace voxd::server {
 

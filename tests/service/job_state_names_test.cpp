@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "server/jobs/job_manager.h"
+#include "server/jobs/job.h"
 #include "server/jobs/job_record.h"
 
 namespace voxd::server {
