@@ -21,6 +21,7 @@
 #include "server/http/routes.h"
 #include "server/http/server_config.h"
 #include "server/jobs/job_manager.h"
+#include "server/jobs/replicated_backend.h"
 #include "server/redis/redis_job_queue.h"
 #include "server/redis/redis_job_store.h"
 #include "server/log_safe.h"
@@ -110,13 +111,15 @@ int serve_command(int argc, char** argv) {
     qo.consumer = replica;
     qo.capacity = config.queue_size;
     qo.lease = std::chrono::seconds(config.redis_lease);
-    jc.queue = std::make_shared<RedisJobQueue>(pool, qo);
-    jc.store = store;
-    jc.records = store;
-    jc.max_deliveries = config.max_deliveries;
+    ReplicatedBackendParts parts;
+    parts.queue = std::make_shared<RedisJobQueue>(pool, qo);
+    parts.store = store;
+    parts.records = store;
+    parts.max_deliveries = config.max_deliveries;
+    parts.slab_tasks = store;
+    parts.slab_task_bytes = config.slab_task_bytes;
+    jc.backend = replicated_backend(std::move(parts));
     jc.max_result_bytes = config.max_result_bytes;
-    jc.slab_tasks = store;
-    jc.slab_task_bytes = config.slab_task_bytes;
     log("shared backend: Redis at " + pool->url().redacted() + " as replica " + replica +
         (store->reachable() ? "" : " (not reachable yet: not ready until it is)"));
   }

@@ -92,6 +92,10 @@ struct JobOutput {
   std::shared_ptr<const MappedFile> values_rle;
 };
 
+// What removing a job did: cancelled one that waited or ran, deleted a
+// finished one with its results, or found none.
+enum class RemoveResult { cancelled, deleted, not_found };
+
 // Submission refused because the queue is full: HTTP 429 with Retry-After.
 class QueueFull : public std::runtime_error {
  public:

@@ -19,34 +19,18 @@
 #include <nlohmann/json.hpp>
 
 #include "server/jobs/job.h"
+#include "server/jobs/job_backend.h"
 #include "server/jobs/memory_budget.h"
 
 namespace voxd::server {
 
-class JobQueue;          // server/jobs/job_queue.h
-class JobStore;          // server/jobs/job_store.h
-class SharedJobRecords;  // server/jobs/shared_records.h
-class SharedSlabTasks;  // server/jobs/slab_tasks.h
-
 struct JobManagerConfig {
-  // Where jobs wait and where they are kept: null = the embedded ones (an
-  // in-process queue of queue_size, the data directory). Replicas sharing one
-  // backend pass theirs.
-  std::shared_ptr<JobQueue> queue;
-  std::shared_ptr<JobStore> store;
-  // Set when replicas share one backend (server/redis/): the job records are
-  // there, not in this process; queue and store are then the backend's.
-  // Synchronous jobs (run_sync) still run in this process only.
-  std::shared_ptr<SharedJobRecords> records;
-  // Set (with records) when the backend keeps a huge job's slab tasks
-  // (server/jobs/slab_tasks.h): a streamed job of bits whose grid holds more
-  // than slab_task_bytes of bits is split into tasks of about that many, so
-  // that every replica's workers make it together. 0 = never split.
-  std::shared_ptr<SharedSlabTasks> slab_tasks;
-  std::uint64_t slab_task_bytes = std::uint64_t{1} << 30;
-  // A shared job handed out this many times without finishing (its workers'
-  // replicas died on it) fails with "redelivery-limit" instead of looping.
-  int max_deliveries = 3;
+  // The service's backend: where its jobs wait, are kept and end
+  // (server/jobs/job_backend.h). Null: the embedded one (an in-process
+  // queue of queue_size, the data directory); replicas sharing one Redis
+  // pass replicated_backend(...) (server/jobs/replicated_backend.h).
+  // Synchronous jobs (run_sync) always run in this process, stored nowhere.
+  JobBackendFactory backend;
   // Jobs whose volumes (uncompressed) would be over this many bytes are
   // refused at admission (422); 0 = no cap. For a backend that keeps results
   // in memory (Redis), so that one job cannot fill it.
@@ -99,7 +83,7 @@ class JobManager {
   // Newest first. `total` receives the number of jobs.
   std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const;
 
-  enum class RemoveResult { cancelled, deleted, not_found };
+  using RemoveResult = server::RemoveResult;
   // Queued or running: cancel (a running voxelization stops within ~50 ms and
   // the job ends cancelled). Finished: delete the job and its files.
   RemoveResult cancel_or_delete(const std::string& id);
