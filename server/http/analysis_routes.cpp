@@ -11,6 +11,8 @@
 #include "server/http/job_lookup.h"
 #include "server/http/problem.h"
 #include "server/http/route_table.h"
+#include "server/http/analysis_headers.h"
+#include "server/http/job_status.h"
 #include "server/jobs/job_analyses.h"
 #include "server/jobs/job_manager.h"
 #include "voxd/error.h"
@@ -65,9 +67,8 @@ std::optional<KeptAnalysis> ready_while_running(JobManager& jobs, const std::str
                                                 const api::AnalysisRequest& request) {
   const auto job = jobs.get(id);
   if (!job || job->state != JobState::running || !job->analyses.is_array()) return std::nullopt;
-  const std::string url = analysis_url(request, id);
   for (const auto& entry : job->analyses) {
-    if (entry.value("url", "") != url || entry.value("state", "") != "ready") continue;
+    if (api::to_json(request) != entry.value("request", nlohmann::json()) || entry.value("state", "") != "ready") continue;
     if (auto bytes = jobs.load_artifact(id, request.artifact_key())) return KeptAnalysis{job->grid, std::move(*bytes)};
   }
   return std::nullopt;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "server/http/job_status.h"
 #include "server/jobs/job_record.h"
 
 namespace voxd::server {
@@ -34,9 +35,9 @@ std::string JobEventStream::start(const JobSnapshot& now) {
       analysis_sent_.push_back(state == "ready" || state == "failed");
     }
   // How long a client's EventSource waits before it reconnects.
-  std::string out = "retry: 1000\n\n" + event("job", to_json(now));
+  std::string out = "retry: 1000\n\n" + event("job", job_status_json(now));
   if (finished(now.state)) {
-    out += event("end", to_json(now));
+    out += event("end", job_status_json(now));
     ended_ = true;
   }
   return out;
@@ -68,13 +69,13 @@ std::string JobEventStream::update(const JobSnapshot& now) {
       const std::string state = entry.value("state", "");
       if (analysis_sent_[i] || (state != "ready" && state != "failed")) continue;
       analysis_sent_[i] = true;
-      json data = entry;
+      json data = analysis_status_entry(entry, now.id);
       data["index"] = i;
       out += event("analysis", data);
     }
   }
   if (finished(now.state)) {
-    out += event("end", to_json(now));
+    out += event("end", job_status_json(now));
     state_ = now.state;
     ended_ = true;
   }

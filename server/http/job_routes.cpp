@@ -10,6 +10,7 @@
 #include "server/http/server_config.h"
 #include "server/http/submission.h"
 #include "server/http/volume_request.h"
+#include "server/http/job_status.h"
 #include "server/jobs/job_record.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/encode/slab_writer.h"
@@ -39,14 +40,14 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
     Submission s = read_submission(req, reader, metrics, config.max_upload_bytes, params_limits);
     const JobSnapshot job = jobs.submit(std::move(s.mesh), s.filename, s.params);
     res.set_header("Location", "/v1/jobs/" + job.id);
-    send_json(res, 202, to_json(job));
+    send_json(res, 202, job_status_json(job));
   });
   routes.get("/v1/jobs", [&](const Request& req, Response& res) {
     const std::size_t offset = query_size(req, "offset", 0, 0, std::size_t{1} << 40);
     const std::size_t limit = query_size(req, "limit", 20, 1, 100);
     std::size_t total = 0;
     json list = json::array();
-    for (const auto& job : jobs.list(offset, limit, &total)) list.push_back(to_json(job));
+    for (const auto& job : jobs.list(offset, limit, &total)) list.push_back(job_status_json(job));
     const bool more = offset + limit < total;
     send_json(res, 200, {{"jobs", list}, {"total", total}, {"offset", offset}, {"limit", limit},
                          {"next", more ? json("/v1/jobs?offset=" + std::to_string(offset + limit) + "&limit=" + std::to_string(limit)) : json(nullptr)}});
@@ -55,7 +56,7 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
   routes.get(kJobPath, [&](const Request& req, Response& res) {
     const auto job = jobs.get(req.matches[1]);
     if (!job) throw unknown_job(req.matches[1]);
-    send_json(res, 200, to_json(*job));
+    send_json(res, 200, job_status_json(*job));
   });
   routes.del(kJobPath, [&](const Request& req, Response& res) {
     const std::string id = req.matches[1];
@@ -64,7 +65,7 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
       case JobManager::RemoveResult::deleted: res.status = 204; return;
       case JobManager::RemoveResult::cancelled: {
         const auto job = jobs.get(id);
-        send_json(res, 202, job ? to_json(*job) : json{{"id", id}, {"state", "cancelled"}});
+        send_json(res, 202, job ? job_status_json(*job) : json{{"id", id}, {"state", "cancelled"}});
         return;
       }
     }

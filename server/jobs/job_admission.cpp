@@ -63,7 +63,7 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
       s.job = parsed;
       s.cached = true;
       s.timings.clear();
-      s.analyses = analyses_status(params.analyses, s.id, "on_request");
+      s.analyses = analyses_status(params.analyses, "on_request");
       try {
         store->share_volume(original->id, s.id);
         store->save(s);
@@ -120,7 +120,7 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
   s.streamed = prepared.streamed;
   s.timings = prepared.timings.stages;
   s.content_hash = hash;
-  s.analyses = analyses_status(params.analyses, s.id, "pending");
+  s.analyses = analyses_status(params.analyses, "pending");
   backend.accept(JobBackend::Admitted{job, std::move(prepared), mesh_bytes, name_hint, decoding, memory});
   return job;
 }

@@ -66,9 +66,6 @@ std::shared_ptr<std::mutex> key_lock(const ArtifactAccess& artifacts, const std:
 
 std::string to_bytes(const std::vector<std::uint8_t>& v) { return std::string(v.begin(), v.end()); }
 
-PngScale radiography_scale(const AnalysisRequest& r, const Grid& g) {
-  return r.unit == "model" ? PngScale{g.voxel_size, "model units"} : PngScale{1.0, "voxel"};
-}
 
 std::string analysis_json(const AnalysisRequest& r, const JobSnapshot& job, const BitVolume& volume,
                           const ArtifactAccess& artifacts, JobControl* control) {
@@ -252,6 +249,10 @@ std::string thickness_volume(const AnalysisRequest& r, const BitVolume& volume, 
 }
 
 }  // namespace
+
+PngScale radiography_scale(const AnalysisRequest& r, const Grid& g) {
+  return r.unit == "model" ? PngScale{g.voxel_size, "model units"} : PngScale{1.0, "voxel"};
+}
 
 bool streams_over_slabs(const AnalysisRequest& r) {
   switch (r.kind) {
@@ -472,41 +473,12 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
   return {std::move(bytes), false};
 }
 
-std::vector<std::pair<std::string, std::string>> analysis_headers(const AnalysisRequest& r, const Grid& grid) {
-  auto scale = [](double per_value, const std::string& unit) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.17g", per_value);
-    return std::string("1 pixel value = ") + buf + " " + unit;
-  };
-  switch (r.kind) {
-    case AnalysisKind::radiography: {
-      const PngScale s = radiography_scale(r, grid);
-      return {{"X-Voxd-Scale", scale(s.per_value, s.unit)}};
-    }
-    case AnalysisKind::thickness: {
-      char dims[96];
-      std::snprintf(dims, sizeof dims, "%lld %lld %lld", static_cast<long long>(grid.dims.x),
-                    static_cast<long long>(grid.dims.y), static_cast<long long>(grid.dims.z));
-      char origin[128];
-      std::snprintf(origin, sizeof origin, "%.17g %.17g %.17g", grid.origin.x, grid.origin.y, grid.origin.z);
-      char size[40];
-      std::snprintf(size, sizeof size, "%.17g", grid.voxel_size);
-      return {{"X-Voxd-Dims", dims}, {"X-Voxd-Origin", origin}, {"X-Voxd-Voxel-Size", size},
-              {"X-Voxd-Unit", r.unit == "model" ? "model units" : "voxels"}};
-    }
-    default: return {};
-  }
-}
-
-nlohmann::json analyses_status(const std::vector<AnalysisRequest>& requests, const std::string& id, const char* state) {
+nlohmann::json analyses_status(const std::vector<AnalysisRequest>& requests, const char* state) {
   json out = json::array();
   for (const AnalysisRequest& r : requests)
-    out.push_back({{"request", api::to_json(r)}, {"url", analysis_url(r, id)}, {"state", state}, {"error", nullptr}});
+    out.push_back({{"request", api::to_json(r)}, {"state", state}, {"error", nullptr}});
   return out;
 }
 
-std::string analysis_url(const AnalysisRequest& r, const std::string& id) {
-  return "/v1/jobs/" + id + "/" + to_string(r.kind) + "?" + r.query();
-}
 
 }  // namespace voxd::server

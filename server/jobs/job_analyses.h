@@ -13,6 +13,7 @@
 
 #include "api/analysis_request.h"
 #include "server/jobs/job.h"
+#include "voxd/analysis/analysis_images.h"
 #include "voxd/bit_volume.h"
 #include "voxd/dense_volume.h"
 #include "voxd/progress.h"
@@ -88,14 +89,12 @@ std::string whole_grid_refusal(const api::AnalysisRequest& request, const Grid& 
 std::uint64_t analysis_memory_on_job(const api::AnalysisRequest& request, const Grid& grid, bool streamed_job,
                                      std::uint64_t max_job_memory);
 
-// Extra response headers of a request (X-Voxd-Scale for images and volumes).
-std::vector<std::pair<std::string, std::string>> analysis_headers(const api::AnalysisRequest& request, const Grid& grid);
+// What one pixel value of a radiograph asked for by `request` means.
+PngScale radiography_scale(const api::AnalysisRequest& request, const Grid& grid);
 
-// The URL of a request's route for job `id`, canonical query included.
-std::string analysis_url(const api::AnalysisRequest& request, const std::string& id);
-
-// The status entries of a job's requested analyses, all in `state`.
-nlohmann::json analyses_status(const std::vector<api::AnalysisRequest>& requests, const std::string& id, const char* state);
+// The status entries of a job's requested analyses, all in `state`:
+// {"request", "state", "error"} (the service adds each one's "url").
+nlohmann::json analyses_status(const std::vector<api::AnalysisRequest>& requests, const char* state);
 
 // The artifact key a job's thickness map of `measure` is kept under.
 const char* thickness_map_key(api::ThicknessMeasure measure);

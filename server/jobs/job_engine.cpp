@@ -105,7 +105,7 @@ void JobEngine::cache_put(const std::string& id, const JobOutput& output) {
 
 nlohmann::json JobEngine::prepare_analyses(Job& job, JobStore& store, const std::vector<api::AnalysisRequest>& requests,
                                            const VoxelJobResult& r, const JobOutput& output) {
-  nlohmann::json status = analyses_status(requests, job.snap.id, "pending");
+  nlohmann::json status = analyses_status(requests, "pending");
   if (requests.empty()) return status;
   JobSnapshot view;
   {

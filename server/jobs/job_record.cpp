@@ -46,12 +46,6 @@ Grid grid_from_json(const json& j) {
   return g;
 }
 
-int failure_status(const std::string& type) {
-  if (type == "interrupted") return 503;
-  if (type == "internal") return 500;
-  if (type == "storage-full") return 507;
-  return 422;
-}
 
 }  // namespace
 
@@ -82,18 +76,7 @@ std::optional<JobState> job_state_from_string(const std::string& name) {
   return value_named(kJobStateNames, name);
 }
 
-// The formats a succeeded job's volume is offered in (those
-// GET /v1/jobs/{id}/volume does not refuse for its mode and value type), by
-// name, each with its URL.
-json downloads(const JobSnapshot& job) {
-  json out = json::object();
-  if (job.state != JobState::succeeded || !job.job) return out;
-  for (const auto& [format, name] : kVolumeFormatNames)
-    if (!job.job->format_refusal(format)) out[name] = "/v1/jobs/" + job.id + "/volume?format=" + name;
-  return out;
-}
-
-json to_json(const JobSnapshot& job) {
+json record_json(const JobSnapshot& job) {
   json out = {
       {"id", job.id},
       {"state", to_string(job.state)},
@@ -110,8 +93,6 @@ json to_json(const JobSnapshot& job) {
       {"cached", job.cached},
       {"streamed", job.streamed},
       {"content_hash", job.content_hash},
-      {"links", {{"self", "/v1/jobs/" + job.id}, {"volume", "/v1/jobs/" + job.id + "/volume"},
-                 {"events", "/v1/jobs/" + job.id + "/events"}, {"downloads", downloads(job)}}},
   };
   json timings = json::object();
   for (const auto& [stage, seconds] : job.timings) timings[stage] = seconds;
@@ -128,7 +109,6 @@ json to_json(const JobSnapshot& job) {
   if (job.failure) {
     out["error"] = {{"type", "urn:voxd:problem:" + job.failure->type},
                     {"title", job.failure->title},
-                    {"status", failure_status(job.failure->type)},
                     {"detail", job.failure->detail}};
   } else {
     out["error"] = nullptr;
@@ -181,7 +161,7 @@ JobSnapshot job_from_json(const json& r) {
 }
 
 nlohmann::json stored_record(const JobSnapshot& job) {
-  nlohmann::json record = to_json(job);
+  nlohmann::json record = record_json(job);
   if (job.mesh_mass) record["mesh_mass"] = api::to_json(*job.mesh_mass);
   return record;
 }

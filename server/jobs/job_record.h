@@ -1,6 +1,7 @@
 #pragma once
-// JobSnapshot <-> JSON: the job record stored on disk and the status body the
-// API returns (proto-schemas/job-status.schema.json) are the same document.
+// JobSnapshot <-> JSON: the job's record, as stores keep it. The status body
+// the API returns (proto-schemas/job-status.schema.json) is this document
+// with the job's links and its failure's HTTP status (server/http/job_status.h).
 #include <chrono>
 #include <string>
 
@@ -10,7 +11,7 @@
 
 namespace voxd::server {
 
-nlohmann::json to_json(const JobSnapshot& job);
+nlohmann::json record_json(const JobSnapshot& job);
 // The record a store keeps: the status JSON plus what only the service
 // reads back (the mesh's exact mass properties).
 nlohmann::json stored_record(const JobSnapshot& job);
