@@ -227,7 +227,7 @@ std::vector<AnalysisRequest> parse_analyses(const json& analyses) {
     }
     std::optional<AnalysisKind> kind;
     if (!a.contains("kind") || !a.at("kind").is_string() || !(kind = value_named(kAnalysisKindNames, a.at("kind").get<std::string>()))) {
-      errors.push_back({path + "/kind", "must be one of analysis, radiography, section, preview, thickness"});
+      errors.push_back({path + "/kind", "must be one of " + names_joined(kAnalysisKindNames, ", ", ", ")});
       continue;
     }
     Fields fields;

@@ -84,6 +84,25 @@ void check_voxel_limit(const Grid& grid, std::uint64_t max_voxels, std::string_v
                   std::to_string(max_voxels) + "; use a lower resolution or a larger voxel_size" + std::string(hint));
 }
 
+ExecutionPlan plan_execution(const api::JobParams& params, const Grid& grid, const JobLimits& limits) {
+  const api::JobMode& mode = *params.mode;
+  ExecutionPlan plan;
+  plan.no_slabs = mode.streaming_refusal(params);
+  if (!plan.no_slabs) plan.no_slabs = limits.output.no_slabs;
+  if (params.streaming == api::Streaming::on) {
+    if (plan.no_slabs) throw Error(ErrorCode::invalid_argument, "\"streaming\": \"on\": " + *plan.no_slabs);
+    if (limits.stream_above_bytes == 0)
+      throw Error(ErrorCode::invalid_argument, "\"streaming\": \"on\" needs a stored result: submit the job to POST /v1/jobs");
+  }
+  plan.streamed = params.streaming == api::Streaming::on ||
+                  (params.streaming == api::Streaming::automatic && !plan.no_slabs && limits.stream_above_bytes > 0 &&
+                   (mode.faster_in_slabs(params) || estimate_job_memory(grid, params) > limits.stream_above_bytes));
+  const bool runs =
+      limits.output.takes_runs && mode.makes_runs(params) && (plan.streamed || !limits.output.keeps_volume);
+  plan.path = runs ? ExecutionPath::runs : plan.streamed ? ExecutionPath::slabs : ExecutionPath::memory;
+  return plan;
+}
+
 PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                    const api::JobParams& params, const JobLimits& limits) {
   PreparedVoxelJob job;
@@ -112,27 +131,21 @@ PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std
     box.max /= aspect;
   }
   job.grid = resolve_grid(params.grid, box);
-  // In memory or slab by slab: asked for, or from the memory it would take.
-  const std::optional<std::string> no_stream = params.mode->streaming_refusal(params);
-  const std::uint64_t in_memory = estimate_job_memory(job.grid, params);
-  if (params.streaming == api::Streaming::on) {
-    if (no_stream) throw Error(ErrorCode::invalid_argument, "\"streaming\": \"on\": " + *no_stream);
-    if (limits.stream_above_bytes == 0)
-      throw Error(ErrorCode::invalid_argument, "\"streaming\": \"on\" needs a stored result: submit the job to POST /v1/jobs");
-  }
-  job.streamed = params.streaming == api::Streaming::on ||
-                 (params.streaming == api::Streaming::automatic && !no_stream && limits.stream_above_bytes > 0 &&
-                  in_memory > limits.stream_above_bytes);
+  // In memory, slab by slab or as runs: asked for, or from the memory it
+  // would take.
+  const ExecutionPlan plan = plan_execution(params, job.grid, limits);
+  job.streamed = plan.streamed;
+  job.path = plan.path;
   if (job.streamed) {
     check_voxel_limit(job.grid, limits.max_streamed_voxels, "");
     job.slab_layers = streamed_job_slab_layers(job.grid, params, limits.stream_slab_bytes);
     job.memory_estimate = estimate_streamed_job_memory(job.grid, job.slab_layers, job.triangles,
                                                        params.mode->streamed_layer_bytes(job.grid, params));
   } else {
-    const bool could_stream = !no_stream && limits.stream_above_bytes > 0 && params.streaming == api::Streaming::off;
+    const bool could_stream = !plan.no_slabs && limits.stream_above_bytes > 0 && params.streaming == api::Streaming::off;
     check_voxel_limit(job.grid, limits.max_voxels,
                       could_stream ? " (or \"streaming\": \"auto\": slab by slab it needs the memory of one slab, not the grid's)" : "");
-    job.memory_estimate = in_memory;
+    job.memory_estimate = estimate_job_memory(job.grid, params);
   }
   job.timings.add("grid", clock.lap());
   return job;

@@ -21,6 +21,7 @@
 #include "voxd/progress.h"
 #include "voxd/run_slab.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/enum_names.h"
 #include "voxd/voxelize/streamed.h"
 
 namespace voxd {
@@ -28,8 +29,35 @@ namespace voxd {
 // Voxels per z-slab of a streamed job: about this many bytes of bits.
 inline constexpr std::uint64_t kStreamSlabBytes = std::uint64_t{128} << 20;
 
+// Where a job's volume goes, as far as how the job runs is concerned
+// (plan_execution). The defaults are the service's stored result: an RLE
+// that takes slabs and runs, the volume kept whole when made in memory (it
+// is cached and analysed).
+struct JobOutputKind {
+  // Why the output cannot take the volume slab by slab (a format that needs
+  // the whole volume, a mode that writes the format itself); none when it can.
+  std::optional<std::string> no_slabs;
+  // An RLE of bits: a job whose mode makes runs is written from them.
+  bool takes_runs = true;
+  // The volume made in memory is kept whole (so runs only when streamed).
+  bool keeps_volume = true;
+};
+
+// How a job runs, decided in one place (plan_execution) for the CLI, the
+// service's workers and the slab tasks a replicated service splits a job
+// into (which make a range of layers of a job planned as runs).
+enum class ExecutionPath {
+  memory,  // whole in memory: execute_voxel_job
+  slabs,   // slab by slab to a consumer: execute_streamed_voxel_job
+  runs,    // its bits as runs, never a dense volume: execute_voxel_runs_job
+};
+inline constexpr EnumNames<ExecutionPath, 3> kExecutionPathNames{
+    {{ExecutionPath::memory, "memory"}, {ExecutionPath::slabs, "slabs"}, {ExecutionPath::runs, "runs"}}};
+inline const char* to_string(ExecutionPath path) noexcept { return name_of(kExecutionPathNames, path); }
+
 struct JobLimits {
   DecodeLimits decode;
+  JobOutputKind output;
   std::uint64_t max_voxels = std::uint64_t{1} << 33;  // a grid made whole in memory: 8 Gi voxels = 1 GiB of bits
   // A grid made slab by slab: memory does not bound it (one slab at a time),
   // so this bounds its time and disk; 2^40 voxels is past 10000^3.
@@ -64,6 +92,7 @@ struct PreparedVoxelJob {
   // Made slab by slab (execute_streamed_voxel_job), as decided from the
   // job's streaming and its memory; memory_estimate is then the streamed one.
   bool streamed = false;
+  ExecutionPath path = ExecutionPath::memory;  // how it runs (plan_execution)
   std::int64_t slab_layers = 0;  // z layers per slab when streamed
   std::uint64_t memory_estimate = 0;  // bytes at peak the way it runs, for admission control
   StageTimings timings;
@@ -118,7 +147,23 @@ std::uint64_t draco_child_memory(std::uint64_t bytes);
 // Bytes a decoded mesh holds.
 std::uint64_t mesh_memory(const Mesh& mesh);
 
-// Decode, rotate/orient, resolve the grid, check limits. Throws voxd::Error.
+struct ExecutionPlan {
+  ExecutionPath path = ExecutionPath::memory;
+  bool streamed = false;  // slab by slab (the slabs or runs path, not the whole grid at once)
+  // Why it cannot stream (the mode, or the output); none when it can.
+  std::optional<std::string> no_slabs;
+};
+// How a job on `grid` runs: streamed when its params ask for it (streaming
+// on), or, streaming auto, when the mode and the output can take slabs and
+// the mode is faster so (JobMode::faster_in_slabs) or its volumes would take
+// more than limits.stream_above_bytes (0: never); as runs when the output
+// takes them and the mode makes them (streamed, or when the volume is not
+// kept whole); else slabs or memory. Throws Error(invalid_argument) for
+// streaming on that cannot be.
+ExecutionPlan plan_execution(const api::JobParams& params, const Grid& grid, const JobLimits& limits);
+
+// Decode, rotate/orient, resolve the grid, check limits, plan how it runs
+// (plan_execution). Throws voxd::Error.
 PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                    const api::JobParams& params, const JobLimits& limits);
 

@@ -7,6 +7,13 @@
 
 namespace voxd::cli {
 
+std::string with_format_list(std::string usage) {
+  const std::string placeholder = "{formats}";
+  if (const std::size_t at = usage.find(placeholder); at != std::string::npos)
+    usage.replace(at, placeholder.size(), names_joined(kVolumeFormatNames, " | ", " | "));
+  return usage;
+}
+
 OutputChoice read_output_choice(const Args& args, const std::string& command) {
   OutputChoice out;
   const auto path = args.value("output");
@@ -14,13 +21,13 @@ OutputChoice read_output_choice(const Args& args, const std::string& command) {
   out.path = *path;
   if (auto f = args.value("format")) {
     const auto format = volume_format_from_string(*f);
-    if (!format) throw UsageError("--format must be rle, binvox, raw, nrrd, vox, png-stack, stl or glb, got '" + *f + "'");
+    if (!format) throw UsageError("--format must be " + volume_format_choices() + ", got '" + *f + "'");
     out.format = *format;
   } else {
     const auto format = volume_format_from_path(out.path);
     if (!format)
       throw UsageError("cannot tell the output format from '" + out.path +
-                       "'; use --format rle|binvox|raw|nrrd|vox|png-stack|stl|glb");
+                       "'; use --format " + names_joined(kVolumeFormatNames, "|", "|"));
     out.format = *format;
   }
   if (auto p = args.value("raw-packing")) {

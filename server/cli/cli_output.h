@@ -26,6 +26,10 @@ struct OutputChoice {
 // UsageError naming the command when they are missing or wrong.
 OutputChoice read_output_choice(const Args& args, const std::string& command);
 
+// A usage text with its "{formats}" replaced by the volume formats,
+// "rle | binvox | ..." (voxd/encode/volume_format.h's table).
+std::string with_format_list(std::string usage);
+
 // Runs `encode` into OUT's temporary file and renames it into place (or
 // into standard output for "-"); the bytes written.
 std::uint64_t write_output(const std::string& path, const std::function<void(ByteSink&)>& encode);

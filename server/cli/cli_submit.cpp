@@ -43,7 +43,7 @@ The job runs on the service, with its limits; the flags are voxd voxelize's.
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ,
   --padding P, --mode M, --inside T, --streaming S
                          as for voxd voxelize (they override --params)
-  --format F             rle | binvox | raw | nrrd | vox | png-stack | stl | glb
+  --format F             {formats}
                          (default: from OUT's extension)
   --raw-packing P, --nrrd-encoding E, --quantize Q
                          as for voxd voxelize
@@ -245,7 +245,7 @@ int submit(int argc, char** argv) {
   valued.insert({"server", "api-key", "streaming"});
   Args args(argc, argv, 2, valued, {"json", "report", "no-progress", "help"});
   if (args.has("help")) {
-    std::cout << kUsage;
+    std::cout << with_format_list(kUsage);
     return 0;
   }
   if (args.positional().size() != 1) throw UsageError("submit takes exactly one mesh file (see voxd submit --help)");
@@ -302,6 +302,7 @@ int submit(int argc, char** argv) {
                   {"filled_voxels", job.value("filled_voxels", json())},
                   {"filled_volume", job.value("filled_volume", json())},
                   {"streamed", job.value("streamed", false)},
+                  {"execution", job.value("execution", "memory")},
                   {"cached", job.value("cached", false)},
                   {"values", job.value("values", json())},
                   {"timings", job.value("timings", json::object())},

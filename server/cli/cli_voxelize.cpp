@@ -39,7 +39,6 @@ using nlohmann::json;
 // e.g. 1625^3; 1 Gi voxels of coverage) stream unless told otherwise, as in
 // the service (JobLimits::stream_above_bytes): slab by slab is then as fast
 // or faster (fresh memory costs page faults) and far smaller.
-const std::uint64_t kStreamAboveBytes = JobLimits{}.stream_above_bytes;
 
 constexpr const char* kUsage = R"(usage: voxd voxelize MESH -o OUT [options]
 
@@ -56,7 +55,7 @@ volume to OUT ("-" for standard output).
   --mode M               one of the modes below (their options in --params,
                          under the mode's name: {"MODE": {...}})
   --inside T             parity | vote | winding (also the sign of a distance field)
-  --format F             rle | binvox | raw | nrrd | vox | png-stack | stl | glb
+  --format F             {formats}
                          (default: from OUT's extension; vox and png-stack (.zip)
                          hold colours, stl and glb a mode's own meshes)
   --raw-packing P        bytes (default) | bits, for --format raw
@@ -88,7 +87,7 @@ centres inside, that its values come with):
 
 // The usage with every mode's line (api/modes/).
 std::string usage() {
-  std::string text = kUsage;
+  std::string text = with_format_list(kUsage);
   for (const api::JobMode* mode : api::job_modes()) {
     std::string name(mode->name());
     name.resize(std::max<std::size_t>(name.size() + 2, 15), ' ');
@@ -158,15 +157,16 @@ int voxelize_command(int argc, char** argv) {
   }
   if (streaming == "on" && no_stream) throw UsageError("--streaming on: " + *no_stream);
   limits.max_voxels = user_limit || no_stream ? max_voxels : UINT64_MAX;
-  // The CLI decides below, once the grid is known, from the output format
-  // too: the preparation only resolves the grid.
-  params.streaming = api::Streaming::off;
+  // Streamed, the grid is bounded by kMaxGridDim alone, or the limit the user set.
+  limits.max_streamed_voxels = user_limit ? max_voxels : UINT64_MAX;
+  // The output, for the plan: a file that takes slabs unless it said why
+  // not, runs when it is an RLE of bits, never kept whole.
+  limits.output.no_slabs = no_stream;
+  limits.output.takes_runs = !mode_writes && *format == VolumeFormat::rle;
+  limits.output.keeps_volume = false;
+  params.streaming = streaming == "on" ? api::Streaming::on : streaming == "off" ? api::Streaming::off : api::Streaming::automatic;
   PreparedVoxelJob job = prepare_voxel_job(file.bytes(), mesh_path, params, limits);
-  // Auto: slab by slab past the memory threshold, or whenever the mode is
-  // faster so (the band SDF) and the output can take slabs.
-  const bool streamed =
-      streaming == "on" || (streaming == "auto" && !no_stream &&
-                            (params.mode->faster_in_slabs(params) || estimate_job_memory(job.grid, params) > kStreamAboveBytes));
+  const bool streamed = job.streamed;
   if (!streamed)  // the in-memory limit; a job that could stream is told so
     check_voxel_limit(job.grid, max_voxels,
                       no_stream || user_limit ? "" : " (or --streaming on: slab by slab it needs the memory of one slab, not the grid's)");
@@ -178,8 +178,8 @@ int voxelize_command(int argc, char** argv) {
   std::uint64_t bytes_written = 0;
   // An RLE of bits is made of runs: made straight from the crossings, the
   // grid is never a dense volume, streamed or not (the bytes are the same).
-  if (!mode_writes && *format == VolumeFormat::rle && params.mode->makes_runs(params)) {
-    job.streamed = streamed;
+  const ExecutionPath path = job.path;
+  if (path == ExecutionPath::runs) {
     const Grid grid = job.grid;
     bytes_written = write_output([&](ByteSink& sink) {
       BitSlabWriter writer(grid, *format, encode_options, sink);
@@ -187,9 +187,9 @@ int voxelize_command(int argc, char** argv) {
                                       [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); });
       writer.finish();
     });
-  } else if (streamed) {
+  } else if (path == ExecutionPath::slabs) {
     const Grid grid = job.grid;
-    const std::int64_t slab_layers = streamed_job_slab_layers(grid, params, kStreamSlabBytes);
+    const std::int64_t slab_layers = job.slab_layers;
     bytes_written = write_output([&](ByteSink& sink) {
       if (const std::optional<ValueVolume> probe = params.value_type()) {
         // The values are the output; the bits (the solid) are only counted.
@@ -233,6 +233,7 @@ int voxelize_command(int argc, char** argv) {
         {"filled_voxels", result.filled},
         {"filled_volume", filled_volume},
         {"streamed", result.streamed},
+        {"execution", to_string(path)},
         {"output", {{"path", *out_path}, {"format", to_string(*format)}, {"bytes", bytes_written}}},
     };
     if (result.report) summary["report"] = api::to_json(*result.report);

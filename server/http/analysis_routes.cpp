@@ -28,7 +28,7 @@ using httplib::Response;
 // while they fit the per-job memory (else the 422 says what does stream).
 JobOutput output_for(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request) {
   JobOutput output;
-  if (job.streamed && streams_over_slabs(request)) {
+  if (job.streamed && streams_over_slabs(request, *job.job)) {
     output.rle = jobs.volume_rle(job.id);
     if (job.has_value_volume()) output.values_rle = jobs.values_rle(job.id);
     if (!output.rle || (job.has_value_volume() && !output.values_rle)) throw unknown_job(job.id);
@@ -77,8 +77,7 @@ std::optional<KeptAnalysis> ready_while_running(JobManager& jobs, const std::str
 }  // namespace
 
 void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
-  for (api::AnalysisKind kind : {api::AnalysisKind::analysis, api::AnalysisKind::radiography, api::AnalysisKind::section,
-                                 api::AnalysisKind::preview, api::AnalysisKind::thickness}) {
+  for (const auto& [kind, name] : api::kAnalysisKindNames) {
     routes.get(kJobPath + "/" + to_string(kind), [&jobs, kind](const Request& req, Response& res) {
       const std::string id = req.matches[1];
       const api::AnalysisRequest request = request_of(kind, req);
@@ -95,7 +94,7 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
       // beside the job's volumes: held from the budget meanwhile. A streamed
       // job's volume is loaded only for this request, so it counts too.
       const MemoryBudget::Reservation memory = jobs.reserve_memory(
-          analysis_memory_on_job(request, job.grid, job.streamed, jobs.max_job_memory()), "this analysis");
+          analysis_memory_on_job(request, *job.job, job.grid, job.streamed, jobs.max_job_memory()), "this analysis");
       const JobOutput output = output_for(jobs, job, request);
       AnalysisResult result;
       try {

@@ -102,7 +102,9 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
       return answer_values(res, std::move(values), v, filename, metrics);
     }
     check_bits_format(v);
-    if (job.streamed && !streaming_refusal(v.format)) {
+    // Made slab by slab or from its runs, the volume is kept as its RLE:
+    // served slab by slab from it in the formats that stream.
+    if (job.execution != ExecutionPath::memory && !streaming_refusal(v.format)) {
       auto rle = jobs.volume_rle(id);
       if (!rle) throw unknown_job(id);
       return answer_stored_bits(res, std::move(rle), v, filename, metrics);

@@ -32,7 +32,7 @@ VolumeRequest read_volume_request(const httplib::Request& req) {
   if (req.has_param("format")) {
     const auto f = volume_format_from_string(req.get_param_value("format"));
     if (!f)
-      throw invalid_query("format must be rle, binvox, raw, nrrd, vox, png-stack, stl or glb, got '" +
+      throw invalid_query("format must be " + volume_format_choices() + ", got '" +
                           req.get_param_value("format") + "'");
     v.format = *f;
   }

@@ -66,6 +66,9 @@ struct JobSnapshot {
   // it is re-encoded and analysed slab by slab, never loaded whole past
   // the per-job memory.
   bool streamed = false;
+  // How it runs (plan_execution, server/job_pipeline.h): the path a CLI run
+  // of the same params takes too.
+  ExecutionPath execution = ExecutionPath::memory;
   // The job JSON's "analyses", one entry each: {"request", "url", "state",
   // "error"}; state pending -> ready | failed, or on_request for a job
   // answered from an earlier one's result (computed when first asked).

@@ -118,6 +118,7 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
   s.triangles = prepared.triangles;
   s.grid = prepared.grid;
   s.streamed = prepared.streamed;
+  s.execution = prepared.path;
   s.timings = prepared.timings.stages;
   s.content_hash = hash;
   s.analyses = analyses_status(params.analyses, "pending");

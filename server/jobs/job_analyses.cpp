@@ -300,11 +300,19 @@ std::string whole_grid_refusal(const AnalysisRequest& r, const Grid& grid, std::
          "or thickness colours) and the analysis with thickness=false&skin=false stream over it at any size";
 }
 
-std::uint64_t analysis_memory_on_job(const AnalysisRequest& r, const Grid& grid, bool streamed_job,
-                                     std::uint64_t max_job_memory) {
+bool streams_over_slabs(const AnalysisRequest& r, const api::JobParams& params) {
+  const bool shows_distances = (r.kind == AnalysisKind::preview && r.colour == "none") ||
+                               (r.kind == AnalysisKind::section && r.colour != "thickness" && r.peel == 0);
+  return streams_over_slabs(r) && !(params.mode->distance_values() && shows_distances);
+}
+
+std::uint64_t analysis_memory_on_job(const AnalysisRequest& r, const api::JobParams& params, const Grid& grid,
+                                     bool streamed_job, std::uint64_t max_job_memory) {
   if (!streamed_job) return estimate_analysis_memory(r, grid);
-  if (streams_over_slabs(r)) return estimate_analysis_memory(r, grid, true);
-  const std::uint64_t whole = whole_grid_memory(r, grid);
+  if (streams_over_slabs(r, params)) return estimate_analysis_memory(r, grid, true);
+  std::uint64_t whole = whole_grid_memory(r, grid);
+  if (const std::optional<ValueVolume> type = params.value_type())  // its values are read whole too
+    whole += grid.voxel_count() * std::visit([]<typename T>(const DenseVolume<T>&) { return sizeof(T); }, *type);
   if (whole > max_job_memory) throw Error(ErrorCode::limit_exceeded, whole_grid_refusal(r, grid, max_job_memory));
   return whole;
 }
@@ -480,5 +488,17 @@ nlohmann::json analyses_status(const std::vector<AnalysisRequest>& requests, con
   return out;
 }
 
+
+JobOutput analysis_output(const AnalysisRequest& r, const JobSnapshot& job, const JobStore& store) {
+  JobOutput output;
+  if (job.streamed && streams_over_slabs(r, *job.job)) {
+    output.rle = store.volume_rle(job.id);
+    if (job.has_value_volume()) output.values_rle = store.layer_rle(job.id, "values");
+    return output;
+  }
+  output.solid = store.load_volume(job.id);
+  if (job.has_value_volume()) output.values = store.load_layer(job.id, "values");
+  return output;
+}
 
 }  // namespace voxd::server

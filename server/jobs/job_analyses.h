@@ -21,6 +21,7 @@
 namespace voxd::server {
 
 class JobManager;  // server/jobs/job_manager.h
+class JobStore;    // server/jobs/job_store.h
 
 // Where a job's kept results live (the job store's artifacts folder).
 // `scope` names the job: requests for the same key of the same scope are
@@ -73,6 +74,9 @@ std::uint64_t estimate_analysis_memory(const api::AnalysisRequest& request, cons
 // colours, and the analysis without thickness, skin or clean-up. The others
 // need the whole grid in memory.
 bool streams_over_slabs(const api::AnalysisRequest& request);
+// The same on a job of `params`: a distance field's preview and sections
+// show its values, read whole.
+bool streams_over_slabs(const api::AnalysisRequest& request, const api::JobParams& params);
 
 // Bytes a request that needs the whole grid takes on it: the grid's bits
 // and the request's own.
@@ -86,8 +90,13 @@ std::string whole_grid_refusal(const api::AnalysisRequest& request, const Grid& 
 // Bytes a request takes on a job, for the memory budget: on a streamed job
 // a request that does not stream loads the grid too, and one over
 // `max_job_memory` throws Error(limit_exceeded) with whole_grid_refusal.
-std::uint64_t analysis_memory_on_job(const api::AnalysisRequest& request, const Grid& grid, bool streamed_job,
-                                     std::uint64_t max_job_memory);
+std::uint64_t analysis_memory_on_job(const api::AnalysisRequest& request, const api::JobParams& params, const Grid& grid,
+                                     bool streamed_job, std::uint64_t max_job_memory);
+
+// The volumes a request on a succeeded job is answered from, read from
+// `store`: the stored RLE of a streamed job when the request streams over
+// it, else the volume and values whole.
+JobOutput analysis_output(const api::AnalysisRequest& request, const JobSnapshot& job, const JobStore& store);
 
 // What one pixel value of a radiograph asked for by `request` means.
 PngScale radiography_scale(const api::AnalysisRequest& request, const Grid& grid);

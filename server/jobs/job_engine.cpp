@@ -80,6 +80,9 @@ void JobEngine::warn_backend(const std::exception& e) {
 JobLimits JobEngine::job_limits(bool stored) const {
   JobLimits limits = config.limits;
   limits.stream_above_bytes = stored ? std::min(limits.stream_above_bytes, config.max_job_memory) : 0;
+  // The store takes slabs and runs; a volume made in memory is kept whole
+  // (cached, analysed, answered from), so a job of bits is made as runs
+  // only when it streams (JobOutputKind's defaults).
   limits.stream_slab_bytes = std::min(limits.stream_slab_bytes, config.max_job_memory / 4);
   return limits;
 }
@@ -88,7 +91,7 @@ std::uint64_t JobEngine::analyses_memory(const api::JobParams& params, const Pre
   std::uint64_t peak = 0;
   for (const api::AnalysisRequest& r : params.analyses) {
     try {
-      peak = std::max(peak, analysis_memory_on_job(r, prepared.grid, prepared.streamed, config.max_job_memory));
+      peak = std::max(peak, analysis_memory_on_job(r, params, prepared.grid, prepared.streamed, config.max_job_memory));
     } catch (const Error& e) {
       throw Error(e.code(), std::string("analyses: ") + e.what());
     }
@@ -139,7 +142,9 @@ nlohmann::json JobEngine::prepare_analyses(Job& job, JobStore& store, const std:
     job.control.set_progress(0.0);
     job.control.set_stage(std::string("analysis: ") + to_string(requests[i].kind));
     try {
-      job_analysis(requests[i], view, output, artifacts, &job.control);
+      // A streamed job's request that needs the grid whole reads it back.
+      const bool whole = !output.solid && !streams_over_slabs(requests[i], *view.job);
+      job_analysis(requests[i], view, whole ? analysis_output(requests[i], view, store) : output, artifacts, &job.control);
       status[i]["state"] = "ready";
     } catch (const AnalysisRejected& e) {
       status[i]["state"] = "failed";

@@ -92,6 +92,7 @@ json record_json(const JobSnapshot& job) {
       {"grid", api::to_json(job.grid)},
       {"cached", job.cached},
       {"streamed", job.streamed},
+      {"execution", to_string(job.execution)},
       {"content_hash", job.content_hash},
   };
   json timings = json::object();
@@ -156,6 +157,9 @@ JobSnapshot job_from_json(const json& r) {
   if (r.contains("values") && r.at("values").is_object()) job.values = r.at("values");
   job.cached = r.at("cached");
   job.streamed = r.value("streamed", false);  // records of earlier releases have none
+  // Records of earlier releases have none: they ran slab by slab or in memory.
+  const std::optional<ExecutionPath> path = value_named(kExecutionPathNames, r.value("execution", std::string()));
+  job.execution = path ? *path : job.streamed ? ExecutionPath::slabs : ExecutionPath::memory;
   job.content_hash = r.at("content_hash");
   return job;
 }

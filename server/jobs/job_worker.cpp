@@ -96,7 +96,7 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
     if (!analyses.empty()) job.control.set_span(0.0, 0.5);
     JobOutput output;
     VoxelJobResult r;
-    if (prepared.streamed) {
+    if (prepared.path != ExecutionPath::memory) {
       // Slab by slab straight into the stored RLE: the grid is never whole
       // (only a job with a store streams: job_limits).
       const Grid grid = prepared.grid;
@@ -106,7 +106,7 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
       store->write_volume(id, [&](ByteSink& bits_sink) {
         BitSlabWriter bits(grid, VolumeFormat::rle, EncodeOptions{}, bits_sink);
         const BitSlabConsumer to_bits = [&](std::int64_t k0, const BitVolume& slab) { bits.write(k0, slab); };
-        if (prepared.params.mode->makes_runs(prepared.params)) {
+        if (prepared.path == ExecutionPath::runs) {
           // Bits only, as runs: the stored RLE is written from them.
           r = execute_voxel_runs_job(std::move(prepared), /*with_report=*/true, &job.control, engine_threads,
                                      [&](std::int64_t k0, const RunSlab& slab) { bits.write(k0, slab); });

@@ -196,7 +196,8 @@ void ReplicatedJobBackend::drop_taken(Job& job) {
 // streamed job of bits of more than one task; true when it was: its tasks
 // are then on the queue for every replica, and it leaves this worker.
 bool ReplicatedJobBackend::split(Job& job, const PreparedVoxelJob& prepared) {
-  if (!parts_.slab_tasks || !prepared.streamed || !prepared.params.mode->makes_runs(prepared.params)) return false;
+  // Only a job planned as runs, streamed: any range of its layers is made alone.
+  if (!parts_.slab_tasks || !prepared.streamed || prepared.path != ExecutionPath::runs) return false;
   const std::optional<SlabTaskPlan> plan = plan_slab_tasks(prepared.grid, prepared.slab_layers, parts_.slab_task_bytes);
   if (!plan) return false;
   const std::string id = job.snap.id;

@@ -120,5 +120,45 @@ TEST_F(CliServiceParity, EachPaletteLayerSaysWhatItHolds) {
   EXPECT_NE(display.find("content: display object (0 = nothing shown"), std::string::npos) << display;
 }
 
+// How a job runs is decided in one place (plan_execution): `voxd voxelize`
+// into an RLE and a job submitted with the same params report the same path,
+// where the modes' own wishes (the band SDF is faster slab by slab) and the
+// memory threshold (512 MiB of volumes) decide it.
+TEST_F(CliServiceParity, CliAndServiceTakeTheSameExecutionPath) {
+  start();
+  const auto mesh = to_binary_stl(make_box({0, 0, 0}, {4, 4, 4}));
+  write_file(dir_ + "/box.stl", mesh);
+  struct Case {
+    const char* what;
+    std::string params;
+    std::string path;
+    bool streamed;
+  };
+  const std::vector<Case> cases = {
+      // Small, but the band goes slab by slab whatever its size.
+      {"band sdf", R"({"grid":{"resolution":48},"mode":"sdf"})", "slabs", true},
+      // 1700^3 voxels, 614 MB of bits: past the threshold, its runs straight into the RLE.
+      {"solid past the threshold", R"({"grid":{"resolution":1700}})", "runs", true},
+      // 400^3 floats and bits: 264 MB, in memory.
+      {"small coverage", R"({"grid":{"resolution":400},"mode":"coverage"})", "memory", false},
+      // 520^3 floats and bits: 580 MB, past the threshold.
+      {"coverage past the threshold", R"({"grid":{"resolution":520},"mode":"coverage"})", "slabs", true},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(dir_ + "/params.json") << c.params;
+    const auto cli = run_process(std::string(VOXD_BINARY) + " voxelize " + dir_ + "/box.stl -o " + dir_ +
+                                 "/out.rle --json --params @" + dir_ + "/params.json");
+    ASSERT_EQ(cli.exit_code, 0) << c.what << ": " << cli.err;
+    const json summary = json::parse(cli.out);
+    const json job = wait_for_job(http(), finished(submit(mesh, c.params)));
+    EXPECT_EQ(summary.at("execution"), c.path) << c.what;
+    EXPECT_EQ(job.at("execution"), c.path) << c.what;
+    EXPECT_EQ(summary.at("streamed"), c.streamed) << c.what;
+    EXPECT_EQ(job.at("streamed"), c.streamed) << c.what;
+    EXPECT_EQ(job.at("filled_voxels"), summary.at("filled_voxels")) << c.what;
+    std::filesystem::remove(dir_ + "/out.rle");
+  }
+}
+
 }  // namespace
 }  // namespace voxd::test

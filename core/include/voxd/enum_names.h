@@ -52,4 +52,16 @@ std::string names_listed(const EnumNames<E, N>& names) {
   return out;
 }
 
+// "a, b, c or d" (with last = " or "), or "a|b|c|d" (separator "|" and
+// last "|"): the allowed names as messages and usage lines spell them.
+template <typename E, std::size_t N>
+std::string names_joined(const EnumNames<E, N>& names, std::string_view separator, std::string_view last) {
+  std::string out;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (i > 0) out += i + 1 == N ? last : separator;
+    out += names[i].name;
+  }
+  return out;
+}
+
 }  // namespace voxd

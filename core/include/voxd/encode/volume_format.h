@@ -41,6 +41,8 @@ enum class RawPacking { bytes, bits };
 enum class NrrdEncoding { raw, gzip };
 
 inline const char* to_string(VolumeFormat format) noexcept { return name_of(kVolumeFormatNames, format); }
+// "rle, binvox, ... or glb", for messages.
+inline std::string volume_format_choices() { return names_joined(kVolumeFormatNames, ", ", " or "); }
 inline std::optional<VolumeFormat> volume_format_from_string(std::string_view name) {
   return value_named(kVolumeFormatNames, name);
 }
