@@ -2,6 +2,7 @@
 
 #include <sys/mman.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -25,6 +26,14 @@ class KeptBlocks {
   static constexpr std::size_t kMaxBytes = std::size_t{1} << 30;
   static constexpr std::size_t kMaxBlocks = 4;
 
+  void enable(bool on) noexcept {
+    enabled_.store(on, std::memory_order_relaxed);
+    if (on) return;
+    std::lock_guard lock(mutex_);
+    release_all();
+  }
+  bool enabled() const noexcept { return enabled_.load(std::memory_order_relaxed); }
+
   void* take(std::size_t bytes) {
     std::lock_guard lock(mutex_);
     for (std::size_t b = 0; b < blocks_.size(); ++b)
@@ -35,15 +44,13 @@ class KeptBlocks {
         return p;
       }
     // About to map new memory: give the kept blocks back first.
-    for (const Block& block : blocks_) ::munmap(block.p, block.bytes);
-    blocks_.clear();
-    kept_ = 0;
+    release_all();
     return nullptr;
   }
 
   // True when kept (the caller must not unmap it).
   bool keep(void* p, std::size_t bytes) noexcept {
-    if (bytes < kMinBytes || bytes > kMaxBytes) return false;
+    if (bytes < kMinBytes || bytes > kMaxBytes || !enabled_.load(std::memory_order_relaxed)) return false;
     std::lock_guard lock(mutex_);
     if (blocks_.size() == kMaxBlocks || kept_ + bytes > kMaxBytes) return false;
     try {
@@ -60,6 +67,12 @@ class KeptBlocks {
     void* p;
     std::size_t bytes;
   };
+  void release_all() noexcept {  // caller holds mutex_
+    for (const Block& block : blocks_) ::munmap(block.p, block.bytes);
+    blocks_.clear();
+    kept_ = 0;
+  }
+  std::atomic<bool> enabled_{true};
   std::mutex mutex_;
   std::vector<Block> blocks_;
   std::size_t kept_ = 0;
@@ -98,5 +111,8 @@ void free_volume_memory(void* p, std::size_t bytes) noexcept {
   else if (!kept_blocks().keep(p, bytes))
     ::munmap(p, bytes);
 }
+
+void set_keep_freed_volumes(bool keep) noexcept { kept_blocks().enable(keep); }
+bool keeps_freed_volumes() noexcept { return kept_blocks().enabled(); }
 
 }  // namespace voxd

@@ -5,6 +5,10 @@
 #include <cstdint>
 #include <cstring>
 
+#include <sys/mman.h>
+
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "voxd/bit_volume.h"
@@ -74,6 +78,33 @@ TEST(VolumeMemory, DenseVolumesFillCopyAndCompareAsVectors) {
   // A bit volume larger than the heap limit starts empty.
   const BitVolume bits(Grid{glm::dvec3(0.0), 1.0, glm::i64vec3(1024, 1024, 16)});
   EXPECT_EQ(bits.count(), 0u);
+}
+
+// A host that shares its memory turns keeping off: freed blocks then go back
+// to the OS at once, and so do those kept when it turns it off. mincore()
+// fails with ENOMEM on pages no longer mapped.
+TEST(VolumeMemory, AHostCanHaveFreedBlocksReturnedAtOnce) {
+  const std::size_t bytes = std::size_t{96} << 20;
+  auto mapped = [](void* p, std::size_t n) {
+    std::vector<unsigned char> pages((n + 4095) / 4096);
+    return ::mincore(p, n, pages.data()) == 0;
+  };
+  ASSERT_TRUE(keeps_freed_volumes());
+  void* a = allocate_volume_memory(bytes, false);
+  std::memset(a, 1, bytes);
+  free_volume_memory(a, bytes);
+  EXPECT_TRUE(mapped(a, bytes));  // kept for the next volume of its size
+  set_keep_freed_volumes(false);
+  EXPECT_FALSE(keeps_freed_volumes());
+  EXPECT_FALSE(mapped(a, bytes));  // what was kept went back
+  void* b = allocate_volume_memory(bytes, false);
+  std::memset(b, 2, bytes);
+  free_volume_memory(b, bytes);
+  EXPECT_FALSE(mapped(b, bytes));
+  set_keep_freed_volumes(true);
+  void* c = allocate_volume_memory(bytes, false);
+  free_volume_memory(c, bytes);
+  EXPECT_TRUE(mapped(c, bytes));
 }
 
 }  // namespace

@@ -14,6 +14,15 @@ if [[ -e "$work/prefix/include/voxd/detail" ]]; then
   echo "FAIL: voxd/detail/ was installed" >&2
   exit 1
 fi
+# The umbrella header includes every installed public header, and names
+# nothing that is not installed.
+installed="$(cd "$work/prefix/include" && find voxd -name '*.h' ! -path voxd/voxd.h | sort)"
+umbrella="$(sed -n 's/^#include "\(voxd\/[^"]*\)"$/\1/p' "$work/prefix/include/voxd/voxd.h" | sort)"
+if [[ "$installed" != "$umbrella" ]]; then
+  echo "FAIL: voxd/voxd.h and the installed headers differ (< installed, > included):" >&2
+  diff <(echo "$installed") <(echo "$umbrella") >&2 || true
+  exit 1
+fi
 # The package names its license, and its text comes with it.
 if ! grep -q 'set(voxd_LICENSE "Apache-2.0")' "$(find "$work/prefix" -name voxdConfig.cmake)"; then
   echo "FAIL: voxdConfig.cmake does not name the license" >&2

@@ -7,7 +7,9 @@
 // volume costs system calls and cross-core TLB flushes. The last few large
 // blocks given back (64 MiB to 1 GiB in all) are kept for the next volume of
 // exactly their size, which then skips the kernel's page faults and
-// clearing; mapping any other new block returns them first.
+// clearing; mapping any other new block returns them first. A host that
+// would rather have every block returned at once (a plugin inside a CAD
+// program sharing its memory) turns that off: set_keep_freed_volumes(false).
 #include <cstddef>
 #include <new>
 #include <vector>
@@ -19,6 +21,11 @@ namespace voxd {
 void* allocate_volume_memory(std::size_t bytes, bool zeroed);
 // Gives back what allocate_volume_memory(bytes, ...) returned.
 void free_volume_memory(void* p, std::size_t bytes) noexcept;
+
+// Whether large blocks given back are kept for the next volume of their size
+// (on by default). Turning it off returns the blocks kept now.
+void set_keep_freed_volumes(bool keep) noexcept;
+bool keeps_freed_volumes() noexcept;
 
 // A stateless allocator over allocate_volume_memory, for the values of
 // dense volumes (voxd/dense_volume.h).

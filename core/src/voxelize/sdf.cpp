@@ -26,7 +26,7 @@
 #include "encode/ordered_pipeline.h"
 #include "voxd/voxelize/runs.h"
 #include "voxelize/sdf_band.h"
-#include "voxelize/sdf_embree.h"
+#include "voxelize/sdf_fill.h"
 #include "voxelize/sdf_tree.h"
 #include "voxelize/sdf_triangle.h"
 
@@ -39,44 +39,6 @@ using sdf::centre_coordinate;
 using sdf::kInfinity;
 using sdf::Triangle;
 using sdf::TriangleTree;
-
-template <class Nearest>
-void fill_beyond_band(const Nearest& tree, const Grid& g, const BandSetup& s, float clamped, int threads,
-                      DenseVolume<float>& values, const detail::ProgressSpan& queries) {
-  const std::int64_t nx = g.dims.x, ny = g.dims.y, rows = ny * g.dims.z;
-  std::atomic<std::int64_t> done{0};
-  parallel_for(0, rows, std::max<std::int64_t>(1, rows / (threads * 64)), threads, [&](std::int64_t r0, std::int64_t r1) {
-    for (std::int64_t r = r0; r < r1; ++r) {
-      queries.check_cancelled();
-      const std::int64_t j = r % ny, k = r / ny;
-      float* row = values.slab(k) + j * nx;
-      const double cy = centre_coordinate(g, 1, j), cz = centre_coordinate(g, 2, k);
-      // The previous voxel's distance bounds this one's (d is 1-Lipschitz),
-      // and its nearest triangle is usually this one's too.
-      double previous = -1.0;
-      std::uint32_t hint = Nearest::kNone;
-      for (std::int64_t i = 0; i < nx; ++i) {
-        if ((i & 255) == 255) queries.check_cancelled();
-        if (row[i] < clamped) {  // exact from the band
-          previous = static_cast<double>(row[i]) * s.to_model;
-          continue;
-        }
-        const dvec3 p(centre_coordinate(g, 0, i), cy, cz);
-        // The margin covers the float rounding of band values and of the
-        // centres' spacing.
-        const double bound = previous >= 0.0 ? (previous + g.voxel_size) * (1.0 + 1e-6) : kInfinity;
-        typename Nearest::Hit hit = tree.nearest(p, bound * bound, hint);
-        if (hit.triangle == Nearest::kNone) hit = tree.nearest(p, kInfinity, Nearest::kNone);
-        if (hit.triangle == Nearest::kNone) continue;  // no triangles at all: stays clamped
-        previous = std::sqrt(hit.d2);
-        hint = hit.triangle;
-        row[i] = static_cast<float>(previous * s.to_output);
-      }
-    }
-    queries.report(static_cast<double>(done.fetch_add(r1 - r0) + (r1 - r0)) / static_cast<double>(rows));
-  });
-  queries.report(1.0);
-}
 
 // ---------------------------------------------------------------------------
 
@@ -121,6 +83,10 @@ BitVolume solid_for_sign(const Mesh& mesh, const Grid& grid, const SdfOptions& o
 }
 
 }  // namespace
+
+namespace sdf {
+FillBeyondBand embree_fill_beyond_band = nullptr;
+}  // namespace sdf
 
 double point_triangle_distance2(const dvec3& p, const dvec3& a, const dvec3& b, const dvec3& c) {
   return sdf::distance2(Triangle(a, b, c), p);
@@ -289,9 +255,11 @@ DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOpti
   if (options.full) {
     const detail::ProgressSpan rest = progress.part(band_end, 1.0);
     if (tuning.nearest == detail::SdfTuning::Nearest::embree) {
-      const sdf::EmbreeNearest nearest(mesh);
-      rest.check_cancelled();
-      fill_beyond_band(nearest, grid, s, clamped, threads, values, rest.part(0.1, 1.0));
+      // Linked only into the tests and benchmarks (voxd_sdf_embree): the
+      // engine itself needs no Embree.
+      if (!sdf::embree_fill_beyond_band)
+        throw Error(ErrorCode::invalid_argument, "nearest-triangle queries by Embree are not linked into this program");
+      sdf::embree_fill_beyond_band(mesh, grid, s, clamped, threads, values, rest);
     } else {
       const TriangleTree tree(mesh, threads, rest.part(0.0, 0.1));
       fill_beyond_band(tree, grid, s, clamped, threads, values, rest.part(0.1, 1.0));

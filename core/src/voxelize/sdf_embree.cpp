@@ -1,5 +1,6 @@
 // Nearest triangle by Embree's rtcPointQuery; see sdf_embree.h.
 #include "voxelize/sdf_embree.h"
+#include "voxelize/sdf_fill.h"
 
 #include <embree3/rtcore.h>
 
@@ -99,5 +100,22 @@ EmbreeNearest::Hit EmbreeNearest::nearest(const dvec3& p, double bound2, std::ui
   rtcPointQuery(static_cast<RTCScene>(scene_), &query, &context, visit, &state);
   return state.best;
 }
+
+namespace {
+
+void fill_by_embree(const Mesh& mesh, const Grid& g, const BandSetup& s, float clamped, int threads,
+                    DenseVolume<float>& values, const detail::ProgressSpan& rest) {
+  const EmbreeNearest nearest(mesh);
+  rest.check_cancelled();
+  fill_beyond_band(nearest, g, s, clamped, threads, values, rest.part(0.1, 1.0));
+}
+
+// Linked in as an object (CMake's voxd_sdf_embree), so this runs at start.
+[[maybe_unused]] const bool registered = [] {
+  embree_fill_beyond_band = fill_by_embree;
+  return true;
+}();
+
+}  // namespace
 
 }  // namespace voxd::sdf
