@@ -1,11 +1,15 @@
 // The progress bar a job shows: it only rises, and every stage that runs
 // inside another reports within its share, so a watcher never sees the bar
 // go back (which a client's progress bar would show as a jump).
+#include <mutex>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "support/test_meshes.h"
 #include "voxd/analysis/analysis.h"
 #include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/error.h"
 #include "voxd/progress.h"
 #include "voxd/voxelize/slice_functions.h"
 #include "voxd/voxelize/voxelize.h"
@@ -99,6 +103,48 @@ TEST(JobControl, TheSliceFunctionsOnlyRiseWithinTheirShare) {
   EXPECT_NEAR(control.progress(), 0.9, 1e-12);
   EXPECT_DOUBLE_EQ(control.span_begin(), 0.1);
   EXPECT_DOUBLE_EQ(control.span_end(), 0.9);
+}
+
+// A host embedding the engine watches and stops it through its own
+// interrupter, with no job type: it hears the progress rise and stops the
+// voxelizer when it says so.
+TEST(JobControl, AHostsInterrupterHearsTheProgressAndStopsTheEngine) {
+  struct Host final : HostInterrupter {
+    std::mutex mutex;
+    std::vector<double> heard;
+    double stop_at = 2.0;
+    bool interrupted() override {
+      std::lock_guard lock(mutex);
+      return !heard.empty() && heard.back() >= stop_at;
+    }
+    void progressed(double fraction) override {
+      std::lock_guard lock(mutex);
+      heard.push_back(fraction);
+    }
+  };
+  const Mesh sphere = make_icosphere({0, 0, 0}, 10.0, 4);
+  const Grid grid{glm::dvec3(-10.5), 21.0 / 192, glm::i64vec3(192)};
+  const VoxelizeOptions options{VoxelMode::solid, InsideTest::parity, 2};
+
+  Host watcher;
+  JobControl control(&watcher);
+  const BitVolume solid = voxelize(sphere, grid, options, &control);
+  EXPECT_GT(solid.count(), 0u);
+  ASSERT_GT(watcher.heard.size(), 2u);
+  for (std::size_t i = 1; i < watcher.heard.size(); ++i) EXPECT_GT(watcher.heard[i], watcher.heard[i - 1]) << i;
+  EXPECT_DOUBLE_EQ(watcher.heard.back(), control.progress());
+  EXPECT_NEAR(control.progress(), 1.0, 1e-9);
+
+  Host stopper;
+  stopper.stop_at = 0.2;
+  JobControl stopped(&stopper);
+  try {
+    (void)voxelize(sphere, grid, options, &stopped);
+    ADD_FAILURE() << "the host asked to stop, and the voxelizer ran to the end";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::cancelled);
+  }
+  EXPECT_LT(stopped.progress(), 1.0);
 }
 
 }  // namespace

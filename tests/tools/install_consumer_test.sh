@@ -59,3 +59,33 @@ if [[ "$out" != "$expected" ]]; then
   exit 1
 fi
 echo "PASS: find_package(voxd) -> voxd::core, built outside the tree, voxelized the box exactly"
+
+# The engine alone as a shared library (VOXD_LIBRARY_ONLY, BUILD_SHARED_LIBS),
+# as a CAD plugin's host would load it: the same consumer, the same answer,
+# through libvoxd_core.so, and no Embree anywhere.
+root="$source/../../.."
+cmake -S "$root" -B "$work/shared-build" -DVOXD_LIBRARY_ONLY=ON -DBUILD_SHARED_LIBS=ON \
+  -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" > "$work/shared-configure.log"
+cmake --build "$work/shared-build" -j"$(nproc)" > "$work/shared-build.log"
+cmake --install "$work/shared-build" --prefix "$work/shared-prefix" > "$work/shared-install.log"
+cmake -S "$source" -B "$work/shared-consumer" -DCMAKE_PREFIX_PATH="$work/shared-prefix" \
+  -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" > "$work/shared-consumer-configure.log"
+cmake --build "$work/shared-consumer" > "$work/shared-consumer-build.log"
+out="$(LD_LIBRARY_PATH="$work/shared-prefix/lib" "$work/shared-consumer/voxd_consumer" "$work/box.stl" 0.25)"
+if [[ "$out" != "$expected" ]]; then
+  echo "FAIL: the consumer of the shared engine printed:" >&2
+  echo "$out" >&2
+  exit 1
+fi
+libs="$(LD_LIBRARY_PATH="$work/shared-prefix/lib" ldd "$work/shared-consumer/voxd_consumer")"
+if ! grep -q "libvoxd_core.so => $work/shared-prefix/lib/" <<< "$libs"; then
+  echo "FAIL: the consumer does not load the installed libvoxd_core.so:" >&2
+  echo "$libs" >&2
+  exit 1
+fi
+if grep -qi embree <<< "$libs"; then
+  echo "FAIL: the engine still loads Embree:" >&2
+  echo "$libs" >&2
+  exit 1
+fi
+echo "PASS: BUILD_SHARED_LIBS: the consumer loads libvoxd_core.so, without Embree, with the same answer"

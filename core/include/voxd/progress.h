@@ -8,10 +8,31 @@
 
 namespace voxd {
 
+// What a host embedding the engine implements to watch and stop it (as
+// OpenVDB's interrupters do), given to a JobControl with set_host. Both are
+// called from the engine's threads, several at once: keep them cheap and
+// thread-safe.
+class HostInterrupter {
+ public:
+  virtual ~HostInterrupter() = default;
+  // True to stop: the engine then throws Error(cancelled) within ~50 ms.
+  virtual bool interrupted() = 0;
+  // The whole job's progress rose to `fraction` (0..1, never going back).
+  virtual void progressed(double fraction) { (void)fraction; }
+};
+
 class JobControl {
  public:
+  JobControl() = default;
+  // A control that also asks `host` whether to stop and tells it the progress.
+  explicit JobControl(HostInterrupter* host) : host_(host) {}
+  void set_host(HostInterrupter* host) { host_ = host; }
+
   void request_cancel() { cancel_.store(true, std::memory_order_relaxed); }
-  bool cancel_requested() const { return cancel_.load(std::memory_order_relaxed); }
+  bool cancel_requested() const {
+    if (cancel_.load(std::memory_order_relaxed)) return true;
+    return host_ && host_->interrupted();
+  }
   // Throws Error(cancelled) if cancellation was requested. Engines call this
   // between units of work small enough that cancel is prompt (< ~50 ms).
   void check_cancelled() const;
@@ -28,6 +49,7 @@ class JobControl {
     double seen = progress_.load(std::memory_order_relaxed);
     while (value > seen && !progress_.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
     }
+    if (value > seen && host_) host_->progressed(value);
     if (value < seen) {
       double back = largest_step_back_.load(std::memory_order_relaxed);
       while (seen - value > back &&
@@ -60,6 +82,7 @@ class JobControl {
   }
 
  private:
+  HostInterrupter* host_ = nullptr;
   std::atomic<bool> cancel_{false};
   std::atomic<double> progress_{0.0};
   std::atomic<double> largest_step_back_{0.0};
