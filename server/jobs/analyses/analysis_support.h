@@ -1,0 +1,51 @@
+#pragma once
+// What several analysis kinds share: replaying a streamed job's stored
+// slabs, the model after skin removal, a section's layer, a radiograph's
+// bytes, a distance field's values.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "server/jobs/analyses/job_analysis_kind.h"
+#include "voxd/analysis/analysis_images.h"
+#include "voxd/analysis/radiography.h"
+#include "voxd/analysis/sdf_render.h"
+#include "voxd/voxelize/streamed.h"
+
+namespace voxd::server {
+
+std::string to_bytes(const std::vector<std::uint8_t>& v);
+
+// The PNG text every image of a job carries ("voxd:job"), with the peel
+// layers when peeled.
+std::vector<PngText> image_text(const AnalysisInput& in, bool with_peel = false);
+
+// The volume after r.peel layers of skin removal, or nullopt for none.
+std::optional<BitVolume> peeled_volume(const api::AnalysisRequest& r, const BitVolume& volume);
+
+// Replays a streamed job's stored volume slab by slab (kReplaySlabBytes),
+// with progress over [from, to] of the bar (a request of two passes takes
+// half each) and cancellation between slabs.
+void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from = 0.0, double to = 1.0);
+// The same for a streamed job's stored values.
+void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume);
+
+// The section's layer index along its axis; throws AnalysisRejected for an
+// index or coordinate outside the grid.
+std::int64_t section_layer(const api::AnalysisRequest& r, const Grid& g);
+
+// A radiograph's bytes in the request's format (PNG or its statistics).
+std::string radiography_result(const AnalysisInput& in, const ThicknessImage& image);
+
+// A distance field's values and how to read them (its convention and units
+// come from the job's mode and options); nullopt for other jobs.
+std::optional<SdfRenderInput> sdf_input(const AnalysisInput& in);
+
+// Pixels of an image across `axis` of the grid.
+std::uint64_t image_pixels(const Grid& grid, int axis);
+
+// Images and reports beside the volumes, for the memory estimates.
+inline constexpr std::uint64_t kImagesAndReports = std::uint64_t{16} << 20;
+
+}  // namespace voxd::server

@@ -1,0 +1,67 @@
+// A shaded preview from one of six views: of the solid (coloured by wall
+// thickness), a colour job's colours, or a distance field's zero level set.
+#include "server/jobs/analyses/analysis_support.h"
+
+#include <variant>
+
+#include "api/job_params.h"
+#include "voxd/analysis/preview.h"
+#include "voxd/analysis/value_images.h"
+
+namespace voxd::server {
+namespace {
+
+class PreviewAnalysis final : public JobAnalysisKind {
+ public:
+  api::AnalysisKind kind() const override { return api::AnalysisKind::preview; }
+
+  std::string compute(const AnalysisInput& in, const BitVolume& volume) const override {
+    const api::AnalysisRequest& r = in.request;
+    const View view = *parse_view(r.view);
+    // A distance field's surface is its zero level set, rendered directly.
+    if (const auto field = sdf_input(in); field && r.colour == "none")
+      return to_bytes(sdf_preview_png(*field, view, image_text(in)));
+    // A colour job's preview shows its colours.
+    const std::shared_ptr<const ValueVolume>& values = in.output.values;
+    if (values && std::holds_alternative<DenseVolume<Rgba8>>(*values) && r.colour == "none")
+      return to_bytes(colour_preview_png(volume, std::get<DenseVolume<Rgba8>>(*values), view, image_text(in)));
+    std::shared_ptr<const DenseVolume<float>> map;
+    if (r.colour == "thickness") map = job_thickness_map(volume, in.artifacts, in.control);
+    return to_bytes(preview_png(volume, view, map.get(), image_text(in)));
+  }
+
+  bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.colour == "none"; }
+  bool shows_values(const api::AnalysisRequest& r) const override { return r.colour == "none"; }
+
+  // Two passes over the slabs: the visible voxels, then their normals.
+  std::string over_slabs(const AnalysisInput& in) const override {
+    const Grid& grid = in.job.grid;
+    const View view = *parse_view(in.request.view);
+    PreviewRenderer preview(grid, view);
+    replay(in, [&](std::int64_t k0, const BitVolume& slab) { preview.find(k0, slab); }, 0.0, 0.5);
+    replay(in, [&](std::int64_t k0, const BitVolume& slab) { preview.shade(k0, slab); }, 0.5, 1.0);
+    return to_bytes(preview_png(preview.take(), grid, view, image_text(in)));
+  }
+
+  // The visible voxels, depths, normals (raw and smoothed), shades, pixels
+  // sorted by layer, the RGB image and its PNG, and three layers of bits.
+  std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
+    return (8 + 4 + 12 + 12 + 4 + 4 + 3 + 3) * image_pixels(grid, parse_view(r.view)->axis) +
+           3 * bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+  }
+
+  std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest& r) const override {
+    return r.colour == "thickness" ? 18 : 6;
+  }
+
+  std::string needs_whole_grid(const api::AnalysisRequest&) const override { return "a preview coloured by wall thickness"; }
+};
+
+}  // namespace
+
+const JobAnalysisKind& preview_analysis() {
+  static const PreviewAnalysis kind;
+  return kind;
+}
+
+}  // namespace voxd::server

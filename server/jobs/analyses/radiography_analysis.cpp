@@ -1,0 +1,45 @@
+// Radiography: the thickness of the solid along each ray of an axis.
+#include "server/jobs/analyses/analysis_support.h"
+
+#include "server/jobs/job_store.h"
+
+namespace voxd::server {
+namespace {
+
+class RadiographyAnalysis final : public JobAnalysisKind {
+ public:
+  api::AnalysisKind kind() const override { return api::AnalysisKind::radiography; }
+
+  std::string compute(const AnalysisInput& in, const BitVolume& volume) const override {
+    const std::optional<BitVolume> peeled_model = peeled_volume(in.request, volume);
+    return radiography_result(in, radiography(peeled_model ? *peeled_model : volume, in.request.axis));
+  }
+
+  bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.peel == 0; }
+
+  std::string over_slabs(const AnalysisInput& in) const override {
+    RadiographyAccumulator image(in.job.grid, in.request.axis);
+    replay(in, [&](std::int64_t k0, const BitVolume& slab) { image.add(k0, slab); });
+    return radiography_result(in, image.take());
+  }
+
+  // Its four maps of 32 bits a pixel, one layer of bits and the PNG.
+  std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
+    return (4 * 4 + 2 + 4) * image_pixels(grid, r.axis) + bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+  }
+
+  std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest&) const override { return 6; }
+
+  std::string needs_whole_grid(const api::AnalysisRequest&) const override {
+    return "a radiography of the peeled model (peel)";
+  }
+};
+
+}  // namespace
+
+const JobAnalysisKind& radiography_analysis() {
+  static const RadiographyAnalysis kind;
+  return kind;
+}
+
+}  // namespace voxd::server

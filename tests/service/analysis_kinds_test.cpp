@@ -1,0 +1,50 @@
+// Every analysis kind is one unit in two halves, each in its own registry
+// (api/analyses/analysis_kinds.cpp, server/jobs/analyses/
+// job_analysis_kinds.cpp): a kind named in kAnalysisKindNames and forgotten
+// in either fails here rather than at a client's first request.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "api/analyses/analysis_kind.h"
+#include "api/analysis_request.h"
+#include "server/jobs/analyses/job_analysis_kind.h"
+
+namespace voxd::test {
+namespace {
+
+// A URL query's fields as the route reads them ("%2B" is '+').
+api::Fields query_fields(const std::string& query) {
+  api::Fields fields;
+  std::size_t at = 0;
+  while (at < query.size()) {
+    const std::size_t amp = std::min(query.find('&', at), query.size());
+    const std::string pair = query.substr(at, amp - at);
+    const std::size_t eq = pair.find('=');
+    std::string value = pair.substr(eq + 1);
+    if (value.starts_with("%2B")) value.replace(0, 3, "+");
+    fields.emplace_back(pair.substr(0, eq), value);
+    at = amp + 1;
+  }
+  return fields;
+}
+
+TEST(AnalysisKinds, EveryNamedKindHasBothHalvesAndItsQueryReadsBackToItsKey) {
+  for (const auto& [kind, name] : api::kAnalysisKindNames) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(api::analysis_kind_request(kind).kind(), kind);
+    EXPECT_EQ(server::job_analysis_kind(kind).kind(), kind);
+    // The defaults (a section needs its layer), written as the canonical
+    // query, are a request of their own with the same key: the URL a job's
+    // status gives finds the result the worker kept.
+    const api::Fields given = kind == api::AnalysisKind::section ? api::Fields{{"index", "3"}} : api::Fields{};
+    const api::AnalysisRequest r = api::parse_analysis_request(kind, given, "");
+    const api::AnalysisRequest again = api::parse_analysis_request(kind, query_fields(r.query()), "");
+    EXPECT_EQ(again.artifact_key(), r.artifact_key());
+    EXPECT_EQ(api::to_json(again), api::to_json(r));
+    EXPECT_EQ(api::to_json(r).at("kind"), name);
+  }
+}
+
+}  // namespace
+}  // namespace voxd::test
