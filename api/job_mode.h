@@ -40,6 +40,7 @@
 #include "voxd/run_slab.h"
 #include "voxd/voxelize/streamed.h"
 #include "voxd/voxelize/voxelize.h"
+#include "api/job_volumes.h"
 
 namespace voxd::api {
 
@@ -65,20 +66,6 @@ struct ModeInput {
   // workers); honoured by run_runs (JobMode::makes_runs), the whole grid
   // for the other runs.
   LayerRange layers{};
-};
-
-// What it makes.
-struct ModeResult {
-  // The job's bits, when the mode makes them (otherwise they are the parity
-  // solid made before it ran).
-  std::optional<BitVolume> volume;
-  // The job's result when it is a volume of values.
-  std::optional<ValueVolume> values;
-  // Further volumes kept beside the values, by name (layer_names()).
-  std::vector<std::pair<std::string, ValueVolume>> layers;
-  // What the values are, for the job status and the CLI summary
-  // (proto-schemas/job-status.schema.json "values"); "type" is added after.
-  nlohmann::json values_info;
 };
 
 // The volumes of a finished job, by name: "values" (the result) and each
@@ -130,13 +117,16 @@ class JobMode {
   virtual bool needs_parity_solid(const JobParams& params) const;
   // The timing stage's name.
   virtual std::string_view stage_name() const { return name(); }
-  virtual ModeResult run(const ModeInput& in) const = 0;
+  // What it makes (api/job_volumes.h): its bits unless it needs the parity
+  // solid, its values, the layers kept beside them and what the values are
+  // ("type" is added after).
+  virtual JobVolumes run(const ModeInput& in) const = 0;
   // Slab-streamed runs (voxd/voxelize/streamed.h), for grids larger than
   // memory: nullopt when this job's result can be made slab by slab, else
   // why not, in words for the user. run_streamed hands each finished z-slab
   // of the job's bits to `bits` (unless the pipeline makes the parity solid
   // first: needs_parity_solid) and of its values to `values`, and returns
-  // what run() says in ModeResult::values_info.
+  // what run() says in JobVolumes::values_info.
   virtual std::optional<std::string> streaming_refusal(const JobParams& params) const;
   // Whether a job that can stream is faster slab by slab than in memory
   // whatever its size (the band SDF: no whole float volume to clear), so an

@@ -18,13 +18,13 @@ class BinaryMode final : public JobMode {
   VoxelMode voxel_mode() const override { return mode_; }
   std::string_view stage_name() const override { return "voxelize"; }
 
-  ModeResult run(const ModeInput& in) const override {
+  JobVolumes run(const ModeInput& in) const override {
     VoxelizeOptions options;
     options.mode = mode_;
     options.inside = in.params.inside;
     options.threads = in.threads;
-    ModeResult r;
-    r.volume = voxelize(in.mesh, in.grid, options, in.control);
+    JobVolumes r;
+    r.solid = std::make_shared<const BitVolume>(voxelize(in.mesh, in.grid, options, in.control));
     return r;
   }
 

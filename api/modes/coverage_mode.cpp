@@ -71,17 +71,17 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
   // job's bits from the values instead.
   bool needs_parity_solid(const JobParams& params) const override { return !options(params).threshold; }
 
-  ModeResult run(const ModeInput& in) const override {
+  JobVolumes run(const ModeInput& in) const override {
     const CoverageParams& c = options(in.params);
     DenseVolume<float> coverage = voxelize_coverage(in.mesh, in.grid, engine_options(in), in.control);
-    ModeResult result;
+    JobVolumes result;
     result.values_info = values_info(c, covered_voxels(coverage, in.threads), in.grid);
     if (c.threshold)
-      result.volume = coverage_threshold(coverage, *c.threshold);
+      result.solid = std::make_shared<const BitVolume>(coverage_threshold(coverage, *c.threshold));
     else if (c.float_values)
-      result.values = std::move(coverage);
+      result.values = std::make_shared<const ValueVolume>(std::move(coverage));
     else
-      result.values = coverage_bytes(coverage, in.threads);
+      result.values = std::make_shared<const ValueVolume>(coverage_bytes(coverage, in.threads));
     return result;
   }
 

@@ -219,13 +219,13 @@ class PaletteMode final : public ModeWithOptions<PaletteParams> {
   bool needs_parity_solid(const JobParams&) const override { return true; }
   bool values_are_image() const override { return false; }  // element indices: sections show the solid
 
-  ModeResult run(const ModeInput& in) const override {
+  JobVolumes run(const ModeInput& in) const override {
     const PaletteParams& p = options(in.params);
     PaletteOptions o = p.options;
     o.threads = in.threads;
     PaletteVolume v = voxelize_palette(in.mesh, in.grid, o, in.control);
     const glm::dvec3 a = p.voxel_aspect;
-    ModeResult result;
+    JobVolumes result;
     result.values_info = {{"quantity", "palette element"},
                           {"unit", "element index (GET /v1/jobs/{id}/palette)"},
                           {"palette", p.palette_name},
@@ -238,8 +238,8 @@ class PaletteMode final : public ModeWithOptions<PaletteParams> {
                           {"voxel_edges", {in.grid.voxel_size * a.x, in.grid.voxel_size * a.y, in.grid.voxel_size * a.z}},
                           {"layers", {"element", "similarity"}}};
     if (!p.render.empty()) result.values_info["layers"].push_back("display");
-    result.values = std::move(v.element);
-    result.layers.emplace_back("similarity", std::move(v.similarity));
+    result.values = std::make_shared<const ValueVolume>(std::move(v.element));
+    result.layers.emplace_back("similarity", std::make_shared<const ValueVolume>(std::move(v.similarity)));
     return result;
   }
 

@@ -79,15 +79,16 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
   }
 
   // The field hands back the solid that signs it: the job's bits.
-  ModeResult run(const ModeInput& in) const override {
+  JobVolumes run(const ModeInput& in) const override {
     SdfOptions o = options(in.params);
     o.threads = in.threads;
-    ModeResult result;
-    result.volume.emplace();
-    DenseVolume<float> sdf = signed_distance_field(in.mesh, in.grid, o, in.control, &*result.volume);
+    JobVolumes result;
+    BitVolume solid;
+    DenseVolume<float> sdf = signed_distance_field(in.mesh, in.grid, o, in.control, &solid);
+    result.solid = std::make_shared<const BitVolume>(std::move(solid));
     const auto [lo, hi] = value_range(sdf);
     result.values_info = values_info(o, lo, hi);
-    result.values = std::move(sdf);
+    result.values = std::make_shared<const ValueVolume>(std::move(sdf));
     return result;
   }
 

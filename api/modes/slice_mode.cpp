@@ -147,26 +147,27 @@ class SliceMode final : public ModeWithOptions<SliceParams> {
            bit_volumes_memory(grid, VoxelMode::solid, InsideTest::parity) + 4 * grid.voxel_count();
   }
 
-  ModeResult run(const ModeInput& in) const override {
-    ModeResult result;
+  JobVolumes run(const ModeInput& in) const override {
+    JobVolumes result;
     SliceOptions o = options(in.params);
     o.threads = in.threads;
     DenseVolume<Rgba8> colours = voxelize_slice(in.mesh, in.grid, o, in.control);
     // The solid is exactly the coloured voxels (alpha > 0).
-    result.volume.emplace(in.grid);
+    BitVolume solid(in.grid);
     for (std::int64_t k = 0; k < in.grid.dims.z; ++k)
       for (std::int64_t j = 0; j < in.grid.dims.y; ++j) {
         const Rgba8* row = colours.slab(k) + j * in.grid.dims.x;
-        std::uint64_t* bits = result.volume->row(j, k);
+        std::uint64_t* bits = solid.row(j, k);
         for (std::int64_t i = 0; i < in.grid.dims.x; ++i)
           if (row[i].a > 0) bits[i >> 6] |= std::uint64_t{1} << (i & 63);
       }
+    result.solid = std::make_shared<const BitVolume>(std::move(solid));
     const SliceFrame frame = make_slice_frame(in.mesh, o.axis);
     result.values_info = {{"quantity", "colour"},
                           {"unit", "rgba8"},
                           {"function", to_string(o.function)},
                           {"axis", {frame.w.x, frame.w.y, frame.w.z}}};
-    result.values = std::move(colours);
+    result.values = std::make_shared<const ValueVolume>(std::move(colours));
     return result;
   }
 };

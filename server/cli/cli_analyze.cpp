@@ -14,7 +14,7 @@
 #include "server/cli/cli_args.h"
 #include "server/cli/cli_params.h"
 #include "server/mapped_file.h"
-#include "server/job_pipeline.h"
+#include "server/pipeline/job_pipeline.h"
 #include "server/jobs/job_analyses.h"
 #include "voxd/analysis/analysis.h"
 #include "voxd/byte_sink.h"
@@ -108,10 +108,10 @@ int analyze_command(int argc, char** argv) {
   // One wall thickness map for the report, the images and the volume.
   std::shared_ptr<const DenseVolume<float>> map;
   if (options.thickness && !options.cleanup) {
-    map = std::make_shared<const DenseVolume<float>>(wall_thickness(result.volume, threads));
+    map = std::make_shared<const DenseVolume<float>>(wall_thickness(*result.volumes.solid, threads));
     options.thickness_map = map.get();
   }
-  const AnalysisReport report = analyze_volume(result.volume, options);
+  const AnalysisReport report = analyze_volume(*result.volumes.solid, options);
   nlohmann::json doc = api::analysis_to_json(report, result.grid, result.report, result.mesh_mass);
 
   std::filesystem::create_directories(*out_dir);
@@ -146,13 +146,9 @@ int analyze_command(int argc, char** argv) {
   job.grid = result.grid;
   job.mesh = result.report;
   job.mesh_mass = result.mesh_mass;
-  job.values = result.values_info;
-  // Non-owning views of this run's volumes (they outlive the requests).
-  server::JobOutput output{
-      std::shared_ptr<const BitVolume>(std::shared_ptr<void>(), &result.volume),
-      result.values ? std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values) : nullptr, {}, nullptr, nullptr};
-  for (const auto& [name, volume] : result.layers)
-    output.layers.emplace_back(name, std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume));
+  job.values = result.volumes.values_info;
+  server::JobOutput output;
+  static_cast<api::JobVolumes&>(output) = result.volumes;  // shared, not copied
 
   std::size_t files = 0;
   auto write_file = [&](const std::string& name, const std::string& bytes) {
@@ -172,7 +168,7 @@ int analyze_command(int argc, char** argv) {
   };
   auto request = [](api::AnalysisKind kind, const api::Fields& fields) { return api::parse_analysis_request(kind, fields, ""); };
   using api::AnalysisKind;
-  const bool distances = result.values && params.mode->distance_field(params, *result.values).has_value();
+  const bool distances = result.volumes.values && params.mode->distance_field(params, *result.volumes.values).has_value();
   std::vector<std::pair<std::string, api::AnalysisRequest>> standard;
   for (int axis = 0; axis < 3; ++axis) {
     const std::string a(1, "xyz"[axis]);

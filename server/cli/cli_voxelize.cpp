@@ -13,7 +13,7 @@
 #include "server/cli/cli_args.h"
 #include "server/cli/cli_params.h"
 #include "server/mapped_file.h"
-#include "server/job_pipeline.h"
+#include "server/pipeline/job_pipeline.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
 #include "voxd/encode/slab_writer.h"
@@ -25,10 +25,8 @@ namespace {
 
 // This run's volumes by name, for a mode that writes a format itself.
 api::VolumeSource result_volumes(const VoxelJobResult& result) {
-  return [&result](const std::string& name) -> std::shared_ptr<const ValueVolume> {
-    if (name == "values") return std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &*result.values);
-    for (const auto& [layer, volume] : result.layers)
-      if (layer == name) return std::shared_ptr<const ValueVolume>(std::shared_ptr<void>(), &volume);
+  return [&result](const std::string& name) {
+    if (auto volume = result.volumes.volume(name)) return volume;
     throw Error(ErrorCode::invalid_argument, "this run made no volume named " + name);
   };
 }
@@ -208,16 +206,16 @@ int voxelize_command(int argc, char** argv) {
     });
   } else {
     result = execute_voxel_job(std::move(job), args.has("report"), nullptr, threads);
-    if (result.values)
-      encode_options.content = api::volume_content(result.values_info);
+    const api::JobVolumes& made = result.volumes;
+    if (made.values) encode_options.content = api::volume_content(made.values_info);
     const auto start = std::chrono::steady_clock::now();
     bytes_written = write_output([&](ByteSink& sink) {
       if (mode_writes)
         params.mode->write(*format, params, result_volumes(result), sink);
-      else if (result.values)
-        encode_volume(*result.values, *format, sink, encode_options);
+      else if (made.values)
+        encode_volume(*made.values, *format, sink, encode_options);
       else
-        encode_volume(result.volume, *format, sink, encode_options);
+        encode_volume(*made.solid, *format, sink, encode_options);
     });
     result.timings.add("encode", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
@@ -237,7 +235,7 @@ int voxelize_command(int argc, char** argv) {
         {"output", {{"path", *out_path}, {"format", to_string(*format)}, {"bytes", bytes_written}}},
     };
     if (result.report) summary["report"] = api::to_json(*result.report);
-    summary["values"] = result.values_info;
+    summary["values"] = result.volumes.values_info;
     json rot = json::array();
     for (int r = 0; r < 3; ++r) rot.push_back({result.rotation[0][r], result.rotation[1][r], result.rotation[2][r]});
     summary["rotation"] = rot;
@@ -255,7 +253,7 @@ int voxelize_command(int argc, char** argv) {
     s << "filled:  " << result.filled << " voxels ("
       << 100.0 * static_cast<double>(result.filled) / static_cast<double>(g.voxel_count()) << "%), volume "
       << filled_volume << " (model units^3)\n";
-    if (!result.values_info.is_null()) s << "values:  " << result.values_info.dump() << '\n';
+    if (!result.volumes.values_info.is_null()) s << "values:  " << result.volumes.values_info.dump() << '\n';
     if (result.report)
       s << "mesh report: " << api::to_json(*result.report).dump() << '\n';
     s << "timings:";

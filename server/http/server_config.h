@@ -1,7 +1,7 @@
 #pragma once
-// `voxd serve` settings: flags, each also settable as VOXD_<NAME> in the
-// environment (flags win), with embedded defaults so the service starts with
-// no configuration at all.
+// `voxd serve` settings, with embedded defaults so the service starts with
+// no configuration at all; read from flags and the environment by the CLI
+// (server/cli/cli_serve_config.h).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -44,10 +44,5 @@ struct ServeConfig {
   std::uint64_t max_result_bytes = std::uint64_t{1} << 30;  // with --redis only
   std::uint64_t slab_task_bytes = std::uint64_t{1} << 30;  // with --redis only
 };
-
-// Parses argv[first..] over the environment over the defaults. Throws
-// cli::UsageError with a message naming the flag or variable.
-ServeConfig parse_serve_config(int argc, char** argv, int first);
-std::string serve_help();
 
 }  // namespace voxd::server

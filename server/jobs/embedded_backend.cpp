@@ -189,11 +189,6 @@ void EmbeddedJobBackend::save_artifact(const std::string& id, const std::string&
   }
 }
 
-bool EmbeddedJobBackend::keeps(const std::string& id) const {
-  std::lock_guard lock(engine_.mutex);
-  return engine_.jobs.count(id) > 0;
-}
-
 JobCounts EmbeddedJobBackend::counts() const {
   JobCounts c;
   std::lock_guard lock(engine_.mutex);

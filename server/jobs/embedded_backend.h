@@ -36,7 +36,6 @@ class EmbeddedJobBackend final : public JobBackend {
   std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const override;
   RemoveResult cancel_or_delete(const std::string& id) override;
   void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) override;
-  bool keeps(const std::string& id) const override;
   JobCounts counts() const override;
   std::size_t expire() override;
 

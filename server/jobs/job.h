@@ -15,7 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/job_params.h"
-#include "server/job_pipeline.h"
+#include "server/pipeline/job_pipeline.h"
 #include "server/mapped_file.h"
 #include "voxd/analysis/mass_properties.h"
 #include "voxd/bit_volume.h"
@@ -38,6 +38,12 @@ struct JobFailure {
   std::string title;
   std::string detail;
 };
+
+// A job that failed for a reason of ours, not its input (an exception no
+// check foresaw): the details are logged, not shown.
+inline JobFailure internal_failure() {
+  return JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
+}
 
 // A consistent copy of one job, safe to use after the job table changes.
 struct JobSnapshot {
@@ -66,7 +72,7 @@ struct JobSnapshot {
   // it is re-encoded and analysed slab by slab, never loaded whole past
   // the per-job memory.
   bool streamed = false;
-  // How it runs (plan_execution, server/job_pipeline.h): the path a CLI run
+  // How it runs (plan_execution, server/pipeline/job_pipeline.h): the path a CLI run
   // of the same params takes too.
   ExecutionPath execution = ExecutionPath::memory;
   // The job JSON's "analyses", one entry each: {"request", "url", "state",
@@ -81,13 +87,10 @@ struct JobSnapshot {
   bool has_value_volume() const { return values.is_object() && values.contains("type"); }
 };
 
-// What a succeeded job produced: its binary volume (the result of a job of
-// bits, the solid of a value job) and, for a value job, its values, which are
-// then the job's result, and the layers its mode keeps beside them.
-struct JobOutput {
-  std::shared_ptr<const BitVolume> solid;
-  std::shared_ptr<const ValueVolume> values;
-  std::vector<std::pair<std::string, std::shared_ptr<const ValueVolume>>> layers;
+// What a succeeded job produced: the volumes its mode made (api/job_volumes.h,
+// the same type the pipeline hands over, kept as it is), or for a streamed
+// job their stored files.
+struct JobOutput : api::JobVolumes {
   // A streamed job's volume as stored (solid is then null): what streams is
   // answered by replaying it slab by slab (voxd/encode/rle_slabs.h); and a
   // streamed job's values as stored (values is then null).

@@ -28,10 +28,6 @@ std::uint64_t result_volume_bytes(const Grid& grid, const api::JobParams& params
   return bytes;
 }
 
-std::string queue_full_message(std::size_t size) {
-  return "the job queue is full (" + std::to_string(size) + " jobs waiting); retry later";
-}
-
 }  // namespace
 
 std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint8_t>& mesh_bytes,
@@ -43,7 +39,7 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
     if (!accepting) throw NotAccepting("the service is shutting down and accepts no new jobs");
   }
   if (const std::size_t waiting = backend.waiting(); waiting >= config.queue_size)
-    throw QueueFull(queue_full_message(config.queue_size), retry_after(waiting));
+    throw queue_full(waiting);
   const auto parsed = std::make_shared<const api::JobParams>(api::parse_job_params(params_json));
   const api::JobParams& params = *parsed;
   if (store && store->free_bytes() < config.min_free_disk)
@@ -85,9 +81,11 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
         {"/analyses", "synchronous voxelization answers with the volume only; submit to POST /v1/jobs for analyses"}});
   // The upload while it is decoded, then the job's own share: until the
   // decoded mesh is known, a bound from the bytes and the format.
+  // The format is detected once, here.
+  const MeshFormat format = detect_mesh_format(mesh_bytes, name_hint);
   MemoryBudget::Reservation decoding =
-      budget.reserve(decode_memory_estimate(mesh_bytes, name_hint, config.limits.decode), "decoding this upload");
-  PreparedVoxelJob prepared = prepare_voxel_job(mesh_bytes, name_hint, params, job_limits(store != nullptr));
+      budget.reserve(decode_memory_estimate(mesh_bytes.size(), format, config.limits.decode), "decoding this upload");
+  PreparedVoxelJob prepared = prepare_voxel_job(format, mesh_bytes, name_hint, params, job_limits(store != nullptr));
   if (max_voxels > 0 && prepared.grid.voxel_count() > max_voxels)
     throw Error(ErrorCode::limit_exceeded, "the grid has " + std::to_string(prepared.grid.voxel_count()) +
                                                " voxels; synchronous voxelization takes at most " +
@@ -142,10 +140,10 @@ void JobEngine::enqueue_local(JobBackend::Admitted& admitted, JobStore* store) {
     // Queued under the table's lock: a worker that takes it at once finds it.
     const bool closing = !accepting;
     if (closing || !local_queue->submit(s.id)) {
-      const int wait = retry_after(local_queue->depth());
+      const QueueFull full = queue_full(local_queue->depth());
       if (store) store->remove(s.id);
       if (closing) throw NotAccepting("the service is shutting down and accepts no new jobs");
-      throw QueueFull(queue_full_message(config.queue_size), wait);
+      throw full;
     }
     jobs.emplace(s.id, admitted.job);
     announce(s);

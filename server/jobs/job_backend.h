@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "server/job_pipeline.h"
+#include "server/pipeline/job_pipeline.h"
 #include "server/jobs/job.h"
 #include "server/jobs/memory_budget.h"
 
@@ -117,12 +117,6 @@ class JobBackend {
     (void)id;
     (void)key;
     (void)bytes;
-  }
-  // Whether a volume read back for this job may be cached (it was not
-  // deleted meanwhile).
-  virtual bool keeps(const std::string& id) const {
-    (void)id;
-    return false;
   }
   virtual JobCounts counts() const { return {}; }
   // Whether the backend answered lately.

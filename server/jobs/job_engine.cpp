@@ -117,7 +117,7 @@ nlohmann::json JobEngine::prepare_analyses(Job& job, JobStore& store, const std:
   }
   view.mesh = r.report;
   view.mesh_mass = r.mesh_mass;
-  view.values = r.values_info;
+  view.values = r.volumes.values_info;
   const std::string id = view.id;
   const ArtifactAccess artifacts{
       id, [&store, id](const std::string& key) { return store.load_artifact(id, key); },
@@ -171,6 +171,11 @@ int JobEngine::retry_after(std::size_t waiting) const {
   return std::clamp(static_cast<int>(std::ceil(seconds)), 1, 3600);
 }
 
+QueueFull JobEngine::queue_full(std::size_t waiting) const {
+  return QueueFull("the job queue is full (" + std::to_string(config.queue_size) + " jobs waiting); retry later",
+                   retry_after(waiting));
+}
+
 void JobEngine::record_success(JobSnapshot& s, const VoxelJobResult& r, std::optional<nlohmann::json> analyses_done) {
   if (analyses_done) s.analyses = std::move(*analyses_done);
   s.state = JobState::succeeded;
@@ -184,7 +189,7 @@ void JobEngine::record_success(JobSnapshot& s, const VoxelJobResult& r, std::opt
     if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
       s.timings.push_back(t);
   s.filled_voxels = r.filled;
-  s.values = r.values_info.is_null() ? nlohmann::json(nullptr) : r.values_info;
+  s.values = r.volumes.values_info.is_null() ? nlohmann::json(nullptr) : r.volumes.values_info;
 }
 
 }  // namespace voxd::server

@@ -21,7 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "server/job_pipeline.h"
+#include "server/pipeline/job_pipeline.h"
 #include "server/jobs/job.h"
 #include "server/jobs/job_backend.h"
 #include "server/jobs/job_events.h"
@@ -121,6 +121,8 @@ class JobEngine {
                                   const VoxelJobResult& r, const JobOutput& output);
   // Seconds a client refused for a full queue of `waiting` jobs should wait.
   int retry_after(std::size_t waiting) const;
+  // The refusal of a submission to a queue of `waiting` jobs (HTTP 429).
+  QueueFull queue_full(std::size_t waiting) const;
   std::size_t worker_count = 1;
 
   // Admission (job_admission.cpp): parses and checks the submission, decodes

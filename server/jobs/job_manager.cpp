@@ -29,6 +29,17 @@ struct JobManager::Impl {
     const auto s = backend->find(id);
     return s && s->state == JobState::succeeded;
   }
+  // Caches a volume read back for a job, and drops it again when the job
+  // was removed meanwhile: removal forgets the job and drops its entries
+  // (embedded: both under the table's lock; replicated: the record first),
+  // so either that drop comes after this put or this check sees the job
+  // gone, and a deleted job's volume never stays cached.
+  template <class T>
+  void cache_while_kept(const std::string& id, const std::string& key, const std::shared_ptr<const T>& v,
+                        std::uint64_t bytes) {
+    engine.cache.put(key, v, bytes);
+    if (!succeeded(id)) engine.cache.drop_job(id);
+  }
 };
 
 JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {
@@ -90,7 +101,7 @@ std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
   VolumeCache& cache = impl_->engine.cache;
   if (auto v = cache.get<BitVolume>(id)) return v;
   auto v = impl_->backend->store()->load_volume(id);
-  if (v && impl_->backend->keeps(id)) cache.put(id, v, v->byte_size());
+  if (v) impl_->cache_while_kept(id, id, v, v->byte_size());
   return v;
 }
 
@@ -119,7 +130,7 @@ std::shared_ptr<const ValueVolume> JobManager::layer(const std::string& id, cons
   VolumeCache& cache = impl_->engine.cache;
   if (auto v = cache.get<ValueVolume>(key)) return v;
   auto v = impl_->backend->store()->load_layer(id, name);
-  if (v && impl_->backend->keeps(id)) cache.put(key, v, byte_size(*v));
+  if (v) impl_->cache_while_kept(id, key, v, byte_size(*v));
   return v;
 }
 

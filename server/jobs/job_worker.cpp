@@ -130,10 +130,8 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
       // The mesh report is part of a kept record; a job kept nowhere skips it.
       r = execute_voxel_job(std::move(prepared), /*with_report=*/store != nullptr, &job.control, engine_threads);
       job.control.set_stage("store");
-      output.solid = std::make_shared<const BitVolume>(std::move(r.volume));
-      if (r.values) output.values = std::make_shared<const ValueVolume>(std::move(*r.values));
-      for (auto& [name, layer] : r.layers)
-        output.layers.emplace_back(name, std::make_shared<const ValueVolume>(std::move(layer)));
+      api::JobVolumes& volumes = output;
+      volumes = r.volumes;  // the same volumes, shared: nothing is copied
       if (store) {
         store->save_volume(id, *output.solid);
         if (output.values) store->save_layer(id, "values", *output.values);
@@ -175,7 +173,7 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
     std::lock_guard lock(mutex);
     job.snap.state = JobState::failed;
     job.snap.finished_at = format_now();
-    job.snap.failure = JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
+    job.snap.failure = internal_failure();
   }
   {
     std::lock_guard lock(mutex);

@@ -23,14 +23,6 @@ JobFailure input_expired() {
                     "the uploaded mesh was no longer kept when a worker took the job; submit it again"};
 }
 
-namespace {
-
-std::string queue_full_message(std::size_t size) {
-  return "the job queue is full (" + std::to_string(size) + " jobs waiting); retry later";
-}
-
-}  // namespace
-
 JobBackendFactory replicated_backend(ReplicatedBackendParts parts) {
   return [parts = std::move(parts)](JobEngine& engine) -> std::unique_ptr<JobBackend> {
     return std::make_unique<ReplicatedJobBackend>(engine, parts);
@@ -61,7 +53,7 @@ void ReplicatedJobBackend::accept(Admitted admitted) {
     admitted.mesh_bytes.shrink_to_fit();
     if (!parts_.queue->submit(s.id)) {
       parts_.store->remove(s.id);
-      throw QueueFull(queue_full_message(engine_.config.queue_size), engine_.retry_after(parts_.queue->depth()));
+      throw engine_.queue_full(parts_.queue->depth());
     }
   } catch (const QueueFull&) {
     throw;

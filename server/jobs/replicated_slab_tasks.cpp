@@ -14,14 +14,6 @@
 
 namespace voxd::server {
 
-namespace {
-
-JobFailure internal_failure() {
-  return JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
-}
-
-}  // namespace
-
 // One slab task from the shared queue: its layers made and stored, and
 // counted done; the worker that counts the last one puts the job together.
 void ReplicatedJobBackend::run_slab_task(const TakenJob& taken, const SlabTaskRef& ref) {

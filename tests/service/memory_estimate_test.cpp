@@ -1,4 +1,4 @@
-// The memory budget's estimates (server/job_pipeline.h,
+// The memory budget's estimates (server/pipeline/job_pipeline.h,
 // server/jobs/job_analyses.h) against the measured peak of real `voxd`
 // processes doing the same work (ru_maxrss from wait4): an estimate below
 // the measurement would let the service admit more than its budget.
@@ -17,7 +17,7 @@
 
 #include "api/analysis_request.h"
 #include "api/job_params.h"
-#include "server/job_pipeline.h"
+#include "server/pipeline/job_pipeline.h"
 #include "server/jobs/job_analyses.h"
 #include "support/ply_writer.h"
 #include "support/run_process.h"

@@ -21,7 +21,9 @@ std::optional<std::string> streaming_refusal(VolumeFormat format) {
              "write rle, raw or nrrd, or voxelize in memory";
     default: break;
   }
-  return std::string(to_string(format)) + " is not a format of bits";
+  // The rest (vox, png-stack, a mode's mesh) need the whole volume; so does
+  // a new format until its writer here says otherwise.
+  return std::string(to_string(format)) + " does not stream slab by slab; write rle, raw or nrrd, or voxelize in memory";
 }
 
 namespace {

@@ -32,9 +32,15 @@ std::string_view as_text(std::span<const std::uint8_t> data) {
 Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint, const DecodeLimits& limits,
                  DecodeWarnings* warnings) {
   check_size(data, limits);
+  return decode_detected_mesh(detect_mesh_format(data, name_hint), data, name_hint, limits, warnings);
+}
+
+Mesh decode_detected_mesh(MeshFormat detected, std::span<const std::uint8_t> data, std::string_view name_hint,
+                          const DecodeLimits& limits, DecodeWarnings* warnings) {
+  check_size(data, limits);
   // UTF-16 text (a binary STL of exactly its declared size stays one, BOM-like
   // header or not): decoded to UTF-8, then read as any text.
-  if (const auto order = mesh_io::utf16_byte_order(data); order && detect_mesh_format(data) != MeshFormat::stl_binary) {
+  if (const auto order = mesh_io::utf16_byte_order(data); order && detected != MeshFormat::stl_binary) {
     const std::string text = mesh_io::utf16_to_utf8(data, *order);
     if (warnings)
       warnings->push_back(std::string("the file is UTF-16 text (") +
@@ -42,8 +48,7 @@ Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint,
                           "-endian), read as UTF-8; save it as UTF-8 for tools that expect it");
     return decode_mesh({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}, name_hint, limits, warnings);
   }
-  const MeshFormat format = detect_mesh_format(data, name_hint);
-  if (format == MeshFormat::unknown) {
+  if (detected == MeshFormat::unknown) {
     const std::string name = name_hint.empty() ? std::string("the file") : mesh_io::quote_token(name_hint);
     const std::string_view foreign = mesh_io::foreign_format_name(data);
     const std::string what = foreign.empty() ? "starts with " + mesh_io::quote_token(as_text(data).substr(0, 16))
@@ -51,7 +56,7 @@ Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint,
     throw Error(ErrorCode::unknown_format,
                 "cannot recognize the mesh format of " + name + ", which " + what + "; " + kSupportedFormats);
   }
-  return decode_mesh_as(format, data, limits, warnings);
+  return decode_mesh_as(detected, data, limits, warnings);
 }
 
 Mesh decode_mesh_as(MeshFormat format, std::span<const std::uint8_t> data, const DecodeLimits& limits,

@@ -48,6 +48,12 @@ MeshFormat detect_mesh_format(std::span<const std::uint8_t> data, std::string_vi
 Mesh decode_mesh(std::span<const std::uint8_t> data, std::string_view name_hint = {},
                  const DecodeLimits& limits = {}, DecodeWarnings* warnings = nullptr);
 
+// decode_mesh for a caller that detected the format first (to size the
+// memory decoding takes): `detected` is detect_mesh_format(data, name_hint),
+// and is not detected again.
+Mesh decode_detected_mesh(MeshFormat detected, std::span<const std::uint8_t> data, std::string_view name_hint = {},
+                          const DecodeLimits& limits = {}, DecodeWarnings* warnings = nullptr);
+
 // Decodes with an already known format (used by tests and by decode_mesh).
 Mesh decode_mesh_as(MeshFormat format, std::span<const std::uint8_t> data,
                     const DecodeLimits& limits = {}, DecodeWarnings* warnings = nullptr);

@@ -1,4 +1,4 @@
-#include "server/job_pipeline.h"
+#include "server/pipeline/job_pipeline.h"
 
 #include "voxd/analysis/mass_properties.h"
 
@@ -51,9 +51,12 @@ std::int64_t streamed_job_slab_layers(const Grid& grid, const api::JobParams& pa
 
 std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                      const DecodeLimits& limits) {
-  const std::uint64_t n = mesh_bytes.size();
+  return decode_memory_estimate(mesh_bytes.size(), detect_mesh_format(mesh_bytes, name_hint), limits);
+}
+
+std::uint64_t decode_memory_estimate(std::uint64_t n, MeshFormat format, const DecodeLimits& limits) {
   constexpr std::uint64_t kFixed = std::uint64_t{16} << 20;
-  switch (detect_mesh_format(mesh_bytes, name_hint)) {
+  switch (format) {
     // A binary STL record (50 bytes) becomes at most 48 bytes of mesh.
     case MeshFormat::stl_binary: return 2 * n + kFixed;
     // A binary PLY vertex can be 12 bytes and a face 13: the mesh takes up
@@ -105,11 +108,16 @@ ExecutionPlan plan_execution(const api::JobParams& params, const Grid& grid, con
 
 PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                    const api::JobParams& params, const JobLimits& limits) {
+  return prepare_voxel_job(detect_mesh_format(mesh_bytes, name_hint), mesh_bytes, name_hint, params, limits);
+}
+
+PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uint8_t> mesh_bytes,
+                                   std::string_view name_hint, const api::JobParams& params, const JobLimits& limits) {
   PreparedVoxelJob job;
   job.params = params;
   Stopwatch clock;
-  job.format = detect_mesh_format(mesh_bytes, name_hint);
-  job.mesh = decode_mesh(mesh_bytes, name_hint, limits.decode, &job.decode_warnings);
+  job.format = detected;
+  job.mesh = decode_detected_mesh(detected, mesh_bytes, name_hint, limits.decode, &job.decode_warnings);
   job.triangles = job.mesh.triangle_count();
   job.timings.add("parse", clock.lap());
 
@@ -199,26 +207,25 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
     if (control) control->set_span(b, e);
   };
   const bool parity_solid = mode.needs_parity_solid(job.params);
+  std::shared_ptr<const BitVolume> parity;
   if (control) control->set_stage("voxelize");
   if (parity_solid) {
     span(begin, begin + 0.1 * (end - begin));
     VoxelizeOptions options;
     options.inside = InsideTest::parity;
     options.threads = threads;
-    result.volume = voxelize(job.mesh, job.grid, options, control);
+    parity = std::make_shared<const BitVolume>(voxelize(job.mesh, job.grid, options, control));
     result.timings.add("voxelize", clock.lap());
     span(begin + 0.1 * (end - begin), end);
     if (control) control->set_stage(std::string(mode.stage_name()));
   }
-  api::ModeResult made = mode.run({job.mesh, job.grid, job.params, threads, control, parity_solid ? &result.volume : nullptr});
+  result.volumes = mode.run({job.mesh, job.grid, job.params, threads, control, parity.get()});
   span(begin, end);
   result.timings.add(std::string(mode.stage_name()), clock.lap());
-  if (made.volume) result.volume = std::move(*made.volume);
-  result.values = std::move(made.values);
-  result.layers = std::move(made.layers);
-  result.values_info = std::move(made.values_info);
-  if (result.values) result.values_info["type"] = value_type_name(*result.values);
-  result.filled = result.volume.count();
+  api::JobVolumes& made = result.volumes;
+  if (!made.solid) made.solid = parity ? std::move(parity) : std::make_shared<const BitVolume>();
+  if (made.values) made.values_info["type"] = value_type_name(*made.values);
+  result.filled = made.solid->count();
   result.timings.add("count", clock.lap());
   return result;
 }
@@ -251,11 +258,11 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
     if (control) control->set_span(begin + 0.1 * (end - begin), end);
     if (control) control->set_stage(std::string(mode.stage_name()));
   }
-  result.values_info = mode.run_streamed({job.mesh, job.grid, job.params, threads, control, nullptr}, slab_layers,
+  result.volumes.values_info = mode.run_streamed({job.mesh, job.grid, job.params, threads, control, nullptr}, slab_layers,
                                          parity_solid ? BitSlabConsumer([](std::int64_t, const BitVolume&) {}) : bits,
                                          values);
   if (control) control->set_span(begin, end);
-  if (auto type = job.params.value_type()) result.values_info["type"] = value_type_name(*type);
+  if (auto type = job.params.value_type()) result.volumes.values_info["type"] = value_type_name(*type);
   result.timings.add(parity_solid ? std::string(mode.stage_name()) + "+write" : "voxelize+write", clock.lap());
   return result;
 }

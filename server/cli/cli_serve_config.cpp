@@ -1,4 +1,4 @@
-#include "server/http/server_config.h"
+#include "server/cli/cli_serve_config.h"
 
 #include <cstdlib>
 #include <functional>
@@ -9,10 +9,11 @@
 
 #include "server/redis/redis_client.h"
 
-namespace voxd::server {
+namespace voxd::cli {
 namespace {
 
-using cli::UsageError;
+using server::ServeConfig;
+using server::parse_redis_url;
 
 struct Option {
   const char* flag;
@@ -206,4 +207,4 @@ std::string serve_help() {
   return s.str();
 }
 
-}  // namespace voxd::server
+}  // namespace voxd::cli

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/job_params.h"
+#include "api/job_volumes.h"
 #include "voxd/bit_volume.h"
 #include "voxd/analysis/mass_properties.h"
 #include "voxd/mesh_io/mesh_decode.h"
@@ -105,20 +106,13 @@ struct VoxelJobResult {
   std::optional<MassProperties> mesh_mass;  // with the report; in the voxels' (rotated) frame
   glm::dmat3 rotation{1.0};
   Grid grid;
-  // The binary volume: the result of a job of bits; the solid (centre
-  // inside) of a value job, which the analyses measure.
-  BitVolume volume;
+  // What the mode made, as the store keeps it (api/job_volumes.h): the
+  // solid is never null in memory (the mode's bits or the parity solid);
+  // made slab by slab and handed on (execute_streamed_voxel_job), only
+  // values_info is set and `filled` is counted from the slabs.
+  api::JobVolumes volumes;
   std::uint64_t filled = 0;
-  // A value job's result (api::JobParams::has_values()).
-  std::optional<ValueVolume> values;
-  // Volumes kept beside the values, by name (api::JobMode::stored_layers()).
-  std::vector<std::pair<std::string, ValueVolume>> layers;
-  // Made slab by slab and handed on (execute_streamed_voxel_job): `volume`
-  // is then empty, `filled` counted from the slabs.
   bool streamed = false;
-  // What the values are, for the job status and the CLI summary
-  // (proto-schemas/job-status.schema.json "values").
-  nlohmann::json values_info;
   StageTimings timings;
 };
 
@@ -141,6 +135,8 @@ std::int64_t streamed_job_slab_layers(const Grid& grid, const api::JobParams& pa
 // tests/service/memory_estimate_test.cpp.
 std::uint64_t decode_memory_estimate(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                      const DecodeLimits& limits);
+// The same for an upload of `bytes` whose format was detected already.
+std::uint64_t decode_memory_estimate(std::uint64_t bytes, MeshFormat format, const DecodeLimits& limits);
 // The memory the isolated Draco decoder is given for a file of `bytes`
 // (at most the service's --max-decode-memory).
 std::uint64_t draco_child_memory(std::uint64_t bytes);
@@ -166,6 +162,11 @@ ExecutionPlan plan_execution(const api::JobParams& params, const Grid& grid, con
 // (plan_execution). Throws voxd::Error.
 PreparedVoxelJob prepare_voxel_job(std::span<const std::uint8_t> mesh_bytes, std::string_view name_hint,
                                    const api::JobParams& params, const JobLimits& limits);
+// The same for an upload whose format the caller detected already
+// (detect_mesh_format(mesh_bytes, name_hint), to size decoding's memory
+// first): the format is detected once per upload.
+PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uint8_t> mesh_bytes,
+                                   std::string_view name_hint, const api::JobParams& params, const JobLimits& limits);
 
 // The expensive part: (mesh report of the mesh as uploaded,) rotation,
 // voxelization, count.
