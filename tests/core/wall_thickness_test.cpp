@@ -7,6 +7,7 @@
 
 #include <glm/common.hpp>
 
+#include "support/ray_thickness.h"
 #include "support/test_meshes.h"
 #include "support/test_parts.h"
 #include "voxd/analysis/analysis.h"
@@ -193,6 +194,41 @@ TEST(WallThickness, TubeAndSphericalShellAreRMinusREverywhere) {
   const Range s = range_of(shell, wall_thickness(shell, 2));
   EXPECT_GT(s.min, 0.7 - h);
   EXPECT_LT(s.max, 0.7 + h);
+}
+
+// Curved walls many voxels thick against the mesh's own ray thickness
+// (support/ray_thickness.h), at points on the walls' faces 2 voxels or more
+// from a sharp edge: a tube 30 voxels thick along a grid axis, whose faces
+// cross the axes at every angle (it read up to 2 voxels low 3-14° off an
+// axis, where a surface fit leant towards the staircase's risers), and a
+// spherical shell turned off the grid. Every point within a voxel, and the
+// report finds no thin region with min_wall one voxel under the wall.
+TEST(WallThickness, CurvedWallsReadTheirRayThicknessWithinAVoxel) {
+  const double h = 0.025;
+  struct Case {
+    const char* name;
+    Mesh mesh;
+    double wall;
+  };
+  const std::vector<Case> cases = {
+      {"tube", test::make_tube(3, 2.25, 0, 1.5, 192), 0.75},
+      {"shell", test::rotated(test::concat({test::make_icosphere({0, 0, 0}, 2.4, 5),
+                                            test::flipped(test::make_icosphere({0, 0, 0}, 1.8, 5))}), 30, 20), 0.6}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const BitVolume v = solid_of(c.mesh, h);
+    const DenseVolume<float> map = wall_thickness(v, 2);
+    const test::WallAgreement w = test::compare_with_rays(c.mesh, v, map, 1000);
+    EXPECT_GE(w.points, 1000u);
+    EXPECT_GE(w.within_1, 0.99) << "p1 " << w.p01 << ", p99 " << w.p99;
+    EXPECT_GE(w.within_1_5, 0.999);
+    EXPECT_NEAR(w.ray_mean, c.wall, 0.01);  // the reference measures the wall
+    AnalysisOptions options;
+    options.skin = false;
+    options.min_wall_voxels = c.wall / h - 1.0;
+    options.thickness_map = &map;
+    EXPECT_TRUE(analyze_volume(v, options).thickness->thin_regions.empty());
+  }
 }
 
 TEST(WallThickness, LBracketFinIsThinAndTheWallsAreNot) {
