@@ -71,18 +71,27 @@ std::vector<SurfacePoint> sample_surface(const Mesh& mesh, std::size_t count, st
   return out;
 }
 
-std::optional<double> ray_thickness(const Mesh& mesh, const SurfacePoint& p) {
+std::optional<RayHit> ray_hit(const Mesh& mesh, const SurfacePoint& p) {
   const glm::dvec3 dir = -p.normal;
   // Past the point's own plane by a hair: not its own face nor a neighbour
   // through the shared edge.
   constexpr double kSelf = 1e-7;
-  std::optional<double> nearest;
+  std::optional<RayHit> nearest;
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     if (t == p.triangle) continue;
-    const auto s = hit(triangle(mesh, t), p.point, dir);
-    if (s && *s > kSelf && (!nearest || *s < *nearest)) nearest = s;
+    const Triangle tri = triangle(mesh, t);
+    const auto s = hit(tri, p.point, dir);
+    if (s && *s > kSelf && (!nearest || *s < nearest->distance)) {
+      const glm::dvec3 n = glm::cross(tri.b - tri.a, tri.c - tri.a);
+      nearest = RayHit{*s, glm::length(n) > 0 ? glm::normalize(n) : glm::dvec3(0.0)};
+    }
   }
   return nearest;
+}
+
+std::optional<double> ray_thickness(const Mesh& mesh, const SurfacePoint& p) {
+  const std::optional<RayHit> h = ray_hit(mesh, p);
+  return h ? std::optional(h->distance) : std::nullopt;
 }
 
 std::vector<Segment> sharp_edges(const Mesh& mesh, double degrees) {
@@ -128,6 +137,10 @@ double distance_to_edges(glm::dvec3 p, const std::vector<Segment>& edges) {
   return best;
 }
 
+namespace {
+const double kFacingCos = std::cos(165.0 * 3.14159265358979323846 / 180.0);
+}  // namespace
+
 WallAgreement compare_with_rays(const Mesh& mesh, const BitVolume& solid, const DenseVolume<float>& map,
                                 std::size_t count, double edge_margin, std::uint64_t seed) {
   const Grid& g = solid.grid();
@@ -143,11 +156,23 @@ WallAgreement compare_with_rays(const Mesh& mesh, const BitVolume& solid, const 
     if (errors.size() == count) break;
     const double to_edge = distance_to_edges(p.point, edges);
     if (to_edge < edge_margin * h) continue;
-    const std::optional<double> ray = ray_thickness(mesh, p);
+    const std::optional<RayHit> exit = ray_hit(mesh, p);
+    if (!exit) continue;
+    const std::optional<double> ray = exit->distance;
     // A face whose ray runs on for more than twice its distance to an edge
     // ends a wall (a tube's annular cap reads the tube's length): the wall
     // it ends is measured on the wall's own faces.
-    if (!ray || *ray > 2 * to_edge) continue;
+    if (*ray > 2 * to_edge) continue;
+    // The same at the far end: a ray that leaves within half its length of
+    // an edge leaves by the end of a wall (behind a rib, a bore's ray runs
+    // out along the rib to its rim), measuring the wall's extent.
+    if (*ray > 2 * distance_to_edges(p.point - *ray * p.normal, edges)) continue;
+    // And a ray measures a wall where it leaves by a face parallel to its
+    // own, within 15°: one that leaves by a face turned further crosses a
+    // junction (a fillet's ray runs down into the wall the fillet stands
+    // on) or cuts a wall obliquely, longer than its thickness by up to
+    // 1 / cos of the angle.
+    if (glm::dot(p.normal, exit->normal) > kFacingCos) continue;
     // The filled voxel under the point, else the nearest one within a voxel.
     glm::i64vec3 at = voxel_of(p.point - 0.5 * h * p.normal);
     if (!inside(at)) {

@@ -35,6 +35,12 @@ std::vector<SurfacePoint> sample_surface(const Mesh& mesh, std::size_t count, st
 // triangle other than its own; nullopt when the ray meets none (an open or
 // inside-out mesh).
 std::optional<double> ray_thickness(const Mesh& mesh, const SurfacePoint& p);
+// The same ray's hit: how far, and the outward normal of the face it leaves by.
+struct RayHit {
+  double distance = 0;
+  glm::dvec3 normal{0.0};
+};
+std::optional<RayHit> ray_hit(const Mesh& mesh, const SurfacePoint& p);
 
 // The edges where the surface turns by more than `degrees` between the two
 // triangles that share them (vertices welded by position), as segments.
@@ -47,7 +53,11 @@ double distance_to_edges(glm::dvec3 p, const std::vector<Segment>& edges);
 // points on the faces of walls: at least `edge_margin` voxels from every
 // edge sharper than 30°, and no further from one than half their ray (a
 // face whose ray runs on past that ends a wall, as a tube's annular cap,
-// whose ray is the tube's length). The map is read at the filled voxel
+// whose ray is the tube's length; the same at the ray's far end: a bore's
+// ray behind a rib runs out along the rib to its rim), and whose ray leaves
+// by a face parallel to theirs within 15° (a fillet's ray runs down into
+// the junction, across no wall; an oblique ray is longer than the wall by
+// up to 1 / cos of the angle). The map is read at the filled voxel
 // under each point (half a voxel inward along its normal, else the nearest
 // filled voxel within one voxel).
 struct WallAgreement {

@@ -128,13 +128,17 @@ class FitCache {
 // (two voxels on a wall 30 thick). Across a thick wall the chord between
 // the two nearest empty voxels knows the direction better, to about
 // atan(2 / length): on a wall at least kChordMinLength voxels across, where
-// the fits are parallel (within 20°) but leave the chord by more than that
-// (and 8°), the faces are placed along the chord. Thinner walls keep their
+// the fits are parallel (within 30°: the risers also tilt the two fits
+// apart, by 21° on a tube 60 voxels thick turned 71°/16°) but their mean
+// leaves the chord by more than that (and 8°), the faces are placed along
+// the chord. A tapering wall's fits are not parallel but their mean is its
+// bisector, which the chord follows: it keeps its fits. Thinner walls keep their
 // fits: there the chord's lattice error is the larger, and the lean costs
 // under a voxel. Measured with bench/wall_accuracy (docs/benchmarks.md,
 // issue #35): tubes and spherical shells 12 to 57 voxels thick, turned or
 // not, read within ±1 voxel of the mesh's ray thickness at every sampled
-// point, from 73-98% before.
+// point, from 73-98% before; with the 30° (from 20°) the thin stripes across
+// a 60-voxel tube and by a cup's floor are gone.
 constexpr double kChordMinLength = 12.0;
 
 std::pair<SurfaceFit, SurfaceFit> along_chord(const BitVolume& solid, const SurfaceFit& a, const SurfaceFit& b,
@@ -146,7 +150,7 @@ std::pair<SurfaceFit, SurfaceFit> along_chord(const BitVolume& solid, const Surf
   const double parallel = -(a.normal.x * b.normal.x + a.normal.y * b.normal.y + a.normal.z * b.normal.z);
   const glm::dvec3 m = chord / length;
   const double lean = n.x * m.x + n.y * m.y + n.z * m.z;
-  if (parallel < std::cos(20.0 * kPi / 180.0) || lean >= std::cos(std::max(8.0 * kPi / 180.0, std::atan(2.0 / length))))
+  if (parallel < std::cos(30.0 * kPi / 180.0) || lean >= std::cos(std::max(8.0 * kPi / 180.0, std::atan(2.0 / length))))
     return {a, b};
   n = m;
   return {SurfaceFit{m, plane_offset(solid, fp, m), true}, SurfaceFit{-m, plane_offset(solid, fq, -m), true}};

@@ -56,9 +56,10 @@
 // faces are flat for two voxels around (nearer an edge, the fits lean: a
 // 2-voxel wall beside a 5-voxel cavity reads 2.2). Tested on
 // plates (sharp, chamfered, rotated 30° about two axes, three voxel sizes),
-// tubes and spherical shells (12 to 57 voxels thick, turned or not, every
-// point of their faces within a voxel of the mesh's own ray thickness:
-// bench/wall_accuracy), an L-bracket with a thin fin, and wedges turned
+// tubes, spherical shells, a cup, a drafted sleeve, a boss on a plate and
+// filleted ribs (16 to 60 voxels thick, most turned off the grid, 99.9% of
+// the points of their faces within a voxel of the mesh's own ray
+// thickness: tests/support/wall_parts.h, bench/wall_accuracy), an L-bracket with a thin fin, and wedges turned
 // off the grid, whose region under min_wall ends within a voxel of where
 // their section crosses it. So a wall at least min_wall + 1 voxel thick is
 // never reported thin, and one with flat faces at least min_wall thick
@@ -68,9 +69,10 @@
 // thickness of them) a voxel takes the medial surface's ragged edge, up to
 // three voxels along the taper; a wall tapering by less than a voxel per 5
 // voxels along the grid is a staircase in the voxel model, and reads as the
-// staircase's steps; where a thick wall meets another at a concave corner
-// (a cup's side on its floor), voxels by the corner read up to about two
-// voxels under the thinner wall.
+// staircase's steps; by a fillet at a wall's junction with a rib, the
+// wall's face within the fillet's first few degrees reads the section a
+// little further into the fillet, up to 5 voxels thick (0.2% of a
+// filleted rib's points).
 //
 // Cost: two feature transforms (each about twice the distance
 // transform's), one pass over the voxels for the medial pairs and one to
