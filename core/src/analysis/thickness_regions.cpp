@@ -5,13 +5,16 @@
 #include "voxd/analysis/thickness_regions.h"
 
 #include <algorithm>
+#include <unordered_map>
 
 #include <glm/common.hpp>
 
 namespace voxd {
 
 std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
-                                                    float threshold_voxels, std::uint64_t min_voxels) {
+                                                    float threshold_voxels, std::uint64_t min_voxels,
+                                                    const std::vector<std::size_t>* probes,
+                                                    std::vector<std::uint32_t>* probe_regions) {
   const auto d = thickness.grid().dims;
   const auto& t = thickness.values();
   auto selected = [&](std::size_t idx) {
@@ -27,9 +30,22 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
     return was;
   };
 
+  // The probed voxels, a bit each; the region each one's flood met it in
+  // (by the order regions are met, -1 for none), by voxel.
+  std::vector<std::uint64_t> probed;
+  std::unordered_map<std::size_t, std::int64_t> met_in;
+  if (probes) {
+    probed.assign(visited.size(), 0);
+    for (const std::size_t p : *probes)
+      if (p < t.size()) probed[p >> 6] |= std::uint64_t{1} << (p & 63);
+  }
+  std::int64_t met = 0;  // regions met so far, kept or not
+  std::vector<std::int64_t> kept_as;  // per region met: its place in `found`, or -1
+
   struct Found {
     ThicknessRegion region;
     std::size_t first;
+    std::size_t order;  // its place in `found` before sorting
   };
   std::vector<Found> found;
   std::vector<std::size_t> stack;
@@ -51,6 +67,7 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
       const auto j = static_cast<std::int64_t>((idx / sx) % static_cast<std::size_t>(d.y));
       const auto k = static_cast<std::int64_t>(idx / sxy);
       ++r.voxel_count;
+      if (!probed.empty() && (probed[idx >> 6] >> (idx & 63) & 1)) met_in[idx] = met;
       thickness_sum += t[idx];
       sum += glm::dvec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
       r.bbox_min = glm::min(r.bbox_min, glm::i64vec3(i, j, k));
@@ -72,10 +89,12 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
         }
       }
     }
+    ++met;
+    kept_as.push_back(r.voxel_count < min_voxels ? -1 : static_cast<std::int64_t>(found.size()));
     if (r.voxel_count < min_voxels) continue;
     r.centroid = sum / static_cast<double>(r.voxel_count);
     r.mean_thickness = static_cast<float>(thickness_sum / static_cast<double>(r.voxel_count));
-    found.push_back({r, seed});
+    found.push_back({r, seed, found.size()});
   }
   // Most severe first: the thinnest (thickest) extreme, then the larger
   // region, then scan order.
@@ -88,7 +107,20 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
   });
   std::vector<ThicknessRegion> regions;
   regions.reserve(found.size());
-  for (const Found& f : found) regions.push_back(f.region);
+  std::vector<std::uint32_t> rank_of_found(found.size());
+  for (const Found& f : found) {
+    rank_of_found[f.order] = static_cast<std::uint32_t>(regions.size());
+    regions.push_back(f.region);
+  }
+  if (probes && probe_regions) {
+    probe_regions->assign(probes->size(), 0);
+    for (std::size_t i = 0; i < probes->size(); ++i) {
+      const auto it = met_in.find((*probes)[i]);
+      if (it == met_in.end()) continue;
+      const std::int64_t place = kept_as[static_cast<std::size_t>(it->second)];
+      if (place >= 0) (*probe_regions)[i] = rank_of_found[static_cast<std::size_t>(place)] + 1;
+    }
+  }
   return regions;
 }
 

@@ -38,7 +38,15 @@ struct ThicknessRegion {
 // by its minimum ascending, a thick one by its maximum descending; ties by
 // size (largest first), then by their first voxel (z, then y, then x): the
 // same input always gives the same list.
+//
+// `probes` (voxel indices, as DenseVolume::index gives them), when given,
+// are answered in `probe_regions`: for each, 1 + the index in the returned
+// list of the region it lies in, or 0 for none (what a vertex on the part's
+// surface reads, voxd/analysis/surface_thickness.h), at the cost of a bit
+// per voxel.
 std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
-                                                    float threshold_voxels, std::uint64_t min_voxels);
+                                                    float threshold_voxels, std::uint64_t min_voxels,
+                                                    const std::vector<std::size_t>* probes = nullptr,
+                                                    std::vector<std::uint32_t>* probe_regions = nullptr);
 
 }  // namespace voxd
