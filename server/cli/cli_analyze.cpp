@@ -16,11 +16,13 @@
 #include "server/mapped_file.h"
 #include "server/pipeline/job_pipeline.h"
 #include "server/jobs/job_analyses.h"
+#include "server/jobs/kept_mesh.h"
 #include "voxd/analysis/analysis.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/error.h"
 #include "voxd/analysis/wall_thickness.h"
+#include "voxd/mesh_report.h"
 
 namespace voxd::cli {
 namespace {
@@ -41,6 +43,11 @@ writes into DIR what the HTTP API serves for a job:
   preview-from{+x,-x,+y,-y,+z,-z}.png  shaded views; preview-*-thickness.png
                          coloured by wall thickness
   thickness.nrrd         the wall-thickness volume (float32, model units)
+  thickness-on-part.{ply,glb,json}
+                         the mesh (welded, as given) with each vertex's wall
+                         thickness and colour (between --min-wall and
+                         --max-wall where given), and the values per vertex
+                         with the thin region of each
   analyses/KEY.EXT       each entry of the job JSON's "analyses" array
 Each file is what the service's route answers for the same job (the
 radiography, section, preview and thickness routes with their defaults):
@@ -85,7 +92,12 @@ int analyze_command(int argc, char** argv) {
   MappedFile file(mesh_path);
   JobLimits limits;
   limits.max_voxels = std::uint64_t{1} << 33;
-  VoxelJobResult result = run_voxel_job(file.bytes(), mesh_path, params, limits, /*with_report=*/true, nullptr, threads);
+  PreparedVoxelJob prepared = prepare_voxel_job(file.bytes(), mesh_path, params, limits);
+  // The mesh the thickness on the part is painted on, kept as the service
+  // keeps a job's (before the voxelizer turns it).
+  std::map<std::string, std::string> kept;
+  kept[server::kKeptMeshKey] = server::encode_kept_mesh(weld_vertices(prepared.mesh), prepared.rotation);
+  VoxelJobResult result = execute_voxel_job(std::move(prepared), /*with_report=*/true, nullptr, threads);
 
   auto positive = [&](const char* flag) -> double {
     const auto v = args.value(flag);
@@ -126,7 +138,6 @@ int analyze_command(int argc, char** argv) {
   // same job: made by the function its routes call (server::job_analysis)
   // from the request the route takes, so the bytes and their metadata agree.
   // This run's wall-thickness map is handed over as it is.
-  std::map<std::string, std::string> kept;
   const server::ArtifactAccess artifacts{
       "cli", [&kept](const std::string& key) -> std::optional<std::string> {
         auto it = kept.find(key);
@@ -192,7 +203,19 @@ int analyze_command(int argc, char** argv) {
       standard.emplace_back(std::string("preview-from") + view + "-thickness.png",
                             request(AnalysisKind::preview, {{"view", view}, {"colour", "thickness"}}));
   }
-  if (map) standard.emplace_back("thickness.nrrd", request(AnalysisKind::thickness, {{"format", "nrrd"}}));
+  if (map) {
+    standard.emplace_back("thickness.nrrd", request(AnalysisKind::thickness, {{"format", "nrrd"}}));
+    // And on the part itself, coloured between --min-wall and --max-wall
+    // where given, as GET /v1/jobs/{id}/thickness?format=ply|glb|json&...
+    api::Fields on_part;
+    if (args.value("min-wall")) on_part.emplace_back("min_wall", *args.value("min-wall"));
+    if (args.value("max-wall")) on_part.emplace_back("max_wall", *args.value("max-wall"));
+    for (const char* format : {"ply", "glb", "json"}) {
+      api::Fields f = on_part;
+      f.emplace_back("format", format);
+      standard.emplace_back(std::string("thickness-on-part.") + format, request(AnalysisKind::thickness, f));
+    }
+  }
   for (const auto& [name, r] : standard) write_file(name, answer(r, name));
 
   // The job JSON's analyses, named by their keys.

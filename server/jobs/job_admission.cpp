@@ -9,6 +9,7 @@
 #include "server/jobs/job_analyses.h"
 #include "server/jobs/job_backend.h"
 #include "server/jobs/job_engine.h"
+#include "server/jobs/kept_mesh.h"
 #include "server/jobs/job_store.h"
 
 namespace voxd::server {
@@ -95,10 +96,11 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
                 "the job needs about " + std::to_string(prepared.memory_estimate >> 20) + " MiB for its volumes, over the limit of " +
                     std::to_string(config.max_job_memory >> 20) + " MiB; use a lower resolution or a larger voxel_size");
   if (store && config.max_result_bytes > 0) {
-    const std::uint64_t bytes = result_volume_bytes(prepared.grid, params);
+    // The volumes, and the mesh the job keeps beside them (kept_mesh.h).
+    const std::uint64_t bytes = result_volume_bytes(prepared.grid, params) + kept_mesh_bytes(prepared.triangles);
     if (bytes > config.max_result_bytes)
       throw Error(ErrorCode::limit_exceeded,
-                  "the job's volumes take up to " + std::to_string(bytes >> 20) + " MiB to store, over the service's cap of " +
+                  "the job's volumes and mesh take up to " + std::to_string(bytes >> 20) + " MiB to store, over the service's cap of " +
                       std::to_string(config.max_result_bytes >> 20) +
                       " MiB a result; use a lower resolution or a larger voxel_size");
   }

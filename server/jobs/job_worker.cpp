@@ -8,10 +8,16 @@
 #include "server/jobs/job_backend.h"
 #include "server/jobs/job_engine.h"
 #include "server/jobs/job_store.h"
+#include "server/jobs/kept_mesh.h"
 #include "server/log_safe.h"
 #include "voxd/encode/slab_writer.h"
+#include "voxd/mesh_report.h"
 
 namespace voxd::server {
+
+void keep_job_mesh(const JobStore& store, const std::string& id, const PreparedVoxelJob& prepared) {
+  store.save_artifact(id, kKeptMeshKey, encode_kept_mesh(weld_vertices(prepared.mesh), prepared.rotation));
+}
 
 void JobEngine::work(JobBackend& backend) {
   for (;;) {
@@ -96,6 +102,9 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
     if (!analyses.empty()) job.control.set_span(0.0, 0.5);
     JobOutput output;
     VoxelJobResult r;
+    // The mesh the thickness on the part is painted on, kept first: the
+    // worker is about to hand it to the voxelizer, which turns it.
+    if (store) keep_job_mesh(*store, id, prepared);
     if (prepared.path != ExecutionPath::memory) {
       // Slab by slab straight into the stored RLE: the grid is never whole
       // (only a job with a store streams: job_limits).

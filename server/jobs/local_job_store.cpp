@@ -1,5 +1,7 @@
 #include "server/jobs/local_job_store.h"
 
+#include "server/jobs/kept_mesh.h"
+
 #include <sstream>
 
 #include <fcntl.h>
@@ -155,8 +157,14 @@ void LocalJobStore::share_volume(const std::string& from_id, const std::string& 
   std::vector<fs::path> files{job_dir(from_id) / "volume.rle"};
   for (const auto& entry : fs::directory_iterator(job_dir(from_id)))
     if (entry.path().extension() == ".rle" && entry.path().filename() != "volume.rle") files.push_back(entry.path());
+  // And the mesh it keeps beside them (kept_mesh.h), where it has one.
+  const fs::path mesh = fs::path("artifacts") / kKeptMeshKey;
+  if (fs::exists(job_dir(from_id) / mesh)) {
+    make_dirs(job_dir(to_id) / "artifacts");
+    files.push_back(job_dir(from_id) / mesh);
+  }
   for (const fs::path& from : files) {
-    const fs::path to = job_dir(to_id) / from.filename();
+    const fs::path to = job_dir(to_id) / fs::relative(from, job_dir(from_id));
     std::error_code ec;
     fs::create_hard_link(from, to, ec);
     if (ec) fs::copy_file(from, to, fs::copy_options::overwrite_existing);

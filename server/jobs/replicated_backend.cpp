@@ -1,5 +1,7 @@
 #include "server/jobs/replicated_backend.h"
 
+#include "server/jobs/kept_mesh.h"
+
 #include <thread>
 
 #include <spdlog/spdlog.h>
@@ -196,6 +198,7 @@ bool ReplicatedJobBackend::split(Job& job, const PreparedVoxelJob& prepared) {
   std::vector<std::string> tasks;
   for (std::int64_t i = 0; i < plan->tasks; ++i) tasks.push_back(slab_task_id(id, i));
   try {
+    keep_job_mesh(*store(), id, prepared);
     parts_.slab_tasks->save_plan(id, *plan);
     parts_.queue->split(id, tasks);
     spdlog::info("job {} split into {} slab tasks of {} layers", id, plan->tasks, plan->task_layers);

@@ -95,7 +95,8 @@ if redis.call('EXISTS', KEYS[3]) == 0 then return 0 end
 local function target(k, from, to)
   if string.sub(k, 1, #from) ~= from then return nil end
   local rest = string.sub(k, #from + 1)
-  if rest == 'volume' or string.sub(rest, 1, 7) == 'volume:' or string.sub(rest, 1, 6) == 'layer:' then return to .. rest end
+  if rest == 'volume' or string.sub(rest, 1, 7) == 'volume:' or string.sub(rest, 1, 6) == 'layer:' or
+     string.sub(rest, 1, 21) == 'artifact:surface-mesh' then return to .. rest end
   return nil
 end
 for _, k in ipairs(redis.call('SMEMBERS', KEYS[1])) do

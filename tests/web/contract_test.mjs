@@ -4,7 +4,8 @@
 // from web/package-lock.json; the repository's own document (whose schemas
 // live in files beside it) lints clean too; and /docs renders every
 // operation in headless Chromium without asking any other host for anything.
-// A palette job's glb passes the Khronos glTF validator and stands Y-up.
+// A palette job's glb passes the Khronos glTF validator and stands Y-up,
+// and so does the thickness on a part, which three.js opens with its colours.
 //   node --test tests/web/contract_test.mjs   (VOXD_BINARY=path/to/voxd)
 import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
@@ -139,4 +140,61 @@ test('a palette job\'s glb passes the Khronos glTF validator, its model turned Y
   };
   const extent = turn([2, 3, 5]).map((c) => Math.round(Math.abs(c) * 1e6) / 1e6);
   assert.deepEqual(extent, [2, 5, 3]);
+});
+
+test('the thickness on the part passes the glTF validator and opens in three.js with the PLY\'s values and colours', async () => {
+  const validator = requireWebModule('gltf-validator');
+  // A plate 10 x 8 x 1 in z: every vertex bounds the 1-thick wall.
+  const v = [[0, 0, 0], [10, 0, 0], [10, 8, 0], [0, 8, 0], [0, 0, 1], [10, 0, 1], [10, 8, 1], [0, 8, 1]];
+  const f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [3, 0, 4], [3, 4, 7]];
+  const stl = Buffer.alloc(84 + 50 * f.length);
+  stl.writeUInt32LE(f.length, 80);
+  f.forEach((t, i) => t.forEach((k, c) => v[k].forEach((x, a) => stl.writeFloatLE(x, 84 + 50 * i + 12 + 12 * c + 4 * a))));
+  const form = new FormData();
+  form.append('mesh', new Blob([stl]), 'plate.stl');
+  form.append('params', JSON.stringify({ grid: { voxel_size: 0.1, padding: 1 } }));
+  const submitted = await (await fetch(`${server.base}/v1/jobs`, { method: 'POST', body: form })).json();
+  let job = submitted;
+  for (let i = 0; i < 600 && !['succeeded', 'failed', 'cancelled'].includes(job.state); ++i) {
+    await new Promise((r) => setTimeout(r, 50));
+    job = await (await fetch(`${server.base}/v1/jobs/${submitted.id}`)).json();
+  }
+  assert.equal(job.state, 'succeeded', JSON.stringify(job));
+  const get = async (format) => {
+    const res = await fetch(`${server.base}/v1/jobs/${job.id}/thickness?format=${format}&min_wall=0.8&max_wall=2`);
+    assert.equal(res.status, 200, await res.clone().text());
+    return res;
+  };
+  const glbRes = await get('glb');
+  assert.equal(glbRes.headers.get('content-type'), 'model/gltf-binary');
+  const glb = new Uint8Array(await glbRes.arrayBuffer());
+  const report = await validator.validateBytes(glb);
+  assert.equal(report.issues.numErrors, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  assert.equal(report.issues.numWarnings, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  assert.equal(report.issues.numInfos, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+
+  // The PLY of the same job: 8 vertices of x y z thickness (floats) and r g b.
+  const ply = Buffer.from(await (await get('ply')).arrayBuffer());
+  const body = ply.indexOf('end_header\n') + 11;
+  const plyValues = [], plyColours = [];
+  for (let i = 0; i < 8; ++i) {
+    plyValues.push(ply.readFloatLE(body + 19 * i + 12));
+    plyColours.push([16, 17, 18].map((o) => ply[body + 19 * i + o]));
+  }
+  const json = await (await get('json')).json();
+  assert.deepEqual(json.thickness.map((t) => Math.fround(t)), plyValues);
+  for (const t of plyValues) assert.ok(Math.abs(t - 1) <= 0.1, `vertex reads ${t}, the wall is 1 (one voxel: 0.1)`);
+  assert.equal(json.vertices, 8);
+  assert.equal(json.unresolved, 0);
+
+  // three.js reads the colours and the values as its own attributes.
+  const { GLTFLoader } = await import(requireWebModule.resolve('three/examples/jsm/loaders/GLTFLoader.js'));
+  const gltf = await new GLTFLoader().parseAsync(glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength), '');
+  let mesh;
+  gltf.scene.traverse((o) => { if (o.isMesh) mesh = o; });
+  assert.ok(mesh.material.vertexColors, 'the material shows vertex colours');
+  assert.deepEqual(Array.from(mesh.geometry.attributes._thickness.array), plyValues);
+  const linear = (c) => { const s = c / 255; return s <= 0.04045 ? s / 12.92 : ((s + 0.055) / 1.055) ** 2.4; };
+  const colours = mesh.geometry.attributes.color.array;
+  plyColours.forEach((rgb, i) => rgb.forEach((c, k) => assert.ok(Math.abs(colours[3 * i + k] - linear(c)) < 1e-6)));
 });
