@@ -7,7 +7,9 @@
 // min/mean at the same surface points (2 voxels or more from sharp edges),
 // the share of points within ±1 and ±1.5 voxels of the ray, the 1st, 50th
 // and 99th percentiles of (map - ray) in voxels, the thin regions the report
-// finds with min_wall one voxel under the wall, and the seconds taken.
+// finds with min_wall one voxel under the wall, the seconds taken, and the
+// thickness on the part's own vertices against the ray at each (those 2
+// voxels or more from a sharp edge whose ray crosses a wall).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -17,7 +19,9 @@
 #include "support/ray_thickness.h"
 #include "support/wall_parts.h"
 #include "voxd/analysis/analysis.h"
+#include "voxd/analysis/surface_thickness.h"
 #include "voxd/analysis/wall_thickness.h"
+#include "voxd/mesh_report.h"
 #include "voxd/voxelize/voxelize.h"
 
 using namespace voxd;
@@ -27,8 +31,8 @@ int main(int argc, char** argv) {
   const std::size_t points = argc > 2 ? static_cast<std::size_t>(std::atol(argv[2])) : 2000;
   const std::vector<test::WallPart> parts = test::curved_wall_parts();
   std::printf("voxel %.3g, %zu points a part\n", h, points);
-  std::printf("| part | wall | ray min / mean | map min / mean | within ±1 voxel | ±1.5 | p1 / p50 / p99 of map - ray (voxels) | thin regions at wall - 1 voxel | seconds |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| part | wall | ray min / mean | map min / mean | within ±1 voxel | ±1.5 | p1 / p50 / p99 of map - ray (voxels) | thin regions at wall - 1 voxel | seconds | vertices compared, within ±1 voxel |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const test::WallPart& p : parts) {
     GridRequest request;
     request.kind = GridRequest::Kind::voxel_size;
@@ -44,9 +48,13 @@ int main(int argc, char** argv) {
     options.min_wall_voxels = p.wall / h - 1.0;
     options.thickness_map = &map;
     const AnalysisReport report = analyze_volume(solid, options);
-    std::printf("| %s | %.3f | %.3f / %.3f | %.3f / %.3f | %.1f%% | %.1f%% | %.2f / %.2f / %.2f | %zu | %.1f |\n",
+    // The thickness on the part's own (welded) vertices, against the ray at each.
+    const Mesh welded = weld_vertices(p.mesh);
+    const test::VertexAgreement on_part =
+        test::compare_vertices_with_rays(welded, surface_thickness(welded, map).thickness, h);
+    std::printf("| %s | %.3f | %.3f / %.3f | %.3f / %.3f | %.1f%% | %.1f%% | %.2f / %.2f / %.2f | %zu | %.1f | %zu, %.1f%% |\n",
                 p.name.c_str(), p.wall, w.ray_min, w.ray_mean, w.min, w.mean, 100 * w.within_1, 100 * w.within_1_5, w.p01,
-                w.p50, w.p99, report.thickness->thin_regions.size(), seconds);
+                w.p50, w.p99, report.thickness->thin_regions.size(), seconds, on_part.vertices, 100 * on_part.within_1);
     std::fflush(stdout);
   }
 }

@@ -41,37 +41,6 @@ Mesh ringed_tube(double R, double r, double H, double step, int segments) {
   return test::make_lathe(p, segments);
 }
 
-struct VertexAgreement {
-  std::size_t vertices = 0;
-  double within_1 = 0;
-};
-
-// The vertices at least 2 voxels from a sharp edge whose ray crosses a wall
-// (the filters of compare_with_rays: not the end of a wall at either end,
-// and leaving by a face within 15° of parallel), against the ray there.
-VertexAgreement compare_vertices(const Mesh& welded, const std::vector<float>& thickness, double h) {
-  const std::vector<test::Segment> edges = test::sharp_edges(welded, 30.0);
-  const std::vector<glm::vec3> normals = vertex_normals(welded);
-  std::vector<std::uint32_t> triangle_of(welded.vertices.size(), 0);
-  for (std::uint32_t t = 0; t < welded.triangles.size(); ++t)
-    for (const std::uint32_t v : welded.triangles[t]) triangle_of[v] = t;
-  std::size_t ok = 0, n = 0;
-  for (std::size_t v = 0; v < welded.vertices.size(); ++v) {
-    const glm::dvec3 p(welded.vertices[v]);
-    const double to_edge = test::distance_to_edges(p, edges);
-    if (to_edge < 2 * h) continue;
-    const test::SurfacePoint sp{p, glm::dvec3(normals[v]), triangle_of[v]};
-    const auto exit = test::ray_hit(welded, sp);
-    if (!exit || exit->distance > 2 * to_edge ||
-        exit->distance > 2 * test::distance_to_edges(p - exit->distance * sp.normal, edges) ||
-        glm::dot(sp.normal, exit->normal) > std::cos(165.0 * 3.14159265358979 / 180))
-      continue;
-    ++n;
-    if (std::abs(thickness[v] - exit->distance / h) <= 1.0) ++ok;
-  }
-  return {n, n ? static_cast<double>(ok) / static_cast<double>(n) : 0.0};
-}
-
 TEST(SurfaceThickness, VerticesReadTheirRayThicknessWithinAVoxel) {
   const double h = 0.05;
   struct Case {
@@ -93,7 +62,7 @@ TEST(SurfaceThickness, VerticesReadTheirRayThicknessWithinAVoxel) {
     const SurfaceThickness s = surface_thickness(welded, map);
     ASSERT_EQ(s.thickness.size(), welded.vertices.size());
     EXPECT_EQ(s.unresolved, 0u);
-    const VertexAgreement a = compare_vertices(welded, s.thickness, h);
+    const test::VertexAgreement a = test::compare_vertices_with_rays(welded, s.thickness, h);
     EXPECT_GE(a.vertices, 500u);
     EXPECT_GE(a.within_1, 0.95) << a.within_1 << " of " << a.vertices << " vertices compared";
   }

@@ -55,9 +55,9 @@ double distance_to_edges(glm::dvec3 p, const std::vector<Segment>& edges);
 // face whose ray runs on past that ends a wall, as a tube's annular cap,
 // whose ray is the tube's length; the same at the ray's far end: a bore's
 // ray behind a rib runs out along the rib to its rim), and whose ray leaves
-// by a face parallel to theirs within 15° (a fillet's ray runs down into
+// by a face parallel to theirs within 10° (a fillet's ray runs down into
 // the junction, across no wall; an oblique ray is longer than the wall by
-// up to 1 / cos of the angle). The map is read at the filled voxel
+// 1 / cos of the angle). The map is read at the filled voxel
 // under each point (half a voxel inward along its normal, else the nearest
 // filled voxel within one voxel).
 struct WallAgreement {
@@ -69,5 +69,18 @@ struct WallAgreement {
 };
 WallAgreement compare_with_rays(const Mesh& mesh, const BitVolume& solid, const DenseVolume<float>& map,
                                 std::size_t count, double edge_margin = 2.0, std::uint64_t seed = 1);
+
+// Thickness per vertex of a welded mesh (voxels; voxd/analysis/
+// surface_thickness.h) against the ray from each vertex along its
+// area-weighted normal, at the vertices at least 2 voxels from a sharp edge
+// whose ray crosses a wall (the filters of compare_with_rays); every
+// vertex, or on a mesh of more than `max_vertices` an even stride of them
+// (the rays are brute force).
+struct VertexAgreement {
+  std::size_t vertices = 0;  // compared
+  double within_1 = 0;       // the fraction within ±1 voxel
+};
+VertexAgreement compare_vertices_with_rays(const Mesh& welded, const std::vector<float>& thickness, double voxel_size,
+                                           std::size_t max_vertices = 4000);
 
 }  // namespace voxd::test

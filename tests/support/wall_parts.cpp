@@ -1,8 +1,10 @@
 #include "support/wall_parts.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
+#include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 
 #include "support/test_meshes.h"
@@ -22,6 +24,22 @@ void add_arc(std::vector<glm::dvec2>& out, glm::dvec2 centre, double r, double a
   }
 }
 
+// The profile with points added along each edge, at most `step` apart: a
+// CAD export's tessellation of a long face has vertices along it, not only
+// at its ends, and the thickness on the part is read at vertices.
+std::vector<glm::dvec2> refined(const std::vector<glm::dvec2>& profile, double step = 0.5) {
+  std::vector<glm::dvec2> out;
+  for (std::size_t i = 0; i < profile.size(); ++i) {
+    const glm::dvec2 a = profile[i], b = profile[(i + 1) % profile.size()];
+    const int n = std::max(1, static_cast<int>(std::ceil(glm::length(b - a) / step)));
+    for (int k = 0; k < n; ++k) out.push_back(a + (b - a) * (static_cast<double>(k) / n));
+  }
+  return out;
+}
+
+// A tube about z, outer radius R, inner r, from z = 0 to H.
+Mesh tube(double R, double r, double H, int segments) { return make_lathe(refined({{r, 0}, {R, 0}, {R, H}, {r, H}}), segments); }
+
 Mesh sphere_shell(double R, double r) {
   return concat({make_icosphere({0, 0, 0}, R, 5), flipped(make_icosphere({0, 0, 0}, r, 5))});
 }
@@ -33,12 +51,12 @@ Mesh drafted_sleeve(double r0, double t, double H, double draft, int segments) {
   const double a = draft * kPi / 180;
   const double across = t / std::cos(a);  // horizontally
   const double in = H * std::tan(a);
-  return make_lathe({{r0, 0}, {r0 + across, 0}, {r0 + across - in, H}, {r0 - in, H}}, segments);
+  return make_lathe(refined({{r0, 0}, {r0 + across, 0}, {r0 + across - in, H}, {r0 - in, H}}), segments);
 }
 
 // A cup: outer radius R, inner r, height H, floor f thick.
 Mesh cup(double R, double r, double H, double f, int segments) {
-  return make_lathe({{0, 0}, {R, 0}, {R, H}, {r, H}, {r, f}, {0, f}}, segments);
+  return make_lathe(refined({{0, 0}, {R, 0}, {R, H}, {r, H}, {r, f}, {0, f}}), segments);
 }
 
 // A boss (outer radius 4, bore 2.5: a 1.5 wall, 6 high) on a plate 1.5 thick
@@ -48,7 +66,7 @@ Mesh boss_on_plate(int segments) {
   add_arc(p, {4.5, 2.0}, 0.5, 270, 180, 6);
   p.push_back({4, 6});
   p.push_back({2.5, 6});
-  return make_lathe(p, segments);
+  return make_lathe(refined(p), segments);
 }
 
 // A hub (tube R 4 / r 3, 6 high) with a rib 1.2 thick standing 2.5 out of it
@@ -61,7 +79,7 @@ Mesh ribbed_hub(int segments) {
   add_arc(p, {4.4, 3.2 + 0.4}, 0.4, 270, 180, 5);
   p.push_back({4, 6});
   p.push_back({3, 6});
-  return make_lathe(p, segments);
+  return make_lathe(refined(p), segments);
 }
 
 // A straight rib 1.0 thick and 4 tall on a plate 2.0 thick and 12 wide,
@@ -80,11 +98,11 @@ Mesh ribbed_plate() {
 
 std::vector<WallPart> curved_wall_parts() {
   return {
-      {"tube R 6 / r 4.5, axis z", 1.5, make_tube(6, 4.5, 0, 6, 192)},
-      {"tube R 10 / r 8, axis z", 2.0, make_tube(10, 8, 0, 6, 256)},
-      {"tube R 5 / r 3.8, turned 30/20", 1.2, rotated(make_tube(5, 3.8, 0, 6, 160), 30, 20)},
-      {"tube R 7 / r 6.2, turned 47/113", 0.8, rotated(make_tube(7, 6.2, 0, 4, 224), 47, 113)},
-      {"tube R 6 / r 3, turned 71/16", 3.0, rotated(make_tube(6, 3, 0, 5, 192), 71, 16)},
+      {"tube R 6 / r 4.5, axis z", 1.5, tube(6, 4.5, 6, 192)},
+      {"tube R 10 / r 8, axis z", 2.0, tube(10, 8, 6, 256)},
+      {"tube R 5 / r 3.8, turned 30/20", 1.2, rotated(tube(5, 3.8, 6, 160), 30, 20)},
+      {"tube R 7 / r 6.2, turned 47/113", 0.8, rotated(tube(7, 6.2, 4, 224), 47, 113)},
+      {"tube R 6 / r 3, turned 71/16", 3.0, rotated(tube(6, 3, 5, 192), 71, 16)},
       {"shell R 6 / r 4.8, turned 30/20", 1.2, rotated(sphere_shell(6, 4.8), 30, 20)},
       {"shell R 5 / r 3, turned 58/141", 2.0, rotated(sphere_shell(5, 3), 58, 141)},
       {"cup R 8 / r 6.5, floor 2, turned 30/20", 1.5, rotated(cup(8, 6.5, 8, 2, 192), 30, 20)},

@@ -5,7 +5,9 @@
 // shells, a cup with a floor, a drafted sleeve, a boss with a bore on a
 // plate, a hub with a filleted rib and a straight filleted rib on a plate,
 // walls from 0.8 to 3 mm, most turned off the grid. Closed and outward
-// oriented; fillets are arcs of segments turning by less than 30° each, so
+// oriented, with vertices along their faces every 0.5 mm (as a CAD
+// export's tessellation has; the thickness on the part is read at
+// vertices), except the straight rib's extrusion; fillets are arcs of segments turning by less than 30° each, so
 // they are smooth faces to tests/support/ray_thickness.h, not sharp edges.
 #include <string>
 #include <vector>
