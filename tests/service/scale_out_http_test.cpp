@@ -270,7 +270,7 @@ TEST_F(ScaleOutTest, RedisRestartLosesNoAcceptedJobAndNoResult) {
 }
 
 // What the embedded mode does by itself works across replicas: identical
-// submissions answered from the first one's result on another replica,
+// submissions answered from the first one's result (and mesh) on another replica,
 // artifacts made on one replica served by another, a queued job cancelled
 // from another replica at once, metrics with the shared queue and replicas.
 TEST_F(ScaleOutTest, CachedResultsArtifactsCancellationAndMetricsAreShared) {
@@ -289,6 +289,12 @@ TEST_F(ScaleOutTest, CachedResultsArtifactsCancellationAndMetricsAreShared) {
   EXPECT_EQ(del->status, 204);
   expect_problem(at(0).Get(("/v1/jobs/" + first).c_str()), 404, "not-found");
   EXPECT_EQ(volume_from(1, second), cli_volume(torus, "torus.stl", p));
+  // And the mesh it shares (kept_mesh.h): its thickness on the part
+  // outlives the original, every vertex of the torus (48 x 24) in it.
+  auto ply = at(0).Get(("/v1/jobs/" + second + "/thickness?format=ply").c_str());
+  ASSERT_TRUE(ply);
+  ASSERT_EQ(ply->status, 200) << ply->body;
+  EXPECT_NE(ply->body.find("element vertex 1152\n"), std::string::npos) << ply->body.substr(0, 300);
 
   // An analysis made on one replica, served by the other.
   auto mass = at(0).Get(("/v1/jobs/" + second + "/analysis").c_str());

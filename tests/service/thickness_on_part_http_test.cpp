@@ -2,10 +2,11 @@
 // json) from a real `voxd serve`: the mesh as uploaded (welded, in the
 // user's frame even when the job turned it), each vertex within a voxel of
 // the tube's wall, the thin-region ids per vertex, the answer of an
-// identical submission, what is refused, and `voxd analyze` writing the
-// same bytes.
+// identical submission, what is refused (and a job kept without its mesh),
+// and `voxd analyze` writing the same bytes.
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <set>
 #include <tuple>
 
@@ -142,6 +143,16 @@ TEST_F(ThicknessOnPart, ThresholdsOnAVolumeOrOutOfOrderAreRefusedWithTheField) {
   EXPECT_NE(p.at("detail").get<std::string>().find("max_wall must be more than min_wall"), std::string::npos) << p.dump();
   p = expect_problem(http().Get(("/v1/jobs/" + id + "/thickness?format=obj").c_str()), 400, "invalid-query");
   EXPECT_NE(p.at("detail").get<std::string>().find("ply"), std::string::npos) << p.dump();
+
+  // A job kept without its mesh (made before the service kept them) says
+  // so, and still serves its volume.
+  std::filesystem::remove(dir_ + "/data/jobs/" + id + "/artifacts/surface-mesh");
+  p = expect_problem(http().Get(("/v1/jobs/" + id + "/thickness?format=ply").c_str()), 400, "invalid-query");
+  EXPECT_NE(p.at("detail").get<std::string>().find("kept no mesh"), std::string::npos) << p.dump();
+  EXPECT_NE(p.at("detail").get<std::string>().find("submit it again"), std::string::npos) << p.dump();
+  auto nrrd = http().Get(("/v1/jobs/" + id + "/thickness?format=nrrd").c_str());
+  ASSERT_TRUE(nrrd);
+  EXPECT_EQ(nrrd->status, 200);
 }
 
 }  // namespace
