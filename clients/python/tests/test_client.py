@@ -91,6 +91,31 @@ class ClientAgainstVoxd(unittest.TestCase):
         png = self.client.download(job, "radiography", axis="z", measure="max")
         self.assertEqual(png[:8], b"\x89PNG\r\n\x1a\n")
 
+    def test_thickness_on_the_part_is_the_cli_s_and_reads_the_wall(self):
+        # A box 4 x 3 x 2: with min_wall 2.5 its whole surface is one thin
+        # region, every vertex within a voxel (0.125) of the 2 between the
+        # z faces, the thinnest wall each bounds.
+        params = {"grid": {"voxel_size": 0.125, "padding": 1}}
+        job = self.client.run(BOX, params, filename="box.stl")
+        on_part = self.client.thickness_on_part(job, min_wall=2.5)
+        self.assertEqual(on_part["vertices"], 8)
+        self.assertEqual(on_part["unresolved"], 0)
+        for t in on_part["thickness"]:
+            self.assertLessEqual(abs(t - 2.0), 0.125)
+        self.assertEqual(on_part["thin_region"], [1] * 8)
+        path = os.path.join(self.tmp, "box.stl")
+        with open(path, "wb") as f:
+            f.write(BOX)
+        out = os.path.join(self.tmp, "analyze")
+        r = subprocess.run([VOXD, "analyze", path, "-o", out, "--params", json.dumps(params), "--min-wall", "2.5"],
+                           capture_output=True, text=True)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        dest = os.path.join(self.tmp, "box.glb")
+        self.assertEqual(self.client.thickness_on_part(job, "glb", dest, min_wall=2.5), dest)
+        for fmt, got in (("glb", open(dest, "rb").read()), ("ply", self.client.thickness_on_part(job, "ply", min_wall=2.5))):
+            with open(os.path.join(out, "thickness-on-part." + fmt), "rb") as f:
+                self.assertEqual(got, f.read(), fmt)
+
     def test_bad_parameters_raise_invalid_params_with_their_paths(self):
         with self.assertRaises(InvalidParams) as caught:
             self.client.submit(BOX, {"grid": {"resolution": -3}, "mode": "nonsense"}, filename="box.stl")

@@ -126,6 +126,19 @@ class VoxdClient:
         e.g. analysis(job, min_wall=0.8, max_wall=6)."""
         return json.loads(self.download(job, "analysis", **query))
 
+    def thickness_on_part(self, job: JobRef, format: str = "json",
+                          dest: Optional[Union[str, "os.PathLike[str]"]] = None,
+                          **query: Any) -> Union[bytes, str, Dict[str, Any]]:
+        """The wall thickness painted on the job's own mesh: ``format`` ply
+        (a float ``thickness`` and a colour per vertex), glb (vertex colours
+        and ``_THICKNESS``) or json (per-vertex values, the surface's
+        min/max/mean and each vertex's thin region, returned as a dict);
+        ``min_wall``/``max_wall`` (model units) set the colours' ends and
+        the thin regions, e.g. thickness_on_part(job, "glb", "part.glb",
+        min_wall=0.8, max_wall=3)."""
+        result = self.download(job, "thickness", dest, format=format, **query)
+        return json.loads(result) if format == "json" and dest is None else result
+
     def job_analysis(self, job: Mapping[str, Any], index: int,
                      dest: Optional[Union[str, "os.PathLike[str]"]] = None) -> Union[bytes, str]:
         """Entry ``index`` of the job JSON's "analyses", as the worker kept it."""
