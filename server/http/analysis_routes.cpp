@@ -94,7 +94,8 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
       // beside the job's volumes: held from the budget meanwhile. A streamed
       // job's volume is loaded only for this request, so it counts too.
       const MemoryBudget::Reservation memory = jobs.reserve_memory(
-          analysis_memory_on_job(request, *job.job, job.grid, job.streamed, jobs.max_job_memory()), "this analysis");
+          analysis_memory_on_job(request, *job.job, job.grid, job.streamed, jobs.max_job_memory(), job.triangles),
+          "this analysis");
       const JobOutput output = output_for(jobs, job, request);
       AnalysisResult result;
       try {

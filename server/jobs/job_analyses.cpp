@@ -86,10 +86,11 @@ bool streams_over_slabs(const AnalysisRequest& r, const api::JobParams& params) 
 }
 
 std::uint64_t analysis_memory_on_job(const AnalysisRequest& r, const api::JobParams& params, const Grid& grid,
-                                     bool streamed_job, std::uint64_t max_job_memory) {
-  if (!streamed_job) return estimate_analysis_memory(r, grid);
-  if (streams_over_slabs(r, params)) return estimate_analysis_memory(r, grid, true);
-  std::uint64_t whole = whole_grid_memory(r, grid);
+                                     bool streamed_job, std::uint64_t max_job_memory, std::uint64_t triangles) {
+  const std::uint64_t mesh = job_analysis_kind(r.kind).bytes_per_triangle(r) * triangles;
+  if (!streamed_job) return estimate_analysis_memory(r, grid) + mesh;
+  if (streams_over_slabs(r, params)) return estimate_analysis_memory(r, grid, true) + mesh;
+  std::uint64_t whole = whole_grid_memory(r, grid) + mesh;
   if (const std::optional<ValueVolume> type = params.value_type())  // its values are read whole too
     whole += grid.voxel_count() * std::visit([]<typename T>(const DenseVolume<T>&) { return sizeof(T); }, *type);
   if (whole > max_job_memory) throw Error(ErrorCode::limit_exceeded, whole_grid_refusal(r, grid, max_job_memory));

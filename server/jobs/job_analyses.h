@@ -89,9 +89,10 @@ std::string whole_grid_refusal(const api::AnalysisRequest& request, const Grid& 
 
 // Bytes a request takes on a job, for the memory budget: on a streamed job
 // a request that does not stream loads the grid too, and one over
-// `max_job_memory` throws Error(limit_exceeded) with whole_grid_refusal.
+// `max_job_memory` throws Error(limit_exceeded) with whole_grid_refusal. A
+// request that reads the job's mesh adds its `triangles`' share.
 std::uint64_t analysis_memory_on_job(const api::AnalysisRequest& request, const api::JobParams& params, const Grid& grid,
-                                     bool streamed_job, std::uint64_t max_job_memory);
+                                     bool streamed_job, std::uint64_t max_job_memory, std::uint64_t triangles = 0);
 
 // The volumes a request on a succeeded job is answered from, read from
 // `store`: the stored RLE of a streamed job when the request streams over

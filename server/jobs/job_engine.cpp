@@ -91,7 +91,8 @@ std::uint64_t JobEngine::analyses_memory(const api::JobParams& params, const Pre
   std::uint64_t peak = 0;
   for (const api::AnalysisRequest& r : params.analyses) {
     try {
-      peak = std::max(peak, analysis_memory_on_job(r, params, prepared.grid, prepared.streamed, config.max_job_memory));
+      peak = std::max(peak, analysis_memory_on_job(r, params, prepared.grid, prepared.streamed, config.max_job_memory,
+                                                      prepared.triangles));
     } catch (const Error& e) {
       throw Error(e.code(), std::string("analyses: ") + e.what());
     }

@@ -8,7 +8,9 @@
 
 #include "api/analyses/analysis_kind.h"
 #include "api/analysis_request.h"
+#include "api/job_params.h"
 #include "server/jobs/analyses/job_analysis_kind.h"
+#include "server/jobs/job_analyses.h"
 
 namespace voxd::test {
 namespace {
@@ -44,6 +46,25 @@ TEST(AnalysisKinds, EveryNamedKindHasBothHalvesAndItsQueryReadsBackToItsKey) {
     EXPECT_EQ(api::to_json(again), api::to_json(r));
     EXPECT_EQ(api::to_json(r).at("kind"), name);
   }
+}
+
+// The thickness on the part reads the job's mesh: its memory grows with the
+// triangles, on top of the thickness volume's; a volume format's does not.
+// And its thresholds go into its key and come back from its query.
+TEST(AnalysisKinds, TheThicknessOnThePartCountsTheMeshAndKeysItsThresholds) {
+  const Grid grid{{0, 0, 0}, 1.0, {64, 64, 64}};
+  const api::JobParams params = api::parse_job_params(nlohmann::json::object());
+  const auto on_part = api::parse_analysis_request(api::AnalysisKind::thickness, {{"format", "glb"}, {"min_wall", "0.8"}}, "");
+  const auto volume = api::parse_analysis_request(api::AnalysisKind::thickness, {{"format", "nrrd"}}, "");
+  const std::uint64_t volume_bytes = server::analysis_memory_on_job(volume, params, grid, false, 1ull << 40, 1'100'000);
+  EXPECT_EQ(volume_bytes, server::analysis_memory_on_job(volume, params, grid, false, 1ull << 40, 0));
+  EXPECT_EQ(server::analysis_memory_on_job(on_part, params, grid, false, 1ull << 40, 1'100'000),
+            volume_bytes + 256ull * 1'100'000);
+  const api::AnalysisRequest again = api::parse_analysis_request(api::AnalysisKind::thickness, query_fields(on_part.query()), "");
+  EXPECT_EQ(again.min_wall, 0.8);
+  EXPECT_EQ(again.artifact_key(), on_part.artifact_key());
+  EXPECT_NE(on_part.artifact_key(),
+            api::parse_analysis_request(api::AnalysisKind::thickness, {{"format", "glb"}, {"min_wall", "0.9"}}, "").artifact_key());
 }
 
 }  // namespace

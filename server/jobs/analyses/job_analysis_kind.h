@@ -48,6 +48,9 @@ class JobAnalysisKind {
   virtual std::uint64_t over_slabs_memory(const api::AnalysisRequest&, const Grid&) const { return 0; }
   // Bytes a voxel at peak answered on the whole grid, beyond its bits.
   virtual std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest& request) const = 0;
+  // Bytes a triangle of the job's mesh at peak, for a kind that reads the
+  // mesh (the thickness on the part); 0 for one that reads only volumes.
+  virtual std::uint64_t bytes_per_triangle(const api::AnalysisRequest&) const { return 0; }
   // What needs the whole grid, in words: "a section coloured by wall
   // thickness" (whole_grid_refusal).
   virtual std::string needs_whole_grid(const api::AnalysisRequest& request) const = 0;
