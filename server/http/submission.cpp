@@ -1,9 +1,9 @@
 #include "server/http/submission.h"
 
-
 #include "server/http/metrics.h"
 #include "server/http/route_table.h"
 #include "voxd/encode/number_text.h"
+#include "voxd/error.h"
 
 namespace voxd::server {
 namespace {
@@ -121,8 +121,10 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
   if (!read_ok)
     throw ProblemError(make_problem(400, "bad-request", "Bad request",
                                     "the request body could not be read completely (truncated, malformed multipart or timed out)"));
-  if (s.mesh.empty())
-    throw ProblemError(make_problem(400, "missing-mesh", "No mesh uploaded", "the uploaded mesh is empty"));
+  // An empty file is an empty mesh, as the CLI and the error table have it
+  // (empty_input: 422 invalid-mesh, with the decoder's words); a multipart
+  // body with no mesh part at all is the 400 missing-mesh above.
+  if (s.mesh.empty()) throw Error(ErrorCode::empty_input, "the mesh file is empty (0 bytes); upload it again");
   return s;
 }
 

@@ -346,10 +346,21 @@ TEST_F(HttpApiTest, BadRequestsGetTheirOwnProblemAndTheServiceKeepsServing) {
   p = expect_problem(post(R"({"grid":{"resolution":32},"rotation":{"axis":[0,0,0],"angle_deg":10}})"), 422, "invalid-params");
   EXPECT_EQ(p.at("errors").at(0).at("path").get<std::string>().rfind("/rotation", 0), 0u) << p.dump();
 
-  // Missing or empty mesh.
+  // No mesh part at all is a bad request; an empty mesh file is an empty
+  // mesh, answered as the error table (README) and the CLI have it.
   httplib::MultipartFormDataItems only_params = {{"params", "{}", "", "application/json"}};
   expect_problem(http().Post("/v1/jobs", only_params), 400, "missing-mesh");
-  expect_problem(post_raw(http(), "/v1/jobs", {}, "{}", "application/octet-stream"), 400, "missing-mesh");
+  for (const auto& empty : {post_raw(http(), "/v1/jobs", {}, "{}", "application/octet-stream"),
+                            post_multipart(http(), "/v1/jobs", {}, "empty.stl", "{}")}) {
+    p = expect_problem(empty, 422, "invalid-mesh");
+    EXPECT_EQ(p.at("detail"), "the mesh file is empty (0 bytes); upload it again") << p.dump();
+  }
+  const auto cli = run_process(std::string(VOXD_BINARY) + " inspect " + [&] {
+    write_file(dir_ + "/empty.stl", {});
+    return dir_ + "/empty.stl";
+  }());
+  EXPECT_EQ(cli.exit_code, 1);
+  EXPECT_NE(cli.err.find("the mesh file is empty (0 bytes); upload it again"), std::string::npos) << cli.err;
   // Bad meshes, each with its reason.
   expect_problem(post_raw(http(), "/v1/jobs", bytes_of("hello, this is not a mesh at all\n"), "{}", "application/octet-stream"), 415,
                  "unsupported-format");
