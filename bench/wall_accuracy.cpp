@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "support/ray_thickness.h"
+#include "support/test_meshes.h"
 #include "support/wall_parts.h"
 #include "voxd/analysis/analysis.h"
 #include "voxd/analysis/surface_thickness.h"
@@ -34,11 +35,7 @@ int main(int argc, char** argv) {
   std::printf("| part | wall | ray min / mean | map min / mean | within ±1 voxel | ±1.5 | p1 / p50 / p99 of map - ray (voxels) | thin regions at wall - 1 voxel | seconds | vertices compared, within ±1 voxel |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const test::WallPart& p : parts) {
-    GridRequest request;
-    request.kind = GridRequest::Kind::voxel_size;
-    request.voxel_size = h;
-    request.padding = 2;
-    const BitVolume solid = voxelize_parity(p.mesh, resolve_grid(request, bounds(p.mesh)), 0, 0, nullptr);
+    const BitVolume solid = test::solid_of(p.mesh, h);
     const auto t0 = std::chrono::steady_clock::now();
     const DenseVolume<float> map = wall_thickness(solid, 0);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

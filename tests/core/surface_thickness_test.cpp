@@ -23,13 +23,7 @@
 namespace voxd {
 namespace {
 
-BitVolume solid_of(const Mesh& mesh, double voxel) {
-  GridRequest r;
-  r.kind = GridRequest::Kind::voxel_size;
-  r.voxel_size = voxel;
-  r.padding = 2;
-  return voxelize_parity(mesh, resolve_grid(r, bounds(mesh)), 0, 0, nullptr);
-}
+using test::solid_of;
 
 // A tube whose faces have rings of vertices every `step` along z (a CAD
 // export's tessellation of a long face): vertices on smooth faces, not only

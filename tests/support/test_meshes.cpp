@@ -1,5 +1,7 @@
 #include "support/test_meshes.h"
 
+#include "voxd/voxelize/voxelize.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -20,6 +22,14 @@ std::uint32_t add_vertex(Mesh& m, glm::dvec3 p) {
 }
 
 }  // namespace
+
+BitVolume solid_of(const Mesh& mesh, double voxel) {
+  GridRequest r;
+  r.kind = GridRequest::Kind::voxel_size;
+  r.voxel_size = voxel;
+  r.padding = 2;
+  return voxelize_parity(mesh, resolve_grid(r, bounds(mesh)), 0, 0, nullptr);
+}
 
 Mesh make_box(glm::dvec3 lo, glm::dvec3 hi) {
   Mesh m;

@@ -8,6 +8,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "voxd/bit_volume.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 
@@ -30,6 +31,9 @@ inline Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz, glm::dv
   return make_grid({nx, ny, nz}, origin);
 }
 // `resolution` voxels along the mesh's longest axis, `padding` more around.
+// The mesh's parity solid on voxels of `voxel` with 2 empty voxels around.
+BitVolume solid_of(const Mesh& mesh, double voxel);
+
 inline Grid grid_for(const Mesh& mesh, std::int64_t resolution, std::int64_t padding) {
   GridRequest r;
   r.resolution = resolution;

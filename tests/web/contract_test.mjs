@@ -42,6 +42,29 @@ function redoclyLint(path) {
                    { encoding: 'utf8', env: { ...process.env, REDOCLY_TELEMETRY: 'off', REDOCLY_SUPPRESS_UPDATE_NOTICE: 'true' } });
 }
 
+// A binary STL of vertices `v` and triangles `f` (vertex indices).
+function binaryStl(v, f) {
+  const stl = Buffer.alloc(84 + 50 * f.length);
+  stl.writeUInt32LE(f.length, 80);
+  f.forEach((t, i) => t.forEach((k, c) => v[k].forEach((x, a) => stl.writeFloatLE(x, 84 + 50 * i + 12 + 12 * c + 4 * a))));
+  return stl;
+}
+
+// Submits the mesh as a client does and waits for the job to succeed.
+async function finishedJob(mesh, filename, params) {
+  const form = new FormData();
+  form.append('mesh', new Blob([mesh]), filename);
+  form.append('params', JSON.stringify(params));
+  const submitted = await (await fetch(`${server.base}/v1/jobs`, { method: 'POST', body: form })).json();
+  let job = submitted;
+  for (let i = 0; i < 600 && !['succeeded', 'failed', 'cancelled'].includes(job.state); ++i) {
+    await new Promise((r) => setTimeout(r, 50));
+    job = await (await fetch(`${server.base}/v1/jobs/${submitted.id}`)).json();
+  }
+  assert.equal(job.state, 'succeeded', JSON.stringify(job));
+  return job;
+}
+
 const operations = (doc) => Object.entries(doc.paths).flatMap(([path, item]) =>
   Object.entries(item).filter(([method]) => method !== 'parameters').map(([method, op]) => ({ method, path, op })));
 
@@ -109,20 +132,8 @@ test('a palette job\'s glb passes the Khronos glTF validator, its model turned Y
   // A 2 x 3 x 5 box, tallest along the model's z.
   const v = [[0, 0, 0], [2, 0, 0], [2, 3, 0], [0, 3, 0], [0, 0, 5], [2, 0, 5], [2, 3, 5], [0, 3, 5]];
   const f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [3, 0, 4], [3, 4, 7]];
-  const stl = Buffer.alloc(84 + 50 * f.length);
-  stl.writeUInt32LE(f.length, 80);
-  f.forEach((t, i) => t.forEach((k, c) => v[k].forEach((x, a) => stl.writeFloatLE(x, 84 + 50 * i + 12 + 12 * c + 4 * a))));
   const params = { mode: 'palette', grid: { resolution: 10 }, palette: { elements: 10, rays: 4, points: 2, seed: 1 } };
-  const form = new FormData();
-  form.append('mesh', new Blob([stl]), 'box.stl');
-  form.append('params', JSON.stringify(params));
-  const submitted = await (await fetch(`${server.base}/v1/jobs`, { method: 'POST', body: form })).json();
-  let job = submitted;
-  for (let i = 0; i < 600 && !['succeeded', 'failed', 'cancelled'].includes(job.state); ++i) {
-    await new Promise((r) => setTimeout(r, 50));
-    job = await (await fetch(`${server.base}/v1/jobs/${submitted.id}`)).json();
-  }
-  assert.equal(job.state, 'succeeded', JSON.stringify(job));
+  const job = await finishedJob(binaryStl(v, f), 'box.stl', params);
   const res = await fetch(`${server.base}/v1/jobs/${job.id}/volume?format=glb`);
   assert.equal(res.status, 200);
   const glb = new Uint8Array(await res.arrayBuffer());
@@ -147,19 +158,7 @@ test('the thickness on the part passes the glTF validator and opens in three.js 
   // A plate 10 x 8 x 1 in z: every vertex bounds the 1-thick wall.
   const v = [[0, 0, 0], [10, 0, 0], [10, 8, 0], [0, 8, 0], [0, 0, 1], [10, 0, 1], [10, 8, 1], [0, 8, 1]];
   const f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [3, 0, 4], [3, 4, 7]];
-  const stl = Buffer.alloc(84 + 50 * f.length);
-  stl.writeUInt32LE(f.length, 80);
-  f.forEach((t, i) => t.forEach((k, c) => v[k].forEach((x, a) => stl.writeFloatLE(x, 84 + 50 * i + 12 + 12 * c + 4 * a))));
-  const form = new FormData();
-  form.append('mesh', new Blob([stl]), 'plate.stl');
-  form.append('params', JSON.stringify({ grid: { voxel_size: 0.1, padding: 1 } }));
-  const submitted = await (await fetch(`${server.base}/v1/jobs`, { method: 'POST', body: form })).json();
-  let job = submitted;
-  for (let i = 0; i < 600 && !['succeeded', 'failed', 'cancelled'].includes(job.state); ++i) {
-    await new Promise((r) => setTimeout(r, 50));
-    job = await (await fetch(`${server.base}/v1/jobs/${submitted.id}`)).json();
-  }
-  assert.equal(job.state, 'succeeded', JSON.stringify(job));
+  const job = await finishedJob(binaryStl(v, f), 'plate.stl', { grid: { voxel_size: 0.1, padding: 1 } });
   const get = async (format) => {
     const res = await fetch(`${server.base}/v1/jobs/${job.id}/thickness?format=${format}&min_wall=0.8&max_wall=2`);
     assert.equal(res.status, 200, await res.clone().text());
