@@ -112,6 +112,10 @@ class JobMode {
   virtual std::uint64_t memory_estimate(const Grid& grid, const JobParams& params) const;
 
   // --- How it runs ---
+  // Whether the job's inside test applies ("inside", chosen from the mesh
+  // by "auto"); false for a mode that counts crossings itself, which is
+  // parity whatever the mesh (and refuses the key).
+  virtual bool uses_inside_test() const { return true; }
   // Whether the job's bits are the parity solid of the mesh, made before
   // run() (which then makes only the values).
   virtual bool needs_parity_solid(const JobParams& params) const;

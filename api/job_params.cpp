@@ -100,6 +100,8 @@ void parse_rotation(Validator& val, const json& rot, JobParams& out) {
   }
 }
 
+constexpr std::string_view kInsideChoiceNames[] = {"auto", "parity", "vote", "winding"};
+
 }  // namespace
 
 JobParams::JobParams() : mode(job_modes().front()) {}
@@ -108,7 +110,7 @@ JobParams parse_job_params(const json& params) {
   Validator val;
   JobParams out;
   if (!val.is_object(params, "")) throw InvalidParams(std::move(val.errors));
-  std::vector<std::string_view> keys = {"grid", "mode", "inside", "rotation", "orient", "analyses", "streaming"};
+  std::vector<std::string_view> keys = {"grid", "mode", "inside", "units", "rotation", "orient", "analyses", "streaming"};
   std::vector<std::string_view> names;
   for (const JobMode* m : job_modes()) {
     names.push_back(m->name());
@@ -132,7 +134,14 @@ JobParams parse_job_params(const json& params) {
     else
       out.options = m->parse_options(val, &params.at(key), out);
   }
-  if (auto i = val.one_of(params, "", "inside", kInsideTestNames)) out.inside = *i;
+  // "auto" or a test by name; a mode that counts crossings itself takes none
+  // (it refuses the key) and is parity whatever the mesh.
+  if (auto i = val.one_of(params, "", "inside", std::span<const std::string_view>(kInsideChoiceNames))) {
+    out.inside_auto = *i == "auto";
+    if (!out.inside_auto) out.inside = *value_named(kInsideTestNames, *i);
+  }
+  if (!out.mode->uses_inside_test()) out.inside_auto = false;
+  if (auto u = val.one_of(params, "", "units", kLengthUnitNames)) out.units = *u;
   if (auto s = val.one_of(params, "", "streaming", kStreamingNames)) out.streaming = *s;
   out.mode->complete(val, params, out);
   if (params.contains("analyses")) {

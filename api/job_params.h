@@ -11,6 +11,7 @@
 
 #include "api/analysis_request.h"
 #include "api/job_mode.h"
+#include "api/length_unit.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/grid.h"
 #include "voxd/voxelize/voxelize.h"
@@ -33,7 +34,13 @@ struct JobParams {
   const JobMode* mode = nullptr;
   // The inside test of the job's solid (the result of a solid job, the solid
   // the analyses measure for a value job), also the sign of a distance field.
+  // With inside_auto ("inside": "auto", the default) it is chosen from the
+  // mesh when the job is prepared (api/inside_choice.h) and set here then;
+  // until then it reads parity.
   InsideTest inside = InsideTest::parity;
+  bool inside_auto = true;
+  // The mesh file's unit; everything after reading it is in millimetres.
+  LengthUnit units = LengthUnit::mm;
   // The mode's options (the object under its name), parsed by the mode; may be null.
   std::shared_ptr<ModeOptions> options;
   // Analyses the worker prepares once the volume exists (api/analysis_request.h).

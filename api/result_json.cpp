@@ -23,7 +23,19 @@ nlohmann::json to_json(const MeshReport& r) {
       {"volume", r.watertight ? nlohmann::json(r.volume) : nlohmann::json(nullptr)},
   };
   if (!r.warnings.empty()) out["warnings"] = r.warnings;
+  if (r.orientation) out["orientation"] = to_json(*r.orientation);
   return out;
+}
+
+nlohmann::json to_json(const OrientationRepair& r) {
+  return {
+      {"components", r.components},
+      {"inconsistent_edges", r.inconsistent_edges},
+      {"flipped_triangles", r.flipped_triangles},
+      {"inconsistent_triangles", r.inconsistent_triangles},
+      {"inverted_components", r.inverted_components},
+      {"unorientable_edges", r.unorientable_edges},
+  };
 }
 
 nlohmann::json to_json(const Grid& g) {

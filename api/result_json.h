@@ -11,6 +11,7 @@
 namespace voxd::api {
 
 nlohmann::json to_json(const MeshReport& report);
+nlohmann::json to_json(const OrientationRepair& repair);
 nlohmann::json to_json(const Grid& grid);
 
 // What a volume's values are in words, from the job's "values" (null for a

@@ -69,6 +69,7 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
 
   // The solid is the parity solid of its crossings; a threshold makes the
   // job's bits from the values instead.
+  bool uses_inside_test() const override { return false; }
   bool needs_parity_solid(const JobParams& params) const override { return !options(params).threshold; }
 
   JobVolumes run(const ModeInput& in) const override {

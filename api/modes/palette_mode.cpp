@@ -216,6 +216,7 @@ class PaletteMode final : public ModeWithOptions<PaletteParams> {
     return bit_volumes_memory(grid, VoxelMode::solid, params.inside) + 2 * grid.voxel_count();
   }
   // The solid is the parity solid of its crossings.
+  bool uses_inside_test() const override { return false; }
   bool needs_parity_solid(const JobParams&) const override { return true; }
   bool values_are_image() const override { return false; }  // element indices: sections show the solid
 

@@ -56,6 +56,14 @@ json values_info(const SdfOptions& o, float lo, float hi) {
 }
 
 class SdfMode final : public ModeWithOptions<SdfParams> {
+  // The engine's options: the job's, signed by the job's inside test (which
+  // "inside": "auto" resolves only once the mesh is read).
+  static SdfOptions engine_options(const JobParams& params) {
+    SdfOptions o = options(params);
+    o.inside = params.inside;
+    return o;
+  }
+
  public:
   std::string_view name() const override { return "sdf"; }
   std::string_view summary() const override {
@@ -64,10 +72,6 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
   // The sign comes from the job's inside test.
   void parse(ParamValidator& val, const json* options, SdfParams& out) const override {
     if (options) parse_sdf(val, *options, out);
-  }
-
-  void complete(ParamValidator&, const json&, JobParams& params) const override {
-    options(params).inside = params.inside;
   }
 
   std::optional<ValueVolume> value_type(const JobParams&) const override { return ValueVolume(DenseVolume<float>()); }
@@ -80,7 +84,7 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
 
   // The field hands back the solid that signs it: the job's bits.
   JobVolumes run(const ModeInput& in) const override {
-    SdfOptions o = options(in.params);
+    SdfOptions o = engine_options(in.params);
     o.threads = in.threads;
     JobVolumes result;
     BitVolume solid;
@@ -95,13 +99,13 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
   // The band goes slab by slab (signed_distance_field_slabs): a whole
   // grid's floats are never held, and their fresh pages never cleared.
   std::optional<std::string> streaming_refusal(const JobParams& params) const override {
-    return sdf_slabs_refusal(options(params));
+    return sdf_slabs_refusal(engine_options(params));
   }
   bool faster_in_slabs(const JobParams& params) const override { return !streaming_refusal(params); }
 
   nlohmann::json run_streamed(const ModeInput& in, std::int64_t, const BitSlabConsumer& bits,
                               const ValueSlabConsumer& values) const override {
-    SdfOptions o = options(in.params);
+    SdfOptions o = engine_options(in.params);
     o.threads = in.threads;
     float lo = std::numeric_limits<float>::infinity(), hi = -lo;
     signed_distance_field_slabs(

@@ -6,7 +6,8 @@
 
 namespace voxd::api {
 
-// The engine's options as the job JSON sets them (inside = the job's inside test).
+// The engine's options as the job JSON sets them; their inside test is not
+// read: the sign comes from the job's (JobParams::inside), resolved per mesh.
 struct SdfParams : ModeOptions, SdfOptions {};
 
 const JobMode& sdf_mode();

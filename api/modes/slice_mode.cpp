@@ -134,10 +134,6 @@ class SliceMode final : public ModeWithOptions<SliceParams> {
       val.fail("/slice", "required with mode \"slice\": at least {\"function\": ...}");
   }
 
-  void complete(ParamValidator&, const json&, JobParams& params) const override {
-    options(params).inside = params.inside;
-  }
-
   std::optional<ValueVolume> value_type(const JobParams&) const override { return ValueVolume(DenseVolume<Rgba8>()); }
   bool colour_values() const override { return true; }
 
@@ -150,6 +146,7 @@ class SliceMode final : public ModeWithOptions<SliceParams> {
   JobVolumes run(const ModeInput& in) const override {
     JobVolumes result;
     SliceOptions o = options(in.params);
+    o.inside = in.params.inside;
     o.threads = in.threads;
     DenseVolume<Rgba8> colours = voxelize_slice(in.mesh, in.grid, o, in.control);
     // The solid is exactly the coloured voxels (alpha > 0).

@@ -66,7 +66,10 @@ std::vector<Link> manifold_links(const Mesh& welded, OrientationRepair& repair) 
       const std::ptrdiff_t count = end - first;
       if (count == 1) ++repair.boundary_edges;
       else if (count > 2) ++repair.nonmanifold_edges;
-      else links.push_back({first[0].triangle, first[1].triangle, (first[0].key & 1) == (first[1].key & 1)});
+      else {
+        links.push_back({first[0].triangle, first[1].triangle, (first[0].key & 1) == (first[1].key & 1)});
+        if (links.back().same_direction) ++repair.inconsistent_edges;
+      }
       first = end;
     }
   }

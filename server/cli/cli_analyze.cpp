@@ -42,7 +42,7 @@ writes into DIR what the HTTP API serves for a job:
                          by wall thickness
   preview-from{+x,-x,+y,-y,+z,-z}.png  shaded views; preview-*-thickness.png
                          coloured by wall thickness
-  thickness.nrrd         the wall-thickness volume (float32, model units)
+  thickness.nrrd         the wall-thickness volume (float32, mm)
   thickness-on-part.{ply,glb,json}
                          the mesh (welded, as given) with each vertex's wall
                          thickness and colour (between --min-wall and
@@ -55,14 +55,15 @@ with a mode of values the sections and previews show the values as the
 service's do (grey coverage, a distance field's zero level set ray-marched
 and section-{x,y,z}-distance.png as a diverging map, colours); the
 measurements are of the solid.
-Lengths are in the mesh's model units. The thickness files need the wall
-thickness (not with --no-thickness or --cleanup*).
+Lengths are in millimetres (--units gives the mesh file's unit). The
+thickness files need the wall thickness (not with --no-thickness or --cleanup*).
 
   --params JSON|@FILE    job parameters, as for voxd voxelize and the HTTP API
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ, --padding P,
-  --mode M, --inside T   as for voxd voxelize
-  --min-wall T           report regions thinner than T (model units): thin walls
-  --max-wall T           report regions thicker than T (model units): hot spots
+  --mode M, --inside T, --units U
+                         as for voxd voxelize
+  --min-wall T           report regions thinner than T (mm): thin walls
+  --max-wall T           report regions thicker than T (mm): hot spots
   --min-region N         ignore thin/thick regions under N voxels (default 1)
   --no-thickness         skip wall thickness (the slowest step)
   --cleanup              remove isolated voxels and one-voxel lines first
@@ -103,7 +104,7 @@ int analyze_command(int argc, char** argv) {
     const auto v = args.value(flag);
     if (!v) return 0.0;
     const double x = parse_number_list(*v, 1, flag)[0];
-    if (!(x > 0)) throw UsageError(std::string("--") + flag + " must be a positive length in model units");
+    if (!(x > 0)) throw UsageError(std::string("--") + flag + " must be a positive length in millimetres");
     return x;
   };
   AnalysisOptions options;

@@ -64,6 +64,7 @@ void apply_param_flags(const Args& args, json& params) {
   }
   if (auto v = args.value("mode")) params["mode"] = *v;
   if (auto v = args.value("inside")) params["inside"] = *v;
+  if (auto v = args.value("units")) params["units"] = *v;
 }
 
 int thread_count(const Args& args) {

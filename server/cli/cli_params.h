@@ -15,6 +15,6 @@ void apply_param_flags(const Args& args, nlohmann::json& params);
 int thread_count(const Args& args);
 
 // The flags apply_param_flags reads (each takes a value).
-inline const char* const kParamFlags[] = {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside"};
+inline const char* const kParamFlags[] = {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "units"};
 
 }  // namespace voxd::cli

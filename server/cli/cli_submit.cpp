@@ -41,7 +41,7 @@ The job runs on the service, with its limits; the flags are voxd voxelize's.
   --api-key KEY          its API key (default: $VOXD_API_KEY)
   --params JSON|@FILE    job parameters, the same JSON the HTTP API takes
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ,
-  --padding P, --mode M, --inside T, --streaming S
+  --padding P, --mode M, --inside T, --units U, --streaming S
                          as for voxd voxelize (they override --params)
   --format F             {formats}
                          (default: from OUT's extension)
@@ -305,6 +305,8 @@ int submit(int argc, char** argv) {
                   {"execution", job.value("execution", "memory")},
                   {"cached", job.value("cached", false)},
                   {"values", job.value("values", json())},
+                  {"inside", job.value("inside", json())},
+                  {"warnings", job.value("warnings", json::array())},
                   {"timings", job.value("timings", json::object())},
                   {"output", {{"path", output.path}, {"format", to_string(output.format)}, {"bytes", written}}},
                   {"seconds", seconds}};
@@ -321,6 +323,8 @@ int submit(int argc, char** argv) {
     s << "filled:  " << summary["filled_voxels"] << " voxels, volume " << summary["filled_volume"] << '\n';
     if (args.has("report")) s << "mesh report: " << summary["report"].dump() << '\n';
     s << "output:  " << output.path << " (" << to_string(output.format) << ", " << written << " bytes), " << seconds << " s\n";
+    for (const json& w : summary["warnings"])
+      s << "warning: " << w.value("message", "") << " [" << w.value("code", "") << "]\n";
     std::cerr << s.str();
   }
   return 0;

@@ -46,13 +46,17 @@ volume to OUT ("-" for standard output).
   --params JSON|@FILE    job parameters, the same JSON the HTTP API takes
                          (proto-schemas/job-params.schema.json)
   --resolution N         voxels along the longest bounding-box axis
-  --voxel-size H         voxel edge in model units
+  --voxel-size H         voxel edge in millimetres
   --origin X,Y,Z         minimum corner of voxel (0,0,0) (with --voxel-size, --dims)
   --dims NX,NY,NZ        grid size in voxels (with --voxel-size, --origin)
   --padding P            empty voxels added on every side
   --mode M               one of the modes below (their options in --params,
                          under the mode's name: {"MODE": {...}})
-  --inside T             parity | vote | winding (also the sign of a distance field)
+  --inside T             auto (default: parity for a closed mesh, the winding
+                         number otherwise) | parity | vote | winding (also the
+                         sign of a distance field)
+  --units U              the mesh file's unit: mm (default) | cm | m | in | ft;
+                         grids, reports and outputs are in millimetres
   --format F             {formats}
                          (default: from OUT's extension; vox and png-stack (.zip)
                          hold colours, stl and glb a mode's own meshes)
@@ -104,7 +108,7 @@ std::string format_seconds(double s) {
 
 int voxelize_command(int argc, char** argv) {
   Args args(argc, argv, 2,
-            {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "format",
+            {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "units", "format",
              "raw-packing", "nrrd-encoding", "quantize", "threads", "output", "max-voxels", "streaming"},
             {"json", "report", "help"});
   if (args.has("help")) {
@@ -227,7 +231,9 @@ int voxelize_command(int argc, char** argv) {
         {"mesh", {{"path", mesh_path}, {"format", to_string(result.format)}, {"triangles", result.triangles}}},
         {"grid", api::to_json(g)},
         {"mode", params.mode_name()},
-        {"inside", to_string(params.inside)},
+        {"inside", api::to_json(result.inside)},
+        {"units", {{"mesh", to_string(params.units)}, {"lengths", "mm"}}},
+        {"warnings", api::to_json(result.warnings)},
         {"filled_voxels", result.filled},
         {"filled_volume", filled_volume},
         {"streamed", result.streamed},
@@ -249,10 +255,13 @@ int voxelize_command(int argc, char** argv) {
     std::ostringstream s;
     s << "mesh:    " << mesh_path << " (" << to_string(result.format) << ", " << result.triangles << " triangles)\n";
     s << "grid:    " << g.dims.x << " x " << g.dims.y << " x " << g.dims.z << " voxels of " << g.voxel_size
-      << " (model units), origin [" << g.origin.x << ", " << g.origin.y << ", " << g.origin.z << "]\n";
+      << " mm, origin [" << g.origin.x << ", " << g.origin.y << ", " << g.origin.z << "]"
+      << (params.units != api::LengthUnit::mm ? std::string(" (mesh in ") + to_string(params.units) + ")" : "") << "\n";
+    s << "inside:  " << to_string(result.inside.test)
+      << (result.inside.reason.empty() ? std::string() : " (" + result.inside.reason + ")") << "\n";
     s << "filled:  " << result.filled << " voxels ("
       << 100.0 * static_cast<double>(result.filled) / static_cast<double>(g.voxel_count()) << "%), volume "
-      << filled_volume << " (model units^3)\n";
+      << filled_volume << " mm^3\n";
     if (!result.volumes.values_info.is_null()) s << "values:  " << result.volumes.values_info.dump() << '\n';
     if (result.report)
       s << "mesh report: " << api::to_json(*result.report).dump() << '\n';
@@ -261,6 +270,7 @@ int voxelize_command(int argc, char** argv) {
     s << " total " << format_seconds(result.timings.total()) << '\n';
     s << "output:  " << *out_path << " (" << to_string(*format) << ", " << bytes_written << " bytes"
       << (result.streamed ? ", written slab by slab" : "") << ")\n";
+    for (const api::JobWarning& w : result.warnings) s << "warning: " << w.message << " [" << w.code << "]\n";
     std::cerr << s.str();
   }
   return 0;

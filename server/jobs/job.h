@@ -14,7 +14,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "api/inside_choice.h"
 #include "api/job_params.h"
+#include "api/job_warning.h"
 #include "server/pipeline/job_pipeline.h"
 #include "server/mapped_file.h"
 #include "voxd/analysis/mass_properties.h"
@@ -65,6 +67,12 @@ struct JobSnapshot {
   Grid grid;                       // resolved at submission
   std::vector<std::pair<std::string, double>> timings;  // stage -> seconds
   std::optional<std::uint64_t> filled_voxels;           // when succeeded
+  // The inside test and why (api/inside_choice.h), set when the job is
+  // prepared: "auto" chooses it from the mesh.
+  std::optional<api::InsideChoice> inside;
+  // What the user should know about the result (api/job_warning.h): from
+  // preparing the job, then from running it.
+  std::vector<api::JobWarning> warnings;
   std::optional<JobFailure> failure;                    // when failed
   std::string content_hash;  // SHA-256 of mesh bytes + canonical params JSON (hex)
   bool cached = false;       // answered from an identical earlier job's result

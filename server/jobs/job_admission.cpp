@@ -120,6 +120,8 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
   s.streamed = prepared.streamed;
   s.execution = prepared.path;
   s.timings = prepared.timings.stages;
+  s.inside = prepared.inside;
+  s.warnings = prepared.warnings;
   s.content_hash = hash;
   s.analyses = analyses_status(params.analyses, "pending");
   backend.accept(JobBackend::Admitted{job, std::move(prepared), mesh_bytes, name_hint, decoding, memory});

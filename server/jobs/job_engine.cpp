@@ -190,6 +190,8 @@ void JobEngine::record_success(JobSnapshot& s, const VoxelJobResult& r, std::opt
     if (std::none_of(s.timings.begin(), s.timings.end(), [&](const auto& x) { return x.first == t.first; }))
       s.timings.push_back(t);
   s.filled_voxels = r.filled;
+  s.inside = r.inside;
+  s.warnings = r.warnings;
   s.values = r.volumes.values_info.is_null() ? nlohmann::json(nullptr) : r.volumes.values_info;
 }
 

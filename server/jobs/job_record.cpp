@@ -34,6 +34,19 @@ MeshReport report_from_json(const json& j) {
   r.watertight = j.at("watertight");
   r.surface_area = j.at("surface_area");
   r.volume = j.at("volume").is_null() ? 0.0 : j.at("volume").get<double>();
+  if (j.contains("warnings")) r.warnings = j.at("warnings").get<std::vector<std::string>>();
+  if (j.contains("orientation")) {
+    const json& o = j.at("orientation");
+    OrientationRepair& repair = r.orientation.emplace();
+    repair.components = o.at("components");
+    repair.inconsistent_edges = o.at("inconsistent_edges");
+    repair.flipped_triangles = o.at("flipped_triangles");
+    repair.inconsistent_triangles = o.at("inconsistent_triangles");
+    repair.inverted_components = o.at("inverted_components");
+    repair.unorientable_edges = o.at("unorientable_edges");
+    repair.boundary_edges = r.boundary_edges;
+    repair.nonmanifold_edges = r.nonmanifold_edges;
+  }
   return r;
 }
 
@@ -94,6 +107,10 @@ json record_json(const JobSnapshot& job) {
       {"streamed", job.streamed},
       {"execution", to_string(job.execution)},
       {"content_hash", job.content_hash},
+      {"inside", job.inside ? api::to_json(*job.inside) : json(nullptr)},
+      // The mesh file's unit, as given; every length here is in millimetres.
+      {"units", {{"mesh", job.job ? to_string(job.job->units) : "mm"}, {"lengths", "mm"}}},
+      {"warnings", api::to_json(job.warnings)},
   };
   json timings = json::object();
   for (const auto& [stage, seconds] : job.timings) timings[stage] = seconds;
@@ -155,6 +172,9 @@ JobSnapshot job_from_json(const json& r) {
   }
   if (r.contains("analyses") && r.at("analyses").is_array()) job.analyses = r.at("analyses");
   if (r.contains("values") && r.at("values").is_object()) job.values = r.at("values");
+  // Records of earlier releases have neither.
+  if (r.contains("inside") && r.at("inside").is_object()) job.inside = api::inside_choice_from_json(r.at("inside"));
+  if (r.contains("warnings")) job.warnings = api::warnings_from_json(r.at("warnings"));
   job.cached = r.at("cached");
   job.streamed = r.value("streamed", false);  // records of earlier releases have none
   // Records of earlier releases have none: they ran slab by slab or in memory.

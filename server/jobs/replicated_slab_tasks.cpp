@@ -169,6 +169,9 @@ void ReplicatedJobBackend::assemble(const std::shared_ptr<Job>& job, const JobSn
   const std::vector<api::AnalysisRequest> analyses = prepared->params.analyses;
   VoxelJobResult r = describe_voxel_job(std::move(*prepared));
   r.filled = parts_.slab_tasks->filled(id);
+  if (r.report && record.job)
+    if (auto w = api::empty_result_warning(*record.job, r.inside, r.filled, r.report->surface_area))
+      r.warnings.push_back(std::move(*w));
   r.timings.add("assemble", assembly);
   nlohmann::json analyses_done = engine_.prepare_analyses(*job, *parts_.store, analyses, r, output);
   JobSnapshot done = record;

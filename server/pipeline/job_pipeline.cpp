@@ -6,7 +6,10 @@
 #include <chrono>
 #include <string>
 
+#include <glm/geometric.hpp>
+
 #include "voxd/error.h"
+#include "voxd/mesh_orientation.h"
 #include "voxd/transform.h"
 #include "voxd/voxelize/voxelize.h"
 
@@ -121,6 +124,21 @@ PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uin
   job.triangles = job.mesh.triangle_count();
   job.timings.add("parse", clock.lap());
 
+  // The file's unit, once: from here on everything is in millimetres.
+  if (params.units != api::LengthUnit::mm) {
+    const double scale = api::millimetres_per(params.units);
+    for (glm::vec3& v : job.mesh.vertices) v = glm::vec3(glm::dvec3(v) * scale);
+  }
+  // Outward triangles for a test that counts a triangle's side; the
+  // topology orienting sees is what "auto" chooses from.
+  if (api::orients_mesh(params)) {
+    job.orientation = orient_outward(job.mesh);
+    job.timings.add("orient", clock.lap());
+  }
+  job.inside = api::choose_inside_test(params, job.orientation ? &*job.orientation : nullptr);
+  job.params.inside = job.inside.test;
+  const api::JobParams& resolved = job.params;
+
   // Only the rotation and the bounds it gives are needed to size the grid;
   // the vertices are rotated by the worker, after the mesh report.
   if (params.rotation) job.rotation = *params.rotation;
@@ -132,6 +150,7 @@ PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uin
       box = rotated_bounds(job.mesh, job.rotation);
     }
   }
+  const Aabb part = box;
 
   // Anisotropic voxels: the engine works where they are cubes.
   if (const glm::dvec3 aspect = params.mode->voxel_aspect(params); aspect != glm::dvec3(1.0)) {
@@ -139,22 +158,47 @@ PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uin
     box.max /= aspect;
   }
   job.grid = resolve_grid(params.grid, box);
+  // The winding number needs the whole grid: where "auto" chose it for a
+  // job that must stream (asked to, or past what memory takes), parity
+  // does the job, with a warning.
+  std::optional<api::JobWarning> fallback;
+  if (job.inside.automatic && job.inside.test == InsideTest::winding) {
+    const bool must_stream =
+        params.streaming == api::Streaming::on ||
+        (!plan_execution(resolved, job.grid, limits).streamed && job.grid.voxel_count() > limits.max_voxels);
+    job.params.inside = InsideTest::parity;
+    if (must_stream && !plan_execution(resolved, job.grid, limits).no_slabs) {
+      job.inside.test = InsideTest::parity;
+      job.inside.reason += "; but the winding number needs the whole grid in memory, which this job cannot have, "
+                           "so parity, which goes slab by slab";
+      fallback = api::JobWarning{"winding-fallback",
+                                 "the mesh is not closed, but this job goes slab by slab and the winding number needs the "
+                                 "whole grid in memory, so parity was used: expect streaks through the mesh's holes; "
+                                 "close the mesh, or use a coarser grid that fits in memory",
+                                 {{"voxels", job.grid.voxel_count()}, {"max_voxels_in_memory", limits.max_voxels}}};
+    } else {
+      job.params.inside = InsideTest::winding;
+    }
+  }
   // In memory, slab by slab or as runs: asked for, or from the memory it
   // would take.
-  const ExecutionPlan plan = plan_execution(params, job.grid, limits);
+  const ExecutionPlan plan = plan_execution(resolved, job.grid, limits);
   job.streamed = plan.streamed;
   job.path = plan.path;
   if (job.streamed) {
     check_voxel_limit(job.grid, limits.max_streamed_voxels, "");
-    job.slab_layers = streamed_job_slab_layers(job.grid, params, limits.stream_slab_bytes);
+    job.slab_layers = streamed_job_slab_layers(job.grid, resolved, limits.stream_slab_bytes);
     job.memory_estimate = estimate_streamed_job_memory(job.grid, job.slab_layers, job.triangles,
-                                                       params.mode->streamed_layer_bytes(job.grid, params));
+                                                       params.mode->streamed_layer_bytes(job.grid, resolved));
   } else {
     const bool could_stream = !plan.no_slabs && limits.stream_above_bytes > 0 && params.streaming == api::Streaming::off;
     check_voxel_limit(job.grid, limits.max_voxels,
                       could_stream ? " (or \"streaming\": \"auto\": slab by slab it needs the memory of one slab, not the grid's)" : "");
-    job.memory_estimate = estimate_job_memory(job.grid, params);
+    job.memory_estimate = estimate_job_memory(job.grid, resolved);
   }
+  job.warnings = api::prepared_job_warnings(resolved, job.inside, job.orientation ? &*job.orientation : nullptr, part,
+                                            job.grid);
+  if (fallback) job.warnings.push_back(std::move(*fallback));
   job.timings.add("grid", clock.lap());
   return job;
 }
@@ -171,11 +215,18 @@ VoxelJobResult begin_voxel_job(PreparedVoxelJob& job, bool with_report, JobContr
   result.rotation = job.rotation;
   result.grid = job.grid;
   result.timings = std::move(job.timings);
+  result.inside = job.inside;
+  result.warnings = job.warnings;
   if (control) control->check_cancelled();
   if (with_report) {
     if (control) control->set_stage("mesh report");
     result.report = make_mesh_report(job.mesh);
     result.report->warnings = job.decode_warnings;
+    result.report->orientation = job.orientation;
+    // Parity asked for by name is not oriented, so only the report sees whether it leaks.
+    if (!job.orientation)
+      if (auto w = api::leaky_inside_warning(job.inside, result.report->boundary_edges, result.report->nonmanifold_edges))
+        result.warnings.push_back(std::move(*w));
     result.timings.add("report", clock.lap());
   }
   if (job.rotation != glm::dmat3(1.0)) {
@@ -191,6 +242,22 @@ VoxelJobResult begin_voxel_job(PreparedVoxelJob& job, bool with_report, JobContr
   // side-by-side comparison (cheap: one pass over the triangles).
   if (with_report) result.mesh_mass = mesh_mass_properties(job.mesh);
   return result;
+}
+
+// The warning a whole job's empty solid gets: its mesh's area from the
+// report, or summed here (only ever for an empty result).
+void warn_if_empty(VoxelJobResult& result, const PreparedVoxelJob& job) {
+  if (result.filled > 0) return;
+  double area = 0.0;
+  if (result.report) {
+    area = result.report->surface_area;
+  } else {
+    for (std::size_t t = 0; t < job.mesh.triangles.size(); ++t) {
+      const glm::dvec3 a(job.mesh.corner(t, 0)), b(job.mesh.corner(t, 1)), c(job.mesh.corner(t, 2));
+      area += glm::length(glm::cross(b - a, c - a)) / 2.0;
+    }
+  }
+  if (auto w = api::empty_result_warning(job.params, result.inside, result.filled, area)) result.warnings.push_back(std::move(*w));
 }
 
 }  // namespace
@@ -227,6 +294,7 @@ VoxelJobResult execute_voxel_job(PreparedVoxelJob job, bool with_report, JobCont
   if (made.values) made.values_info["type"] = value_type_name(*made.values);
   result.filled = made.solid->count();
   result.timings.add("count", clock.lap());
+  warn_if_empty(result, job);
   return result;
 }
 
@@ -264,6 +332,7 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
   if (control) control->set_span(begin, end);
   if (auto type = job.params.value_type()) result.volumes.values_info["type"] = value_type_name(*type);
   result.timings.add(parity_solid ? std::string(mode.stage_name()) + "+write" : "voxelize+write", clock.lap());
+  warn_if_empty(result, job);
   return result;
 }
 
@@ -293,7 +362,9 @@ VoxelJobResult execute_runs(PreparedVoxelJob& job, bool with_report, LayerRange 
 
 VoxelJobResult execute_voxel_runs_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
                                       const RunSlabConsumer& consume) {
-  return execute_runs(job, with_report, {}, control, threads, consume);
+  VoxelJobResult result = execute_runs(job, with_report, {}, control, threads, consume);
+  warn_if_empty(result, job);
+  return result;
 }
 
 VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,

@@ -13,7 +13,9 @@
 #include <glm/mat3x3.hpp>
 #include <nlohmann/json.hpp>
 
+#include "api/inside_choice.h"
 #include "api/job_params.h"
+#include "api/job_warning.h"
 #include "api/job_volumes.h"
 #include "voxd/bit_volume.h"
 #include "voxd/analysis/mass_properties.h"
@@ -97,6 +99,12 @@ struct PreparedVoxelJob {
   std::int64_t slab_layers = 0;  // z layers per slab when streamed
   std::uint64_t memory_estimate = 0;  // bytes at peak the way it runs, for admission control
   StageTimings timings;
+  // The inside test, resolved ("auto" chooses from the mesh: params.inside
+  // is then set to it), what orienting the mesh turned round (when the test
+  // needs outward triangles), and what preparing found doubtful.
+  api::InsideChoice inside;
+  std::optional<OrientationRepair> orientation;
+  std::vector<api::JobWarning> warnings;
 };
 
 struct VoxelJobResult {
@@ -114,6 +122,10 @@ struct VoxelJobResult {
   std::uint64_t filled = 0;
   bool streamed = false;
   StageTimings timings;
+  api::InsideChoice inside;
+  // The prepared job's warnings, then the run's (an empty result, an open
+  // mesh under parity seen by the report).
+  std::vector<api::JobWarning> warnings;
 };
 
 // Bytes the job's volumes will take at peak, for admission control.

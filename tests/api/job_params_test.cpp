@@ -177,7 +177,9 @@ TEST(JobParams, SdfModeDefaultsToABandOfThreeVoxelsInsideNegativeInModelUnits) {
   EXPECT_FALSE(p.options_as<SdfParams>()->full);
   EXPECT_EQ(p.options_as<SdfParams>()->sign, SignConvention::inside_negative);
   EXPECT_TRUE(p.options_as<SdfParams>()->model_units);
-  EXPECT_EQ(p.options_as<SdfParams>()->inside, InsideTest::winding);  // the sign comes from the job's inside test
+  // The sign comes from the job's inside test, asked for here by name.
+  EXPECT_EQ(p.inside, InsideTest::winding);
+  EXPECT_FALSE(p.inside_auto);
   EXPECT_TRUE(p.has_values());
 }
 

@@ -51,6 +51,7 @@ TEST(OrientOutward, TurnsTrianglesThatDisagreeWithTheirNeighbours) {
   ASSERT_GT(before.inconsistent_edges, 0u);
   const double expected = signed_volume(test::make_icosphere({1, 2, 3}, 5.0, 3));
   const OrientationRepair r = orient_outward(sphere);
+  EXPECT_EQ(r.inconsistent_edges, before.inconsistent_edges);
   const MeshReport after = make_mesh_report(sphere);
   EXPECT_EQ(after.inconsistent_edges, 0u);
   EXPECT_TRUE(after.watertight);

@@ -86,6 +86,45 @@ TEST_F(CliTest, InspectReportsTheOpenRealWuson) {
   EXPECT_TRUE(report.at("volume").is_null());
 }
 
+// A part written inside out: nothing in the edge counts shows it (every
+// edge is consistent), the orientation does; and what "auto" would choose.
+TEST_F(CliTest, InspectSaysAPartIsInsideOutAndWhichInsideTestAutoChooses) {
+  const std::string inverted = write_mesh("inverted.stl", test::flipped(test::make_box({0, 0, 0}, {4, 3, 2})));
+  const auto r = run_process(kVoxd + " inspect " + inverted);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json report = json::parse(r.out);
+  EXPECT_EQ(report.at("inconsistent_edges"), 0);
+  EXPECT_DOUBLE_EQ(report.at("volume").get<double>(), -24.0);  // the file as it is
+  EXPECT_EQ(report.at("orientation").at("inverted_components"), 1);
+  EXPECT_EQ(report.at("orientation").at("flipped_triangles"), 12);
+  EXPECT_EQ(report.at("inside").at("test"), "parity");
+  const auto open = run_process(kVoxd + " inspect " + test::assimp_model("STL/Wuson.stl"));
+  ASSERT_EQ(open.exit_code, 0) << open.err;
+  EXPECT_EQ(json::parse(open.out).at("inside").at("test"), "winding");
+}
+
+// The mesh file's unit: a box 4 x 3 x 2 m is voxelized and reported in mm,
+// and a voxel of 100 mm makes 40 x 30 x 20 of them; the summary says so.
+TEST_F(CliTest, VoxelizeReadsTheMeshInItsUnitAndReportsMillimetres) {
+  const std::string box = write_mesh("box_m.stl", test::make_box({0, 0, 0}, {4, 3, 2}));
+  const auto r = run_process(kVoxd + " voxelize " + box + " --units m --voxel-size 100 --report -o " + path("m.rle") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(r.out);
+  EXPECT_EQ(s.at("grid").at("dims"), json::array({40, 30, 20}));
+  EXPECT_EQ(s.at("units"), json({{"mesh", "m"}, {"lengths", "mm"}}));
+  EXPECT_DOUBLE_EQ(s.at("report").at("volume").get<double>(), 24e9);
+  EXPECT_EQ(s.at("filled_voxels"), 40 * 30 * 20);
+  const auto bad = run_process(kVoxd + " voxelize " + box + " --units yards -o " + path("y.rle"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("/units"), std::string::npos) << bad.err;
+  // Without the unit, a part 4 mm across with a 100 mm voxel: both warned on
+  // standard error with their codes.
+  const auto plain = run_process(kVoxd + " voxelize " + box + " --voxel-size 100 -o " + path("p.rle"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_NE(plain.err.find("warning: the voxel (100 mm) is larger than the part (4 mm across)"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("[voxel-larger-than-part]"), std::string::npos) << plain.err;
+}
+
 // What decoding noticed comes with the report: Blender 2.47's PLY header
 // line, and UTF-16 text (assimp-testmodels); a plain file has no warnings.
 TEST_F(CliTest, InspectSaysWhatDecodingNoticed) {
@@ -114,7 +153,11 @@ TEST_F(CliTest, VoxelizeJsonSummaryMatchesTheEngineAndTheFile) {
   const json s = json::parse(r.out);
   EXPECT_EQ(s.at("grid").at("dims"), json::array({42, 42, 42}));
   EXPECT_EQ(s.at("mode"), "solid");
-  EXPECT_EQ(s.at("inside"), "parity");
+  // A closed sphere: "auto" (the default) chooses parity, and says why.
+  EXPECT_EQ(s.at("inside").at("test"), "parity");
+  EXPECT_EQ(s.at("inside").at("chosen"), "auto");
+  EXPECT_EQ(s.at("warnings"), json::array());
+  EXPECT_EQ(s.at("units"), json({{"mesh", "mm"}, {"lengths", "mm"}}));
   // An RLE of bits is made from runs, in one stage; a binvox from the dense
   // volume, voxelized then encoded.
   for (const char* stage : {"parse", "voxelize+write", "total"}) EXPECT_TRUE(s.at("timings").contains(stage)) << stage;

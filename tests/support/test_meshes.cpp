@@ -205,6 +205,14 @@ Mesh remove_face(Mesh mesh, int axis, double value) {
   return mesh;
 }
 
+Mesh punched(const Mesh& mesh, std::size_t stride) {
+  Mesh out = mesh;
+  out.triangles.clear();
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    if (t % stride != stride / 2) out.triangles.push_back(mesh.triangles[t]);
+  return out;
+}
+
 double mesh_volume(const Mesh& mesh) {
   double vol = 0.0;
   for (const auto& t : mesh.triangles) {

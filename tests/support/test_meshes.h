@@ -59,6 +59,9 @@ Mesh concat(const std::vector<Mesh>& parts);
 Mesh flipped(Mesh mesh);
 // Removes the triangles whose every vertex satisfies coordinate[axis] == value.
 Mesh remove_face(Mesh mesh, int axis, double value);
+// `mesh` with holes punched in it: every `stride`-th triangle gone (the
+// middle one of each run of `stride`), small holes all over its surface.
+Mesh punched(const Mesh& mesh, std::size_t stride);
 
 // Exact volume of the icosphere polyhedron (not the sphere), for tight checks.
 double mesh_volume(const Mesh& mesh);

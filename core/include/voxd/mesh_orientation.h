@@ -35,7 +35,9 @@ struct OrientationRepair {
   // Edges whose two triangles no orientation makes agree (a Moebius strip,
   // or a component folded through itself); left as they are.
   std::uint64_t unorientable_edges = 0;
-  // The topology the repair saw (as make_mesh_report counts them).
+  // The topology the repair saw (as make_mesh_report counts them), the
+  // inconsistent edges as written, before the repair.
+  std::uint64_t inconsistent_edges = 0;
   std::uint64_t boundary_edges = 0;
   std::uint64_t nonmanifold_edges = 0;
 

@@ -5,7 +5,10 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
 #include "voxd/mesh.h"
+#include "voxd/mesh_orientation.h"
 
 namespace voxd {
 
@@ -23,6 +26,10 @@ struct MeshReport {
   // What decoding the file noticed (DecodeWarnings): set by whoever decoded
   // it, as make_mesh_report sees only the mesh.
   std::vector<std::string> warnings;
+  // What orienting the mesh turned round (orient_outward), when it was: set
+  // by whoever oriented it. The counts above are then of the mesh as
+  // oriented, which is the mesh that was voxelized.
+  std::optional<OrientationRepair> orientation;
 };
 
 // Merges vertices with bit-identical positions; triangles keep their order.
