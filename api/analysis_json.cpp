@@ -4,6 +4,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "voxd/encode/number_text.h"
+
 namespace voxd::api {
 namespace {
 
@@ -91,11 +93,18 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
   json thickness = nullptr;
   if (report.thickness) {
     const ThicknessAnalysis& t = *report.thickness;
-    auto regions = [&](const std::vector<ThicknessRegion>& list, const char* extreme) {
+    // `kind` set: each region says whether it is certainly beyond the
+    // threshold (else it is marginal); unset: regions near the threshold.
+    auto regions = [&](const std::vector<ThicknessRegion>& list, const char* extreme,
+                       std::optional<ThicknessRegionKind> kind = std::nullopt) {
       json items = json::array();
+      std::size_t marginal = 0;
+      for (const ThicknessRegion& r : list)
+        if (!kind || !certainly_beyond(t, r, *kind)) ++marginal;
       for (std::size_t i = 0; i < list.size() && i < kMaxListedRegions; ++i) {
         const ThicknessRegion& r = list[i];
         items.push_back({{"voxels", r.voxel_count},
+                         {"certain", kind ? json(certainly_beyond(t, r, *kind)) : json(false)},
                          {"volume", static_cast<double>(r.voxel_count) * h * h * h},
                          {"centroid", vec(grid.origin + (r.centroid + glm::dvec3(0.5)) * h)},
                          {"bbox_min", vec(grid.origin + glm::dvec3(r.bbox_min) * h)},
@@ -103,8 +112,29 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
                          {extreme, static_cast<double>(r.extreme_thickness) * h},
                          {"mean_thickness", static_cast<double>(r.mean_thickness) * h}});
       }
-      return json{{"count", list.size()}, {"items", items}};
+      return json{{"count", list.size()}, {"marginal", marginal}, {"items", items}};
     };
+    const ThicknessVerdict verdict = thickness_verdict(t);
+    const std::optional<double> deciding = deciding_voxel_size(t);
+    json verdict_json = nullptr, reason = nullptr;
+    const std::string bound = "the error bound of " + wall_thickness_error_statement(h);
+    switch (verdict) {
+      case ThicknessVerdict::none: break;
+      case ThicknessVerdict::pass:
+        verdict_json = "pass";
+        reason = "every wall reads within the thresholds by more than " + bound;
+        break;
+      case ThicknessVerdict::fail:
+        verdict_json = "fail";
+        reason = "a region reads beyond a threshold by more than " + bound + ": the wall itself is beyond it";
+        break;
+      case ThicknessVerdict::inconclusive:
+        verdict_json = "inconclusive";
+        reason = "no region is certainly beyond a threshold, but some read within " + bound +
+                 " of one, so the walls there may be on either side; voxels of " + number_text(*deciding * h) + " mm" +
+                 " or smaller would decide it (voxel_size_to_decide)";
+        break;
+    }
     json histogram = json::array();
     for (std::uint64_t n : t.stats.histogram) histogram.push_back(n);
     thickness = {
@@ -121,15 +151,17 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
         {"histogram", {{"min", t.stats.min * h}, {"bin_width", t.stats.bin_width() * h}, {"counts", histogram}}},
         {"min_wall", t.min_wall_voxels > 0 ? json(t.min_wall_voxels * h) : json(nullptr)},
         {"max_wall", t.max_wall_voxels > 0 ? json(t.max_wall_voxels * h) : json(nullptr)},
-        {"thin_regions", regions(t.thin_regions, "min_thickness")},
-        {"thick_regions", regions(t.thick_regions, "max_thickness")},
-        {"verdict", t.min_wall_voxels > 0 || t.max_wall_voxels > 0
-                        ? json(t.thin_regions.empty() && t.thick_regions.empty() ? "pass" : "fail")
-                        : json(nullptr)},
+        {"thin_regions", regions(t.thin_regions, "min_thickness", ThicknessRegionKind::thin)},
+        {"thick_regions", regions(t.thick_regions, "max_thickness", ThicknessRegionKind::thick)},
+        {"near_min_wall", regions(t.near_min_wall, "min_thickness")},
+        {"near_max_wall", regions(t.near_max_wall, "max_thickness")},
+        {"verdict", verdict_json},
+        {"verdict_reason", reason},
+        {"voxel_size_to_decide", deciding ? json(*deciding * h) : json(nullptr)},
     };
   }
   json out = {
-      {"unit", "model units (the mesh's own)"},
+      {"unit", "mm"},
       {"voxel_size", h},
       {"grid", {{"origin", vec(grid.origin)}, {"dims", json::array({grid.dims.x, grid.dims.y, grid.dims.z})}}},
       {"mass_properties", mass},

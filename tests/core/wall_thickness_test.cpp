@@ -389,6 +389,38 @@ TEST(ThinWallReport, APlateOfAnyOrientationHasNoThinRegionAndIsOneWhenThinnerTha
       }
 }
 
+// The verdict with the error bound (one voxel): a plate T thick, along the
+// grid or turned 30° about two axes, against min_wall = T + k voxels. Under
+// by 3 voxels: fail; within a voxel either side: inconclusive, naming the
+// voxel that would decide it; over by a voxel or more: pass.
+TEST(ThinWallReport, TheVerdictIsPassFailOrInconclusiveWithinTheErrorBound) {
+  struct Case {
+    double k;
+    ThicknessVerdict verdict;
+  };
+  const Case cases[] = {{-3, ThicknessVerdict::pass},          {-1, ThicknessVerdict::pass},
+                        {-0.5, ThicknessVerdict::inconclusive}, {0.5, ThicknessVerdict::inconclusive},
+                        {1, ThicknessVerdict::inconclusive},    {3, ThicknessVerdict::fail}};
+  for (double voxel : {0.1, 0.13})
+    for (bool tilted : {false, true}) {
+      const Mesh m = plate(1.0, 6, 5, 0.0);
+      const BitVolume v = solid_of(tilted ? test::rotated(m, 30, 30) : m, voxel);
+      const double t = tilted ? 1.0 : std::round(1.0 / voxel) * voxel;
+      for (const Case& c : cases) {
+        const ThicknessAnalysis a = thin_walls(v, t + c.k * voxel);
+        EXPECT_EQ(thickness_verdict(a), c.verdict) << voxel << " " << tilted << " k " << c.k;
+        const std::optional<double> decide = deciding_voxel_size(a);
+        EXPECT_EQ(decide.has_value(), c.verdict == ThicknessVerdict::inconclusive);
+        // The plate reads T: decided once the bound and the tolerance
+        // (1.25 voxels) fit between T and min_wall, by a wall of at most 20 voxels.
+        if (decide) {
+          const double expected = std::max(std::abs(c.k) / 1.25, a.min_wall_voxels / 20.0);
+          EXPECT_NEAR(*decide, expected, 0.1) << voxel << " " << tilted << " k " << c.k;
+        }
+      }
+    }
+}
+
 TEST(ThinWallReport, TheLBracketsOnlyThinRegionIsTheFin) {
   const double h = 0.1;
   const BitVolume v = solid_of(test::make_extrusion({{0, 0}, {20, 0}, {20, 3}, {12.6, 3}, {12.6, 8}, {12, 8}, {12, 3},

@@ -616,14 +616,24 @@ TEST_F(HttpApiTest, AnalysisOfAHollowBoxFindsItsVoidItsThinWallsAndIsKept) {
   // around (the surface fits' windows); every face of this small box is
   // nearer an edge than that, where the fits lean: within a quarter voxel.
   EXPECT_NEAR(t.at("min").get<double>(), 2.0, 0.25);
-  EXPECT_EQ(t.at("verdict"), "fail");
+  // Half a voxel under min_wall is within the error bound (a voxel): the
+  // walls there may be either side, and a voxel of 0.4 would decide them.
+  EXPECT_EQ(t.at("verdict"), "inconclusive");
   EXPECT_GE(t.at("thin_regions").at("count").get<int>(), 1);
+  EXPECT_EQ(t.at("thin_regions").at("marginal"), t.at("thin_regions").at("count"));
+  EXPECT_NEAR(t.at("voxel_size_to_decide").get<double>(), 0.4, 0.2);
+  EXPECT_NE(t.at("verdict_reason").get<std::string>().find("would decide it"), std::string::npos);
   EXPECT_FALSE(t.at("error_bound").get<std::string>().empty());
   // Kept: the same answer from the job's directory.
   auto again = http().Get(("/v1/jobs/" + id + "/analysis?min_wall=2.5").c_str());
   EXPECT_EQ(again->get_header_value("X-Voxd-Cache"), "hit");
   EXPECT_EQ(again->body, first->body);
-  EXPECT_EQ(expect_json(http().Get(("/v1/jobs/" + id + "/analysis?min_wall=1.5").c_str()), 200, "Analysis")
+  // Two voxels under min_wall: thin beyond the bound; a voxel over: sound.
+  const json fail = expect_json(http().Get(("/v1/jobs/" + id + "/analysis?min_wall=4").c_str()), 200, "Analysis");
+  EXPECT_EQ(fail.at("thickness").at("verdict"), "fail");
+  EXPECT_EQ(fail.at("thickness").at("thin_regions").at("items").at(0).at("certain"), true);
+  EXPECT_TRUE(fail.at("thickness").at("voxel_size_to_decide").is_null());
+  EXPECT_EQ(expect_json(http().Get(("/v1/jobs/" + id + "/analysis?min_wall=1").c_str()), 200, "Analysis")
                 .at("thickness").at("verdict"), "pass");
   EXPECT_TRUE(expect_json(http().Get(("/v1/jobs/" + id + "/analysis?thickness=false").c_str()), 200, "Analysis")
                   .at("thickness").is_null());

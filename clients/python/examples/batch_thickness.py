@@ -2,16 +2,21 @@
 """Wall-thickness batch report: every part in a folder through voxd, one CSV row each.
 
     python3 batch_thickness.py PARTS_DIR -o report.csv --min-wall 0.8 --max-wall 6 \\
-        [--server http://127.0.0.1:8080] [--voxel-size 0.2 | --resolution 256] [--density 7.85e-3]
+        [--server http://127.0.0.1:8080] [--voxel-size 0.2 | --resolution 256] [--density 7.85e-3] [--units mm]
 
 For each mesh (STL, Draco, OBJ, PLY) it submits a job whose JSON asks for the
 analysis, waits for it, and writes: the part, its volume (from the mesh when
 it is closed, else from the voxels), surface area, centroid, mass (with
---density, in mass per cubic model unit), connected parts, enclosed voids, the
+--density, in mass per cubic millimetre), connected parts, enclosed voids, the
 thinnest and thickest wall, the thin and thick regions, and the verdict
-(pass/fail against --min-wall/--max-wall). A part voxd cannot read gets its
-error in the row; the batch goes on. Exit status: 0 when every part passed,
-1 when any failed its check or could not be analysed, 2 on a usage error.
+against --min-wall/--max-wall: pass, fail, or inconclusive when a wall reads
+within the error bound (a voxel) of a limit, with the voxel size that would
+decide it. Every length is in millimetres (--units gives the files' unit).
+The inside test voxd chose for the mesh and the codes of the job's warnings
+(an open or inside-out mesh, an implausible size) come with each row. A part
+voxd cannot read gets its error in the row; the batch goes on. Exit status:
+0 when every part passed, 1 when any failed, was inconclusive or could not be
+analysed, 2 on a usage error.
 """
 import argparse
 import csv
@@ -27,7 +32,7 @@ except ImportError:  # run from the repository without installing the client
 MESH_EXTENSIONS = (".stl", ".drc", ".obj", ".ply")
 COLUMNS = ["part", "volume", "volume_source", "surface_area", "centroid_x", "centroid_y", "centroid_z", "mass",
            "parts", "voids", "void_volume", "min_wall", "max_wall", "thin_regions", "thinnest_region_wall",
-           "thick_regions", "verdict", "voxel_size", "job", "error"]
+           "thick_regions", "verdict", "voxel_size_to_decide", "voxel_size", "inside", "warnings", "job", "error"]
 
 
 def job_params(args):
@@ -38,7 +43,7 @@ def job_params(args):
         analysis["min_wall"] = args.min_wall
     if args.max_wall:
         analysis["max_wall"] = args.max_wall
-    return {"grid": grid, "analyses": [analysis]}
+    return {"grid": grid, "units": args.units, "analyses": [analysis]}
 
 
 def row_for(client, path, args):
@@ -46,6 +51,8 @@ def row_for(client, path, args):
     try:
         job = client.run(path, job_params(args), timeout=args.timeout)
         row["job"] = job["id"]
+        row["inside"] = (job.get("inside") or {}).get("test", "")
+        row["warnings"] = ";".join(w["code"] for w in job.get("warnings", []))
         report = client.analysis(job, **{k: v for k, v in (("min_wall", args.min_wall), ("max_wall", args.max_wall)) if v})
     except VoxdError as e:
         row["error"] = str(e).replace("\n", " ")
@@ -74,6 +81,8 @@ def row_for(client, path, args):
             row["thinnest_region_wall"] = min(r["min_thickness"] for r in thin["items"])
         row["thick_regions"] = (thickness.get("thick_regions") or {"count": 0})["count"]
         row["verdict"] = thickness.get("verdict") or ""
+        if thickness.get("voxel_size_to_decide") is not None:
+            row["voxel_size_to_decide"] = thickness["voxel_size_to_decide"]
     return row
 
 
@@ -84,11 +93,13 @@ def main(argv=None):
     parser.add_argument("--server", help="voxd URL (default: $VOXD_SERVER or http://127.0.0.1:8080)")
     parser.add_argument("--api-key", help="API key (default: $VOXD_API_KEY)")
     size = parser.add_mutually_exclusive_group()
-    size.add_argument("--voxel-size", type=float, help="voxel edge in model units")
+    size.add_argument("--voxel-size", type=float, help="voxel edge in mm")
     size.add_argument("--resolution", type=int, default=256, help="voxels along the longest axis (default 256)")
-    parser.add_argument("--min-wall", type=float, help="walls thinner than this fail (model units)")
-    parser.add_argument("--max-wall", type=float, help="walls thicker than this fail: casting hot spots (model units)")
-    parser.add_argument("--density", type=float, help="mass per cubic model unit, for the mass column")
+    parser.add_argument("--min-wall", type=float, help="walls thinner than this fail (mm)")
+    parser.add_argument("--max-wall", type=float, help="walls thicker than this fail: casting hot spots (mm)")
+    parser.add_argument("--units", default="mm", choices=["mm", "cm", "m", "in", "ft"],
+                        help="the unit of the mesh files' coordinates (default mm)")
+    parser.add_argument("--density", type=float, help="mass per cubic millimetre, for the mass column")
     parser.add_argument("--timeout", type=float, default=3600, help="seconds to wait for one part (default 3600)")
     args = parser.parse_args(argv)
     if not os.path.isdir(args.folder):

@@ -69,6 +69,33 @@ class BatchThicknessExample(unittest.TestCase):
         self.assertIn("invalid-mesh", broken["error"])
         self.assertEqual(broken["volume"], "")
 
+    def test_a_wall_within_a_voxel_of_the_limit_is_inconclusive_and_warnings_come_with_the_row(self):
+        # The slab is 2 thick; 2.1 is under half a voxel of 0.25 away: the
+        # wall could be either side. The same slab written inside out is
+        # turned round and says so; a slab in centimetres is read in mm.
+        with open(os.path.join(self.parts, "slab.stl"), "wb") as f:
+            f.write(box_stl((0, 0, 0), (8, 6, 2)))
+        with open(os.path.join(self.parts, "inside_out.stl"), "wb") as f:
+            f.write(box_stl((0, 0, 0), (8, 6, 2), inside_out=True))
+        r, rows = self.run_example("--voxel-size", "0.25", "--min-wall", "2.1")
+        self.assertEqual(r.returncode, 1, r.stderr)  # inconclusive is not a pass
+        for name in ("slab.stl", "inside_out.stl"):
+            row = rows[name]
+            self.assertEqual(row["verdict"], "inconclusive", row)
+            self.assertGreater(float(row["voxel_size_to_decide"]), 0.0)
+            self.assertLess(float(row["voxel_size_to_decide"]), 0.25)
+            self.assertEqual(row["inside"], "parity")
+            self.assertAlmostEqual(float(row["volume"]), 96.0, places=9)
+        self.assertEqual(rows["slab.stl"]["warnings"], "")
+        self.assertEqual(rows["inside_out.stl"]["warnings"], "mesh-inverted")
+        self.assertIn("slab.stl: inconclusive", r.stderr)
+
+        r, rows = self.run_example("--voxel-size", "2.5", "--min-wall", "15", "--units", "cm")
+        slab = rows["slab.stl"]
+        self.assertAlmostEqual(float(slab["volume"]), 96000.0, places=6)  # mm^3
+        self.assertEqual(float(slab["min_wall"]), 20.0)
+        self.assertEqual(slab["verdict"], "pass")
+
     def test_every_part_passing_exits_zero(self):
         with open(os.path.join(self.parts, "slab.stl"), "wb") as f:
             f.write(box_stl((0, 0, 0), (8, 6, 2)))

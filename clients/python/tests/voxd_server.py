@@ -56,8 +56,8 @@ class VoxdServer:
             shutil.rmtree(self.dir, ignore_errors=True)
 
 
-def box_stl(lo, hi):
-    """A closed, outward-facing box as binary STL bytes."""
+def box_stl(lo, hi, inside_out=False):
+    """A closed box as binary STL bytes, facing outward (or inward: written inside out)."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
     v = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0), (x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)]
     faces = [(0, 2, 1), (0, 3, 2), (4, 5, 6), (4, 6, 7), (0, 1, 5), (0, 5, 4), (2, 3, 7), (2, 7, 6), (1, 2, 6),
@@ -65,7 +65,7 @@ def box_stl(lo, hi):
     out = bytearray(80) + struct.pack("<I", len(faces))
     for f in faces:
         out += struct.pack("<3f", 0, 0, 0)
-        for k in f:
+        for k in (reversed(f) if inside_out else f):
             out += struct.pack("<3f", *v[k])
         out += b"\0\0"
     return bytes(out)

@@ -1,5 +1,9 @@
 #include "voxd/analysis/analysis.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 namespace voxd {
 
 AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& options, JobControl* control) {
@@ -45,10 +49,65 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
       t.thick_regions = find_thickness_regions(
           map, ThicknessRegionKind::thick, static_cast<float>(options.max_wall_voxels + kWallReportTolerance),
           options.min_region_voxels);
+    // Within the bound on the good side: found with the threshold moved a
+    // bound further, less those holding a region beyond it (listed above).
+    const ThicknessErrorBound bound = wall_thickness_error_bound();
+    if (options.min_wall_voxels > 0) {
+      const double at = options.min_wall_voxels - kWallReportTolerance;
+      for (ThicknessRegion& r : find_thickness_regions(map, ThicknessRegionKind::thin,
+                                                       static_cast<float>(at + bound.below_voxels), options.min_region_voxels))
+        if (r.extreme_thickness >= static_cast<float>(at)) t.near_min_wall.push_back(r);
+    }
+    if (options.max_wall_voxels > 0) {
+      const double at = options.max_wall_voxels + kWallReportTolerance;
+      for (ThicknessRegion& r : find_thickness_regions(map, ThicknessRegionKind::thick,
+                                                       static_cast<float>(at - bound.above_voxels), options.min_region_voxels))
+        if (r.extreme_thickness <= static_cast<float>(at)) t.near_max_wall.push_back(r);
+    }
     report.thickness = std::move(t);
   }
   step(1.0);
   return report;
+}
+
+bool certainly_beyond(const ThicknessAnalysis& t, const ThicknessRegion& region, ThicknessRegionKind kind) {
+  const ThicknessErrorBound bound = wall_thickness_error_bound();
+  // A reading r of a wall w has w - below <= r <= w + above: the wall is
+  // under min_wall when r + below < min_wall, past the tolerance.
+  if (kind == ThicknessRegionKind::thin)
+    return region.extreme_thickness < t.min_wall_voxels - kWallReportTolerance - bound.above_voxels;
+  return region.extreme_thickness > t.max_wall_voxels + kWallReportTolerance + bound.below_voxels;
+}
+
+ThicknessVerdict thickness_verdict(const ThicknessAnalysis& t) {
+  if (t.min_wall_voxels <= 0 && t.max_wall_voxels <= 0) return ThicknessVerdict::none;
+  for (const ThicknessRegion& r : t.thin_regions)
+    if (certainly_beyond(t, r, ThicknessRegionKind::thin)) return ThicknessVerdict::fail;
+  for (const ThicknessRegion& r : t.thick_regions)
+    if (certainly_beyond(t, r, ThicknessRegionKind::thick)) return ThicknessVerdict::fail;
+  const bool marginal =
+      !t.thin_regions.empty() || !t.thick_regions.empty() || !t.near_min_wall.empty() || !t.near_max_wall.empty();
+  return marginal ? ThicknessVerdict::inconclusive : ThicknessVerdict::pass;
+}
+
+std::optional<double> deciding_voxel_size(const ThicknessAnalysis& t) {
+  if (thickness_verdict(t) != ThicknessVerdict::inconclusive) return std::nullopt;
+  const ThicknessErrorBound bound = wall_thickness_error_bound();
+  // Decided at voxel h' (in these voxels) when the reading is beyond the
+  // threshold by more than (bound + tolerance) h'.
+  const double margin = std::max(bound.below_voxels, bound.above_voxels) + kWallReportTolerance;
+  double voxel = std::numeric_limits<double>::infinity(), floor = voxel;
+  auto take = [&](const std::vector<ThicknessRegion>& regions, double threshold) {
+    if (threshold <= 0) return;
+    floor = std::min(floor, threshold / 20.0);
+    for (const ThicknessRegion& r : regions)
+      voxel = std::min(voxel, std::abs(static_cast<double>(r.extreme_thickness) - threshold) / margin);
+  };
+  take(t.thin_regions, t.min_wall_voxels);
+  take(t.near_min_wall, t.min_wall_voxels);
+  take(t.thick_regions, t.max_wall_voxels);
+  take(t.near_max_wall, t.max_wall_voxels);
+  return std::min(1.0, std::max(voxel, floor));
 }
 
 }  // namespace voxd
