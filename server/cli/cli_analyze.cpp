@@ -126,6 +126,8 @@ int analyze_command(int argc, char** argv) {
   }
   const AnalysisReport report = analyze_volume(*result.volumes.solid, options);
   nlohmann::json doc = api::analysis_to_json(report, result.grid, result.report, result.mesh_mass);
+  doc["inside"] = api::to_json(result.inside);
+  doc["warnings"] = api::to_json(result.warnings);
 
   std::filesystem::create_directories(*out_dir);
   const std::string path = *out_dir + "/analysis.json";
@@ -157,6 +159,8 @@ int analyze_command(int argc, char** argv) {
   job.job = std::make_shared<const api::JobParams>(params);
   job.grid = result.grid;
   job.mesh = result.report;
+  job.inside = result.inside;
+  job.warnings = result.warnings;
   job.mesh_mass = result.mesh_mass;
   job.values = result.volumes.values_info;
   server::JobOutput output;
@@ -233,6 +237,10 @@ int analyze_command(int argc, char** argv) {
   std::cerr << "analysis: " << report.components.parts.size() << " part(s), " << report.components.voids.size()
             << " void(s), skin " << (report.skin ? report.skin->max_depth : 0) << " layers deep; wrote " << path << " and " << files
             << " files\n";
+  if (report.thickness && !doc["thickness"]["verdict"].is_null())
+    std::cerr << "verdict: " << doc["thickness"]["verdict"].get<std::string>() << " ("
+              << doc["thickness"]["verdict_reason"].get<std::string>() << ")\n";
+  for (const api::JobWarning& w : result.warnings) std::cerr << "warning: " << w.message << " [" << w.code << "]\n";
   return 0;
 }
 

@@ -118,6 +118,8 @@ nlohmann::json JobEngine::prepare_analyses(Job& job, JobStore& store, const std:
   }
   view.mesh = r.report;
   view.mesh_mass = r.mesh_mass;
+  view.inside = r.inside;
+  view.warnings = r.warnings;
   view.values = r.volumes.values_info;
   const std::string id = view.id;
   const ArtifactAccess artifacts{

@@ -52,6 +52,14 @@ TEST_F(MeshWarnings, AnOpenPartWrittenInsideOutIsTurnedRoundFilledAndSaidSo) {
   const double a = open.at("filled_voxels").get<double>(), b = closed.at("filled_voxels").get<double>();
   EXPECT_LT(std::abs(a - b) / b, 0.01) << a << " inside out and open, " << b << " closed";
 
+  // The analysis report is read with the same warnings and inside test.
+  const std::string open_id = open.at("id");
+  const json report = expect_json(http().Get(("/v1/jobs/" + open_id + "/analysis?thickness=false&skin=false").c_str()), 200,
+                                  "Analysis");
+  EXPECT_EQ(report.at("warnings"), open.at("warnings"));
+  EXPECT_EQ(report.at("inside"), open.at("inside"));
+  EXPECT_EQ(report.at("unit"), "mm");
+
   // An identical submission is answered from the first, warnings and all.
   const json again = submit(inverted, params);
   EXPECT_TRUE(again.at("cached").get<bool>());

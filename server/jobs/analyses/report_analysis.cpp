@@ -11,6 +11,16 @@
 namespace voxd::server {
 namespace {
 
+// The report with what it should be read with: the job's inside test and
+// warnings (an open or inside-out mesh, an implausible size).
+std::string report_json(const AnalysisReport& report, const JobSnapshot& job) {
+  nlohmann::json doc = api::analysis_to_json(report, job.grid, job.mesh, job.mesh_mass);
+  if (job.inside) doc["inside"] = api::to_json(*job.inside);
+  doc["warnings"] = api::to_json(job.warnings);
+  return doc.dump();
+}
+
+
 class ReportAnalysis final : public JobAnalysisKind {
  public:
   api::AnalysisKind kind() const override { return api::AnalysisKind::analysis; }
@@ -35,7 +45,7 @@ class ReportAnalysis final : public JobAnalysisKind {
     }
     const NestedSpan report_share(in.control, map_first ? 0.8 : 0.0, 1.0);
     const AnalysisReport report = analyze_volume(volume, options, in.control);
-    return api::analysis_to_json(report, job.grid, job.mesh, job.mesh_mass).dump();
+    return report_json(report, job);
   }
 
   bool streams_over_slabs(const api::AnalysisRequest& r) const override {
@@ -56,7 +66,7 @@ class ReportAnalysis final : public JobAnalysisKind {
     report.voxels = mass.result();
     report.components = components.finish();
     report.peel = in.request.peel_metric;
-    return api::analysis_to_json(report, job.grid, job.mesh, job.mesh_mass).dump();
+    return report_json(report, job);
   }
 
   // The distance transform and the thickness map (floats), the labels of
