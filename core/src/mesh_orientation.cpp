@@ -91,12 +91,10 @@ struct Component {
 
 glm::dvec3 corner(const Mesh& m, std::uint32_t t, int c) { return glm::dvec3(m.vertices[m.triangles[t][c]]); }
 
-// Crossings of the ray from p along a fixed, irrational-looking direction
-// with the component's triangles (Moeller-Trumbore in double): odd when p is
-// enclosed by a closed component. The direction keeps the ray off edges and
-// vertices of axis-aligned and grid-like meshes.
-int crossings(const Mesh& m, const std::vector<std::uint32_t>& tris, glm::dvec3 p) {
-  const glm::dvec3 d = glm::normalize(glm::dvec3(1.0, 0.5772156649, 0.3183098862));
+// Crossings of the ray from p along `d` with the component's triangles
+// (Moeller-Trumbore in double): odd when p is enclosed by a closed
+// component.
+int crossings(const Mesh& m, const std::vector<std::uint32_t>& tris, glm::dvec3 p, glm::dvec3 d) {
   int count = 0;
   for (std::uint32_t t : tris) {
     const glm::dvec3 a = corner(m, t, 0), b = corner(m, t, 1), c = corner(m, t, 2);
@@ -114,6 +112,19 @@ int crossings(const Mesh& m, const std::vector<std::uint32_t>& tris, glm::dvec3 
     if (glm::dot(e2, r) * inv > 0.0) ++count;
   }
   return count;
+}
+
+// Whether p is inside the component: odd crossings along most of three
+// rays, in directions that keep off the edges and vertices of axis-aligned
+// and grid-like meshes. Three rays, not one, because an enclosure may be
+// open: a ray that leaves through a hole would say outside.
+bool encloses(const Mesh& m, const std::vector<std::uint32_t>& tris, glm::dvec3 p) {
+  static const glm::dvec3 kDirections[3] = {glm::normalize(glm::dvec3(1.0, 0.5772156649, 0.3183098862)),
+                                            glm::normalize(glm::dvec3(-0.4142135624, 1.0, -0.7071067812)),
+                                            glm::normalize(glm::dvec3(0.2718281828, -0.6180339887, 1.0))};
+  int odd = 0;
+  for (const glm::dvec3& d : kDirections) odd += crossings(m, tris, p, d) % 2;
+  return odd >= 2;
 }
 
 bool box_contains(const Aabb& outer, const Aabb& inner) {
@@ -242,7 +253,7 @@ OrientationRepair orient_outward(Mesh& mesh) {
       for (std::size_t j = 0; j < i; ++j) {
         const Component& outer = components[signed_ids[j]];
         if (!box_contains(outer.box, inner.box)) continue;
-        if (crossings(welded, outer.triangles, inner.probe) % 2 == 1) {
+        if (encloses(welded, outer.triangles, inner.probe)) {
           ++inner.depth;
           inner.parent = signed_ids[j];  // later (smaller) enclosing boxes replace earlier ones
         }

@@ -89,6 +89,23 @@ TEST(OrientOutward, TurnsAHollowPartWrittenInsideOutBothShells) {
   EXPECT_DOUBLE_EQ(signed_volume(hollow), 1000.0 - 216.0);
 }
 
+TEST(OrientOutward, AnOpenHollowPartWrittenInsideOutKeepsItsCavity) {
+  // Each face of the outer shell in turn missing a triangle: whichever way
+  // a ray from the cavity leaves, most rays still cross the shell.
+  for (std::size_t missing = 0; missing < 12; ++missing) {
+    Mesh outer = flipped(make_box({0, 0, 0}, {10, 10, 10}));
+    outer.triangles.erase(outer.triangles.begin() + static_cast<std::ptrdiff_t>(missing));
+    Mesh hollow = concat({outer, make_box({2, 2, 2}, {8, 8, 8})});  // the cavity's shell inside out too
+    const OrientationRepair r = orient_outward(hollow);
+    EXPECT_EQ(r.inverted_components, 2u) << missing;
+    // The cavity's shell faces inward again: its own signed volume is -216.
+    Mesh cavity;
+    cavity.vertices = hollow.vertices;
+    cavity.triangles.assign(hollow.triangles.end() - 12, hollow.triangles.end());
+    EXPECT_DOUBLE_EQ(signed_volume(cavity), -216.0) << missing;
+  }
+}
+
 TEST(OrientOutward, ASolidInACavityStaysSolid) {
   Mesh nested = concat({make_box({0, 0, 0}, {10, 10, 10}), flipped(make_box({2, 2, 2}, {8, 8, 8})),
                         make_box({4, 4, 4}, {6, 6, 6})});

@@ -12,7 +12,8 @@
 // flipped triangles are the error, not the rest). Then each component's sign:
 // its signed volume about its own centroid is positive for a solid and
 // negative for a cavity, and whether it should be a cavity comes from how
-// many other components enclose it (ray parity against them). A component
+// many other components enclose it (ray parity against them, the majority
+// of three rays, so that an enclosure with a hole still counts). A component
 // whose sign disagrees is turned whole. Open components take part when their
 // signed volume is a clear fraction of what their area and size allow (a
 // bowl, an open hull); a flat or nearly flat sheet has no inside and is left
