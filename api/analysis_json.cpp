@@ -117,7 +117,10 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
     const ThicknessVerdict verdict = thickness_verdict(t);
     const std::optional<double> deciding = deciding_voxel_size(t);
     json verdict_json = nullptr, reason = nullptr;
-    const std::string bound = "the error bound of " + wall_thickness_error_statement(h);
+    const ThicknessErrorBound b = wall_thickness_error_bound();
+    const std::string bound = "the error bound (-" + number_text(b.below_voxels) + " to +" + number_text(b.above_voxels) +
+                              " voxel, -" + number_text(b.below_voxels * h) + " to +" + number_text(b.above_voxels * h) +
+                              " mm)";
     switch (verdict) {
       case ThicknessVerdict::none: break;
       case ThicknessVerdict::pass:

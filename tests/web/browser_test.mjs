@@ -35,6 +35,12 @@ function binaryStl(triangles) {
 }
 const meshPath = join(work, 'hollow-box.stl');
 writeFileSync(meshPath, binaryStl([...boxTriangles([0, 0, 0], [20, 16, 12], false), ...boxTriangles([2, 2, 2], [18, 14, 10], true)]));
+// The same hollow box written inside out, with a hole in its top: the page
+// says it was turned round, which inside test was chosen and why.
+const outerInverted = boxTriangles([0, 0, 0], [20, 16, 12], true);
+outerInverted.splice(2, 1);
+const openInvertedPath = join(work, 'open-inside-out.stl');
+writeFileSync(openInvertedPath, binaryStl([...outerInverted, ...boxTriangles([2, 2, 2], [18, 14, 10], false)]));
 const badPath = join(work, 'broken.stl');
 writeFileSync(badPath, 'solid broken\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0 0\n      vertex 1 0\n');
 
@@ -171,7 +177,35 @@ try {
   assert.ok(sdfPixels.drawn > sdfPixels.total * 0.02, `zero level set nearly blank: ${sdfPixels.drawn} drawn`);
   await shot(page, 'sdf-zero-level-set');
 
-  // 9. A malformed STL: the page shows the API's problem, title and detail.
+  // 9. An open mesh written inside out: the warnings and the inside test
+  // chosen from the mesh, from the job's status; the report's verdict with
+  // a wall 0.1 over the limit (under a voxel of 0.25): inconclusive.
+  await page.selectOption('#mode', 'solid');
+  await page.fill('#resolution', '80');
+  await page.check('#want-report');
+  await page.fill('#min-wall', '1.9');
+  await page.setInputFiles('#mesh-file', openInvertedPath);
+  const sdfJob = await page.$eval('#job-id', (e) => e.textContent);
+  await page.click('#submit');
+  await page.waitForFunction((before) => document.getElementById('job-id').textContent !== before, sdfJob);
+  await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
+  const openJobId = await page.$eval('#job-id', (e) => e.textContent);
+  const openStatus = await (await fetch(`${base}/v1/jobs/${openJobId}`)).json();
+  assert.equal(openStatus.inside.test, 'winding');
+  assert.equal(await page.$eval('#job-inside', (e) => e.textContent),
+               `inside test: winding, chosen from the mesh: ${openStatus.inside.reason}`);
+  const shown = await page.$$eval('#job-warnings li', (l) => l.map((x) => ({ code: x.dataset.code, message: x.textContent })));
+  assert.deepEqual(shown, openStatus.warnings.map((w) => ({ code: w.code, message: w.message })));
+  assert.ok(shown.some((w) => w.code === 'mesh-inverted'), JSON.stringify(shown));
+  await page.click('button[data-tab=report]');
+  await page.waitForSelector('#report .verdict.inconclusive');
+  assert.match(await page.$eval('#report .decide', (e) => e.textContent), /^voxel size to decide: [0-9.]+ mm or smaller$/);
+  // The cavity stayed a cavity: the box's 2304, within a voxel layer.
+  const openVolume = Number(await page.$eval('#report table tbody tr td:nth-child(2)', (e) => e.textContent));
+  assert.ok(Math.abs(openVolume - 2304) / 2304 < 0.05, `volume ${openVolume}`);
+  await shot(page, 'open-inside-out');
+
+  // 10. A malformed STL: the page shows the API's problem, title and detail.
   const form = new FormData();
   form.append('mesh', new Blob([readFileSync(badPath)]), 'broken.stl');
   form.append('params', new Blob([JSON.stringify({ grid: { resolution: 80 } })], { type: 'application/json' }));

@@ -77,6 +77,7 @@ async function loadSchema() {
   const p = schema.properties;
   fillSelect($('mode'), p.mode.enum, p.mode.default);
   fillSelect($('inside'), p.inside.enum, p.inside.default);
+  fillSelect($('units'), p.units.enum, p.units.default);
   const byResolution = p.grid.oneOf.find((g) => g.required.includes('resolution')).properties.resolution;
   Object.assign($('resolution'), { min: byResolution.minimum, max: Math.min(byResolution.maximum, 4096), value: 128 });
   $('mode').onchange = () => optionInputs($('mode').value);
@@ -84,7 +85,7 @@ async function loadSchema() {
 }
 
 function jobParams() {
-  const params = { mode: $('mode').value, inside: $('inside').value };
+  const params = { mode: $('mode').value, inside: $('inside').value, units: $('units').value };
   const kind = document.querySelector('input[name=grid-kind]:checked').value;
   params.grid = kind === 'resolution' ? { resolution: Number($('resolution').value) }
                                       : { voxel_size: Number($('voxel-size').value) };
@@ -171,6 +172,21 @@ function noteAnalyses(entries) {
     .map((k) => `${analysesDone.get(k)} · `).join('');
 }
 
+// The inside test the job's solid is made with and why, and what the user
+// should know about the result (the job status's warnings), from the
+// status the job was accepted with onwards.
+function showJobNotes(job) {
+  const inside = job.inside;
+  $('job-inside').textContent = !inside ? ''
+    : `inside test: ${inside.test}` + (inside.chosen === 'auto' ? `, chosen from the mesh: ${inside.reason}`
+                                                              : inside.reason ? ` (${inside.reason})` : ', as asked');
+  $('job-warnings').replaceChildren(...(job.warnings || []).map((w) => {
+    const li = Object.assign(document.createElement('li'), { className: 'warning', textContent: w.message });
+    li.dataset.code = w.code;
+    return li;
+  }));
+}
+
 function openJob(id) {
   stopWatching();
   current = { id, job: null };
@@ -179,16 +195,23 @@ function openJob(id) {
   $('job-id').textContent = id;
   analysesDone = new Map();
   $('analyses-ready').textContent = '';
+  showJobNotes({});
   showProgress('queued', 0, null);
   const mine = current;
   stopWatching = watchJob(id, {
-    job: (job) => { mine.job = job; noteAnalyses(job.analyses); showProgress(job.state, job.progress, job.stage); },
+    job: (job) => {
+      mine.job = job;
+      noteAnalyses(job.analyses);
+      showJobNotes(job);
+      showProgress(job.state, job.progress, job.stage);
+    },
     state: (s) => showProgress(s.state, s.progress, s.stage),
     progress: (p) => showProgress('running', p.progress, p.stage),
     analysis: (a) => noteAnalyses([a]),
     end: guarded(async (job) => {
       mine.job = job;
       noteAnalyses(job.analyses);
+      showJobNotes(job);
       showProgress(job.state, job.progress, null);
       refreshJobs();
       if (current !== mine) return;

@@ -24,7 +24,7 @@ function heading(text) { return Object.assign(document.createElement('h3'), { te
 // `showRegion(min, max)` puts a box in the 3D view (null: none).
 export function renderReport(container, report, showRegion) {
   container.replaceChildren();
-  const unit = report.unit || 'model units';
+  const unit = report.unit || 'mm';
   const m = report.mass_properties;
   container.append(heading(`Mass properties (${unit})`));
   const mesh = m.mesh && m.mesh.available !== false ? m.mesh : null;
@@ -35,6 +35,9 @@ export function renderReport(container, report, showRegion) {
     { cells: ['bounding box max', vec(m.voxels.bbox_max), vec(mesh && mesh.bbox_max)] },
     { cells: ['surface area', '–', fmt(mesh && mesh.surface_area)] },
   ]));
+  if (m.mesh && m.mesh.available === false && m.mesh.reason) {
+    container.append(Object.assign(document.createElement('p'), { className: 'muted mesh-reason', textContent: `mesh (exact): ${m.mesh.reason}` }));
+  }
   if (m.difference) {
     container.append(Object.assign(document.createElement('p'), {
       className: 'muted',
@@ -65,9 +68,24 @@ export function renderReport(container, report, showRegion) {
     verdict.append(Object.assign(document.createElement('strong'), {
       className: `verdict ${t.verdict || ''}`, textContent: t.verdict || 'no limits given',
     }));
+    if (t.verdict_reason) {
+      verdict.append(Object.assign(document.createElement('span'), { className: 'verdict-reason', textContent: ` (${t.verdict_reason})` }));
+    }
     container.append(verdict, Object.assign(document.createElement('p'), { className: 'muted', textContent: t.error_bound }));
-    const thick = (r) => [fmt(r.min_thickness ?? r.max_thickness), fmt(r.mean_thickness)];
-    regions('Thin regions', t.thin_regions, thick, ['thinnest', 'mean']);
-    regions('Thick regions', t.thick_regions, (r) => [fmt(r.max_thickness ?? r.min_thickness), fmt(r.mean_thickness)], ['thickest', 'mean']);
+    if (t.voxel_size_to_decide) {
+      container.append(Object.assign(document.createElement('p'), {
+        className: 'decide', textContent: `voxel size to decide: ${fmt(t.voxel_size_to_decide)} ${unit} or smaller`,
+      }));
+    }
+    // Certain: beyond the limit by more than the error bound; else marginal.
+    const certainty = (r) => (r.certain === undefined ? [] : [r.certain ? 'certain' : 'marginal']);
+    const thin = (r) => [fmt(r.min_thickness ?? r.max_thickness), fmt(r.mean_thickness), ...certainty(r)];
+    const thick = (r) => [fmt(r.max_thickness ?? r.min_thickness), fmt(r.mean_thickness), ...certainty(r)];
+    // Reports kept by earlier releases have no certainty.
+    const sure = 'verdict_reason' in t ? ['beyond the bound'] : [];
+    regions('Thin regions', t.thin_regions, thin, ['thinnest', 'mean', ...sure]);
+    regions('Thick regions', t.thick_regions, thick, ['thickest', 'mean', ...sure]);
+    if (t.near_min_wall?.count) regions('Within a voxel over min wall', t.near_min_wall, thin, ['thinnest', 'mean', 'beyond the bound']);
+    if (t.near_max_wall?.count) regions('Within a voxel under max wall', t.near_max_wall, thick, ['thickest', 'mean', 'beyond the bound']);
   }
 }
