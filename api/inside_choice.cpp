@@ -9,7 +9,7 @@ std::string count_of(std::uint64_t n, const char* what) { return std::to_string(
 
 }  // namespace
 
-InsideChoice choose_inside_test(const JobParams& params, const OrientationRepair* topology) {
+InsideChoice choose_inside_test(const JobParams& params, const EdgeTopology* topology) {
   InsideChoice choice;
   choice.test = params.inside;
   if (!params.mode->uses_inside_test()) {
@@ -21,14 +21,13 @@ InsideChoice choose_inside_test(const JobParams& params, const OrientationRepair
   choice.automatic = true;
   if (topology->closed()) {
     choice.test = InsideTest::parity;
-    choice.reason = "the mesh is closed and consistently oriented: parity, exact and fastest";
+    choice.reason = "the mesh is closed: parity, exact and fastest";
     return choice;
   }
   std::string why;
   auto add = [&why](const std::string& part) { why += (why.empty() ? "" : ", ") + part; };
   if (topology->boundary_edges) add(count_of(topology->boundary_edges, "boundary edges"));
   if (topology->nonmanifold_edges) add(count_of(topology->nonmanifold_edges, "non-manifold edges"));
-  if (topology->unorientable_edges) add(count_of(topology->unorientable_edges, "edges no orientation mends"));
   choice.test = InsideTest::winding;
   choice.reason = "the mesh is not closed (" + why +
                   "): the generalized winding number, which does not leak through holes as parity does";

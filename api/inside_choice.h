@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/job_params.h"
-#include "voxd/mesh_orientation.h"
+#include "voxd/edge_topology.h"
 
 namespace voxd::api {
 
@@ -20,15 +20,15 @@ struct InsideChoice {
   std::string reason;      // why this test, in words; empty when asked for by name
 };
 
-// The job's choice. `topology` is what orienting the mesh saw; it is read
-// only for "auto" and must then be given.
-InsideChoice choose_inside_test(const JobParams& params, const OrientationRepair* topology);
+// The job's choice. `topology` is the mesh's edge topology
+// (count_edge_topology); it is read only for "auto" and must then be given.
+// Parity where the mesh is closed (an inconsistent or inside-out closed
+// mesh too: parity does not read a triangle's side), else the winding number.
+InsideChoice choose_inside_test(const JobParams& params, const EdgeTopology* topology);
 
-// Whether the job's mesh must be oriented before it is voxelized: the
-// winding number (asked for, or possibly chosen) counts a triangle's side.
-inline bool orients_mesh(const JobParams& params) {
-  return params.mode->uses_inside_test() && (params.inside_auto || params.inside == InsideTest::winding);
-}
+// Whether the job must know its mesh's edge topology before it is planned:
+// "auto" chooses from it.
+inline bool needs_topology(const JobParams& params) { return params.mode->uses_inside_test() && params.inside_auto; }
 
 // {"test", "chosen": "auto" | "asked", "reason"}: the job status's and the report's "inside".
 nlohmann::json to_json(const InsideChoice& choice);

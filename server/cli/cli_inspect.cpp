@@ -9,6 +9,7 @@
 #include "server/cli/cli_args.h"
 #include "server/mapped_file.h"
 #include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/edge_topology.h"
 #include "voxd/mesh_orientation.h"
 #include "voxd/mesh_report.h"
 
@@ -34,7 +35,8 @@ int inspect_command(int argc, char** argv) {
   const OrientationRepair repair = orient_outward(oriented);
   report.orientation = repair;
   nlohmann::json out = api::to_json(report);
-  out["inside"] = api::to_json(api::choose_inside_test(api::JobParams(), &repair));
+  const EdgeTopology topology = count_edge_topology(mesh);
+  out["inside"] = api::to_json(api::choose_inside_test(api::JobParams(), &topology));
   out["format"] = to_string(detect_mesh_format(file.bytes(), path));
   std::cout << out.dump(2) << '\n';
   return 0;

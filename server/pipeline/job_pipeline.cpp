@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 
 #include "voxd/error.h"
+#include "voxd/edge_topology.h"
 #include "voxd/mesh_orientation.h"
 #include "voxd/transform.h"
 #include "voxd/voxelize/voxelize.h"
@@ -129,14 +130,24 @@ PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uin
     const double scale = api::millimetres_per(params.units);
     for (glm::vec3& v : job.mesh.vertices) v = glm::vec3(glm::dvec3(v) * scale);
   }
-  // Outward triangles for a test that counts a triangle's side; the
-  // topology orienting sees is what "auto" chooses from.
-  if (api::orients_mesh(params)) {
+  // "auto" chooses from the mesh's edges (counted in parallel, without
+  // welding). The winding number reads a triangle's side, so its mesh is
+  // turned outward first; so is a closed mesh that is inside out or has
+  // flipped triangles (rare), for the report, the kept mesh and the
+  // warnings. A closed, outward mesh pays only the edge count.
+  std::optional<EdgeTopology> topology;
+  if (api::needs_topology(params)) {
+    topology = count_edge_topology(job.mesh);
+    job.timings.add("topology", clock.lap());
+  }
+  job.inside = api::choose_inside_test(params, topology ? &*topology : nullptr);
+  job.params.inside = job.inside.test;
+  const bool reads_sides = params.mode->uses_inside_test() && job.inside.test == InsideTest::winding;
+  const bool suspect = topology && (topology->inconsistent_edges > 0 || topology->six_volume < 0.0);
+  if (reads_sides || suspect) {
     job.orientation = orient_outward(job.mesh);
     job.timings.add("orient", clock.lap());
   }
-  job.inside = api::choose_inside_test(params, job.orientation ? &*job.orientation : nullptr);
-  job.params.inside = job.inside.test;
   const api::JobParams& resolved = job.params;
 
   // Only the rotation and the bounds it gives are needed to size the grid;

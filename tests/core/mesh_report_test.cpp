@@ -14,16 +14,7 @@
 namespace voxd {
 namespace {
 
-// Triangle soup of `mesh`: three fresh vertices per triangle, as binary STL gives.
-Mesh soup_of(const Mesh& mesh) {
-  Mesh soup;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const auto first = static_cast<std::uint32_t>(soup.vertices.size());
-    for (int c = 0; c < 3; ++c) soup.vertices.push_back(mesh.corner(t, c));
-    soup.triangles.push_back({first, first + 1, first + 2});
-  }
-  return soup;
-}
+using test::soup_of;
 
 void expect_same_report(const MeshReport& a, const MeshReport& b) {
   EXPECT_EQ(a.triangles, b.triangles);

@@ -32,7 +32,7 @@ TEST_F(MeshWarnings, AnOpenPartWrittenInsideOutIsTurnedRoundFilledAndSaidSo) {
   const json closed = status_of(finished(submit(to_binary_stl(nut), params)));
   EXPECT_EQ(closed.at("inside"), json({{"test", "parity"},
                                        {"chosen", "auto"},
-                                       {"reason", "the mesh is closed and consistently oriented: parity, exact and fastest"}}));
+                                       {"reason", "the mesh is closed: parity, exact and fastest"}}));
   EXPECT_EQ(closed.at("warnings"), json::array());
   EXPECT_EQ(closed.at("units"), json({{"mesh", "mm"}, {"lengths", "mm"}}));
 

@@ -213,6 +213,16 @@ Mesh punched(const Mesh& mesh, std::size_t stride) {
   return out;
 }
 
+Mesh soup_of(const Mesh& mesh) {
+  Mesh soup;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto first = static_cast<std::uint32_t>(soup.vertices.size());
+    for (int c = 0; c < 3; ++c) soup.vertices.push_back(mesh.corner(t, c));
+    soup.triangles.push_back({first, first + 1, first + 2});
+  }
+  return soup;
+}
+
 double mesh_volume(const Mesh& mesh) {
   double vol = 0.0;
   for (const auto& t : mesh.triangles) {

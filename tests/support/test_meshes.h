@@ -62,6 +62,8 @@ Mesh remove_face(Mesh mesh, int axis, double value);
 // `mesh` with holes punched in it: every `stride`-th triangle gone (the
 // middle one of each run of `stride`), small holes all over its surface.
 Mesh punched(const Mesh& mesh, std::size_t stride);
+// The triangle soup of `mesh`: three fresh vertices per triangle, as binary STL gives.
+Mesh soup_of(const Mesh& mesh);
 
 // Exact volume of the icosphere polyhedron (not the sphere), for tight checks.
 double mesh_volume(const Mesh& mesh);

@@ -10,6 +10,7 @@
 #include "voxd/error.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
+#include "voxd/edge_topology.h"
 #include "voxd/mesh_orientation.h"
 #include "voxd/mesh_report.h"
 #include "voxd/parallel.h"

@@ -1,0 +1,165 @@
+// Edge topology by hashing (voxd/edge_topology.h): two passes over the
+// triangles hash every edge, the first to count each bucket's keys, the
+// second to write them in place; then each bucket's edges are counted in a
+// small hash table of its own. Nothing is welded and no table is shared between threads.
+#include "voxd/edge_topology.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "voxd/parallel.h"
+
+namespace voxd {
+namespace {
+
+constexpr int kBucketBits = 10;
+constexpr std::size_t kBuckets = std::size_t{1} << kBucketBits;
+constexpr std::int64_t kGrain = 1 << 14;
+
+// A vertex's 64-bit hash from its position's bits (-0.0 and 0.0 are the
+// same point), computed once per corner.
+std::uint64_t mix(std::uint64_t h) {
+  h ^= h >> 30;
+  h *= 0xBF58476D1CE4E5B9ull;
+  h ^= h >> 27;
+  h *= 0x94D049BB133111EBull;
+  return h ^ (h >> 31);
+}
+
+std::uint32_t canonical(float f) {
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  return bits == 0x80000000u ? 0u : bits;
+}
+
+std::uint64_t vertex_hash(const glm::vec3& p) {
+  return mix((std::uint64_t{canonical(p.x)} << 32 | canonical(p.y)) ^ mix(canonical(p.z) + 0x9E3779B97F4A7C15ull));
+}
+
+// The edge's key: a hash of its two vertices' hashes, unordered, with the
+// lowest bit the direction (1 when traversed from the smaller hash).
+std::uint64_t edge_key(std::uint64_t from, std::uint64_t to) {
+  const bool forward = from < to;
+  const std::uint64_t lo = forward ? from : to, hi = forward ? to : from;
+  return (mix(lo ^ std::rotl(hi, 23) ^ 0xD6E8FEB86659FD93ull) & ~std::uint64_t{1}) | (forward ? 1u : 0u);
+}
+
+// Calls visit(key) for each edge of the triangles [t0, t1) that have three
+// distinct positions, and returns six times their signed volume about `origin`.
+template <class Visit>
+double for_each_edge(const Mesh& mesh, std::int64_t t0, std::int64_t t1, glm::dvec3 origin, Visit&& visit) {
+  double six_volume = 0.0;
+  for (std::int64_t t = t0; t < t1; ++t) {
+    const auto& tri = mesh.triangles[static_cast<std::size_t>(t)];
+    const glm::vec3 &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
+    const std::uint64_t h[3] = {vertex_hash(a), vertex_hash(b), vertex_hash(c)};
+    if (h[0] == h[1] || h[1] == h[2] || h[0] == h[2]) continue;
+    for (int k = 0; k < 3; ++k) visit(edge_key(h[k], h[(k + 1) % 3]));
+    const glm::dvec3 da(a), db(b), dc(c);
+    six_volume += glm::dot(da - origin, glm::cross(db - da, dc - da));
+  }
+  return six_volume;
+}
+
+// One bucket's edges counted in an open-addressing table: each slot holds
+// an edge's hash (the key less its direction bit, never 0 once set: the
+// table stores it with bit 0 set), its uses and its forward uses.
+struct Counter {
+  std::vector<std::uint64_t> edge;
+  std::vector<std::uint32_t> uses, forward;
+
+  void count(const std::uint64_t* first, const std::uint64_t* last, std::uint64_t& boundary, std::uint64_t& nonmanifold,
+             std::uint64_t& inconsistent) {
+    const std::size_t n = static_cast<std::size_t>(last - first);
+    if (n == 0) return;
+    const std::size_t size = std::bit_ceil(2 * n);
+    edge.assign(size, 0);
+    uses.assign(size, 0);
+    forward.assign(size, 0);
+    const std::size_t mask = size - 1;
+    for (const std::uint64_t* k = first; k < last; ++k) {
+      const std::uint64_t id = *k | 1u;
+      for (std::size_t i = static_cast<std::size_t>(*k >> 1) & mask;; i = (i + 1) & mask) {
+        if (edge[i] == 0) edge[i] = id;
+        if (edge[i] != id) continue;
+        ++uses[i];
+        forward[i] += static_cast<std::uint32_t>(*k & 1);
+        break;
+      }
+    }
+    for (std::size_t i = 0; i < size; ++i) {
+      if (uses[i] == 0) continue;
+      if (uses[i] == 1) ++boundary;
+      else if (uses[i] > 2) ++nonmanifold;
+      else if (forward[i] != 1) ++inconsistent;
+    }
+  }
+};
+
+}  // namespace
+
+EdgeTopology count_edge_topology(const Mesh& mesh, int threads) {
+  EdgeTopology out;
+  const auto n = static_cast<std::int64_t>(mesh.triangles.size());
+  if (n == 0) return out;
+  const std::int64_t chunks = (n + kGrain - 1) / kGrain;
+
+  // Pass 1: each chunk's count per bucket, and its share of the volume.
+  std::vector<std::uint32_t> counts(static_cast<std::size_t>(chunks) * kBuckets, 0);
+  std::vector<double> volumes(static_cast<std::size_t>(chunks), 0.0);
+  const glm::dvec3 origin(mesh.vertices[mesh.triangles[0][0]]);
+  parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
+    for (std::int64_t c = c0; c < c1; ++c) {
+      std::uint32_t* count = counts.data() + static_cast<std::size_t>(c) * kBuckets;
+      volumes[static_cast<std::size_t>(c)] = for_each_edge(
+          mesh, c * kGrain, std::min(n, (c + 1) * kGrain), origin, [&](std::uint64_t key) { ++count[key >> (64 - kBucketBits)]; });
+    }
+  });
+  for (double v : volumes) out.six_volume += v;
+
+  // Where each chunk writes in each bucket: buckets in order, chunks in
+  // order within them.
+  std::vector<std::size_t> bucket_start(kBuckets + 1, 0), at(counts.size());
+  std::size_t total = 0;
+  for (std::size_t b = 0; b < kBuckets; ++b) {
+    bucket_start[b] = total;
+    for (std::int64_t c = 0; c < chunks; ++c) {
+      const std::size_t i = static_cast<std::size_t>(c) * kBuckets + b;
+      at[i] = total;
+      total += counts[i];
+    }
+  }
+  bucket_start[kBuckets] = total;
+
+  // Pass 2: the keys, each chunk into its own ranges.
+  std::vector<std::uint64_t> keys(total);
+  parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
+    for (std::int64_t c = c0; c < c1; ++c) {
+      std::size_t* cursor = at.data() + static_cast<std::size_t>(c) * kBuckets;
+      for_each_edge(mesh, c * kGrain, std::min(n, (c + 1) * kGrain), origin,
+                    [&](std::uint64_t key) { keys[cursor[key >> (64 - kBucketBits)]++] = key; });
+    }
+  });
+
+  // Each bucket's edges counted.
+  std::atomic<std::uint64_t> boundary{0}, nonmanifold{0}, inconsistent{0};
+  parallel_for(0, static_cast<std::int64_t>(kBuckets), 16, threads, [&](std::int64_t b0, std::int64_t b1) {
+    std::uint64_t bd = 0, nm = 0, ic = 0;
+    Counter counter;
+    for (std::int64_t b = b0; b < b1; ++b)
+      counter.count(keys.data() + bucket_start[static_cast<std::size_t>(b)],
+                    keys.data() + bucket_start[static_cast<std::size_t>(b) + 1], bd, nm, ic);
+    boundary += bd;
+    nonmanifold += nm;
+    inconsistent += ic;
+  });
+  out.boundary_edges = boundary;
+  out.nonmanifold_edges = nonmanifold;
+  out.inconsistent_edges = inconsistent;
+  return out;
+}
+
+}  // namespace voxd
