@@ -1,11 +1,17 @@
 // Mesh ingest speed on a 1.1M-triangle torus: the binary STL decode from
-// memory (the format of large uploads), welding its soup, and the report.
+// memory (the format of large uploads), welding its soup, the report, and
+// what "inside": "auto" adds to a job: the edge count it chooses from (on
+// 1, 2 and all threads), and orienting the mesh (the winding number's, or
+// a closed mesh's that is inside out).
 // Run: build/bench/mesh_io_bench --benchmark_min_time=2
 #include <benchmark/benchmark.h>
 
 #include "support/test_meshes.h"
 #include "voxd/mesh_io/mesh_decode.h"
+#include "voxd/edge_topology.h"
+#include "voxd/mesh_orientation.h"
 #include "voxd/mesh_report.h"
+#include "voxd/parallel.h"
 
 namespace {
 
@@ -41,5 +47,24 @@ void BM_MeshReport(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(make_mesh_report(soup));
 }
 BENCHMARK(BM_MeshReport)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_EdgeTopology(benchmark::State& state) {
+  const Mesh& soup = torus_soup();
+  const int threads = state.range(0) > 0 ? static_cast<int>(state.range(0)) : default_thread_count();
+  for (auto _ : state) benchmark::DoNotOptimize(count_edge_topology(soup, threads));
+  state.counters["threads"] = threads;
+}
+BENCHMARK(BM_EdgeTopology)->Arg(1)->Arg(2)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_OrientOutward(benchmark::State& state) {
+  const Mesh& soup = torus_soup();
+  for (auto _ : state) {
+    state.PauseTiming();
+    Mesh copy = soup;
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(orient_outward(copy));
+  }
+}
+BENCHMARK(BM_OrientOutward)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

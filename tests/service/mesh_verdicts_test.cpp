@@ -17,6 +17,7 @@
 #include "support/assimp_models.h"
 #include "support/test_meshes.h"
 #include "support/test_parts.h"
+#include "voxd/analysis/analysis.h"
 
 namespace voxd {
 namespace {
@@ -88,6 +89,18 @@ TEST_P(OpenPart, DefaultsFillThePartWithinOnePercentOfItClosedAndNothingOutsideI
   EXPECT_EQ(leaks.on_border, 0u);
   EXPECT_EQ(leaks.outside_box, 0u);
   EXPECT_FALSE(has_warning(holes, "open-mesh-parity"));
+  // The same wall-thickness verdicts, with min_wall well under the part's
+  // thinnest wall and well over it.
+  if (part.thinnest_wall > 0) {
+    for (double min_wall : {part.thinnest_wall / 2, part.thinnest_wall * 2}) {
+      AnalysisOptions o;
+      o.skin = false;
+      o.min_wall_voxels = min_wall / h;
+      const ThicknessVerdict closed_verdict = thickness_verdict(*analyze_volume(*closed.volumes.solid, o).thickness);
+      EXPECT_EQ(thickness_verdict(*analyze_volume(*holes.volumes.solid, o).thickness), closed_verdict) << min_wall;
+      EXPECT_EQ(closed_verdict, min_wall < part.thinnest_wall ? ThicknessVerdict::pass : ThicknessVerdict::fail) << min_wall;
+    }
+  }
 
   // Parity, asked for by name, leaks through the same holes, and is warned
   // about: what the default no longer does.
