@@ -5,6 +5,8 @@
 
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <iostream>
 #include <random>
 #include <thread>
@@ -146,12 +148,19 @@ int serve_command(int argc, char** argv) {
   server.set_tcp_nodelay(true);
 
   int port = config.port;
+  errno = 0;
   if (port == 0) {
     port = server.bind_to_any_port(config.host);
   } else if (!server.bind_to_port(config.host, port)) {
     port = -1;
   }
-  if (port < 0) throw Error(ErrorCode::io_error, "cannot listen on " + config.host + ":" + std::to_string(config.port));
+  if (port < 0) {
+    const int why = errno;
+    throw Error(ErrorCode::io_error, "cannot listen on " + config.host + ":" + std::to_string(config.port) +
+                                         (why == EADDRINUSE ? ": the port is in use (is another voxd serving it?)"
+                                          : why != 0        ? std::string(": ") + std::strerror(why)
+                                                            : std::string()));
+  }
   server.apply_backlog();
 
   std::thread stopper([&] {

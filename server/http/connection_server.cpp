@@ -15,6 +15,7 @@
 #include <cstring>
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -49,15 +50,24 @@ class Connection final : public httplib::Stream {
     in_body_ = false;
     close_after_ = false;
   }
-  void begin_body() {
+  // `announced` is what the head says the body holds: its Content-Length (0
+  // without one), or for a chunked body at least its last chunk's 5 bytes.
+  void begin_body(std::uint64_t content_length, bool chunked) {
     in_body_ = true;
     body_start_ = Clock::now();
     body_bytes_ = 0;
+    body_announced_ = chunked ? kChunkedEnd : content_length;
     update_body_deadline();
   }
   void close_after() { close_after_ = true; }
-  bool must_close() const { return close_after_; }
+  // Closing is a must when the answer left the body (or some of it) unread:
+  // what is left would otherwise be parsed as the next request. This holds
+  // for every early answer (a 401, a preflight, a 413, a refused part) without
+  // each having to remember it, and for a request httplib answered itself
+  // before the body's start was known (a 400 or 414 on a broken head).
+  bool must_close() const { return close_after_ || !in_body_ || body_bytes_ < body_announced_; }
   bool has_buffered() const { return pos_ < len_; }
+  std::string_view buffered() const { return {buffer_.data() + pos_, len_ - pos_}; }
   int fd() const { return fd_; }
 
   bool peer_gone() const {
@@ -143,9 +153,11 @@ class Connection final : public httplib::Stream {
   std::array<char, 4096> buffer_{};
   std::size_t pos_ = 0, len_ = 0;
   Clock::time_point deadline_ = Clock::now();
+  static constexpr std::uint64_t kChunkedEnd = 5;  // "0\r\n\r\n"
   bool in_body_ = false;
   Clock::time_point body_start_;
   std::size_t body_bytes_ = 0;
+  std::uint64_t body_announced_ = 0;
   bool close_after_ = false;
 };
 
@@ -354,24 +366,29 @@ struct ConnectionServer::Impl {
         return;
       }
     }
-    if (w.connection->has_buffered()) return dispatch(it);
+    // What the connection has read ahead (a pipelined request), then what
+    // waits in the socket, peeked.
+    std::string data(w.connection->buffered());
     std::array<char, 16384> head;
     const ssize_t r = ::recv(fd, head.data(), head.size(), MSG_PEEK | MSG_DONTWAIT);
-    if (r == 0 || (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+    const bool failed = r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR;
+    if ((r == 0 || failed) && data.empty()) {
       close_connection(w);  // the client closed (or reset) its side
       forget(it);
       return;
     }
-    if (r < 0) return;
+    if (r > 0) data.append(head.data(), static_cast<std::size_t>(r));
+    if (data.empty()) return;
     if (w.phase == Phase::idle) {
       // The request's first byte starts its header deadline.
       w.phase = Phase::head;
       w.deadline = Clock::now() + limits.header_timeout;
     }
-    // A head longer than the peek is left to httplib's own limits.
-    const std::string_view peeked(head.data(), static_cast<std::size_t>(r));
-    if (has_complete_head(peeked) || peeked.size() == head.size())
-      dispatch(it, is_stream && is_stream(peeked.substr(0, peeked.find_first_of("\r\n"))));
+    // A head longer than the peek is left to httplib's own limits; the client
+    // closing its side after a whole head still gets its answer.
+    const bool peer_done = r == 0 || failed;
+    if (has_complete_head(data) || static_cast<std::size_t>(std::max<ssize_t>(r, 0)) == head.size() || peer_done)
+      dispatch(it, is_stream && is_stream(std::string_view(data).substr(0, data.find_first_of("\r\n"))));
   }
 
   // After an answer that ends the connection while the client may still be
@@ -416,7 +433,10 @@ struct ConnectionServer::Impl {
         it->second.connection->begin_head(it->second.deadline);
         stream_queue.push_back(std::move(it->second));
         waiting.erase(it);
-        if (idle_stream_workers == 0) {
+        // Each waiting stream needs an idle thread of its own: a woken thread
+        // counts as idle until it runs, so in a burst the idle count alone
+        // would send many streams to one thread.
+        if (stream_queue.size() > idle_stream_workers) {
           stream_workers.emplace_back([this] { work_streams(); });
         } else {
           stream_cv.notify_one();
@@ -478,36 +498,43 @@ struct ConnectionServer::Impl {
     }
   }
 
-  // Runs requests on the connection while their heads are already here, then
-  // hands it back to the gate (or closes it).
+  // Runs the request whose head is here, then hands the connection back to
+  // the gate (or closes it). A pipelined request already read ahead goes
+  // through the gate too, so it is classified like any other: an event
+  // stream behind a plain request must get a stream thread, not keep this one.
   void serve(ConnectionServer& server, Waiting& w) {
-    for (;;) {
-      Connection& c = *w.connection;
-      current_connection = &c;
-      bool connection_closed = false;
-      const bool last = w.served + 1 >= limits.keep_alive_max_count;
-      bool ok = false;
-      try {
-        ok = server.process_request(c, last, connection_closed, nullptr);
-      } catch (const std::exception& e) {
-        spdlog::error("HTTP request processing failed: {}", e.what());
-      }
-      current_connection = nullptr;
-      ++w.served;
-      if (c.must_close()) {  // a body left unread
-        start_lingering(w);
-        to_gate(std::move(w));
-        return;
-      }
-      if (!ok || connection_closed || last) {
-        close_connection(w);
-        return;
-      }
-      if (!c.has_buffered()) break;
-      c.begin_head(Clock::now() + limits.header_timeout);  // a pipelined request
+    Connection& c = *w.connection;
+    current_connection = &c;
+    bool connection_closed = false;
+    const bool last = w.served + 1 >= limits.keep_alive_max_count;
+    bool ok = false;
+    try {
+      ok = server.process_request(c, last, connection_closed, nullptr);
+    } catch (const std::exception& e) {
+      spdlog::error("HTTP request processing failed: {}", e.what());
     }
-    w.phase = Phase::idle;
-    w.deadline = Clock::now() + limits.keep_alive_timeout;
+    current_connection = nullptr;
+    ++w.served;
+    if (!ok) {
+      close_connection(w);
+      return;
+    }
+    if (c.must_close()) {  // a body left unread
+      start_lingering(w);
+      to_gate(std::move(w));
+      return;
+    }
+    if (connection_closed || last) {
+      close_connection(w);
+      return;
+    }
+    if (c.has_buffered()) {
+      w.phase = Phase::head;  // a pipelined request: its head deadline runs
+      w.deadline = Clock::now() + limits.header_timeout;
+    } else {
+      w.phase = Phase::idle;
+      w.deadline = Clock::now() + limits.keep_alive_timeout;
+    }
     to_gate(std::move(w));
   }
 };
@@ -523,6 +550,14 @@ ConnectionServer::ConnectionServer(ConnectionLimits limits) : impl_(std::make_un
     void shutdown() override {}
   };
   new_task_queue = [] { return new Inline; };
+  // httplib's default sets SO_REUSEPORT, so a second server (a mistaken
+  // second start, or any process of the same user) binds the same port and
+  // takes half the connections. SO_REUSEADDR alone lets a restart bind at
+  // once past TIME_WAIT, and a port in use is an error.
+  set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   impl_->start(*this);
 }
 
@@ -546,8 +581,8 @@ bool ConnectionServer::process_and_close_socket(socket_t sock) {
   return true;
 }
 
-void begin_request_body() {
-  if (current_connection) current_connection->begin_body();
+void begin_request_body(std::uint64_t content_length, bool chunked) {
+  if (current_connection) current_connection->begin_body(content_length, chunked);
 }
 
 void close_connection_after_response() {

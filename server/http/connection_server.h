@@ -21,6 +21,7 @@
 // A handler reaches its own connection through the functions at the end.
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string_view>
@@ -65,8 +66,10 @@ class ConnectionServer : public httplib::Server {
 };
 
 // For the handler running on this thread (no effect outside a request):
-// the request head is done, its body is read from now on.
-void begin_request_body();
+// the request head is done, its body is read from now on. The head announced
+// `content_length` bytes (0 when it gave none), or a chunked body. Whatever
+// part of it the answer leaves unread, the connection closes after it.
+void begin_request_body(std::uint64_t content_length, bool chunked);
 // The body was left unread: close the connection after the response.
 void close_connection_after_response();
 // Whether the client has closed or reset its side of the connection.

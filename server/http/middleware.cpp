@@ -1,5 +1,7 @@
 #include "server/http/middleware.h"
 
+#include <strings.h>
+
 #include <chrono>
 #include <cstdio>
 #include <random>
@@ -46,7 +48,12 @@ bool constant_time_equal(const std::string& a, const std::string& b) {
 // Every request gets an id (the client's, if it is a plain token) in its
 // answer and its log line; its clock starts.
 void start_request(const Request& req, Response& res) {
-  begin_request_body();  // the head is parsed: the body's deadline applies from here
+  // The head is parsed: the body's deadline applies from here, and a body the
+  // answer leaves unread closes the connection (a 401 or a preflight answers
+  // before httplib reads it).
+  // Any Transfer-Encoding counts as a body, even one httplib does not read
+  // (only exactly "chunked" is), so that one closes the connection too.
+  begin_request_body(declared_length(req).value_or(0), req.has_header("Transfer-Encoding"));
   current_request.start = std::chrono::steady_clock::now();
   const std::string client_id = req.get_header_value("X-Request-Id");
   current_request.request_id = is_plain_request_id(client_id) ? client_id : new_request_id();
@@ -77,7 +84,8 @@ bool refuse_unauthorized(const Request& req, Response& res, const ServeConfig& c
   if (config.api_keys.empty() || req.path.rfind("/v1/", 0) != 0) return false;
   const std::string auth = req.get_header_value("Authorization");
   bool ok = false;
-  if (auth.rfind("Bearer ", 0) == 0)
+  // The scheme is case-insensitive (RFC 9110 11.1): "bearer KEY" is as good.
+  if (auth.size() > 7 && strncasecmp(auth.c_str(), "Bearer ", 7) == 0)
     for (const auto& key : config.api_keys) ok = constant_time_equal(auth.substr(7), key) || ok;
   if (ok) return false;
   metrics.count_rejected("unauthorized");

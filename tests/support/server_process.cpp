@@ -15,11 +15,17 @@
 
 namespace voxd::test {
 
+std::string serve_binary() {
+  const char* other = std::getenv("VOXD_TEST_SERVE_BINARY");
+  return other && *other ? other : VOXD_BINARY;
+}
+
 ServerProcess::ServerProcess(const std::string& data_dir, const std::vector<std::string>& args,
                              std::vector<std::string> env, const std::vector<std::string>& launcher)
     : log_path_(data_dir + ".log") {
   std::vector<std::string> argv_s = launcher;
-  for (const char* a : {VOXD_BINARY, "serve", "--host", "127.0.0.1", "--port", "0", "--data-dir"}) argv_s.push_back(a);
+  argv_s.push_back(serve_binary());
+  for (const char* a : {"serve", "--host", "127.0.0.1", "--port", "0", "--data-dir"}) argv_s.push_back(a);
   argv_s.push_back(data_dir);
   argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;

@@ -9,6 +9,11 @@
 
 namespace voxd::test {
 
+// The voxd that serves: this build's, or VOXD_TEST_SERVE_BINARY's when set (to
+// run the service tests against another build, e.g. an older one, and see a
+// regression test fail there).
+std::string serve_binary();
+
 class ServerProcess {
  public:
   // Starts `voxd serve --host 127.0.0.1 --port 0 --data-dir DATA_DIR ARGS...`
