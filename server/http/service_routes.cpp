@@ -23,8 +23,7 @@ void install_service_routes(RouteTable& routes, JobManager& jobs, Metrics& metri
       return send_json(res, 503, {{"status", "not ready"}, {"reason", "the shared backend (Redis) is unreachable"}});
     if (jobs.counts().queue_depth >= config.queue_size)
       return send_json(res, 503, {{"status", "not ready"}, {"reason", "the job queue is full"}});
-    if (!jobs.storage_ok())
-      return send_json(res, 503, {{"status", "not ready"}, {"reason", "the data directory's disk is full"}});
+    if (const auto full = jobs.storage_full()) return send_json(res, 503, {{"status", "not ready"}, {"reason", *full}});
     send_json(res, 200, {{"status", "ready"}});
   });
   routes.get("/metrics", [&](const Request&, Response& res) {

@@ -173,12 +173,14 @@ MemoryBudget::Reservation JobManager::reserve_memory(std::uint64_t bytes, const 
 std::uint64_t JobManager::memory_budget() const { return impl_->engine.budget.total(); }
 std::uint64_t JobManager::memory_in_use() const { return impl_->engine.budget.used(); }
 
-bool JobManager::storage_ok() const {
+std::optional<std::string> JobManager::storage_full() const {
+  const JobStore* store = impl_->backend->store();
   try {
-    return impl_->backend->store()->free_bytes() >= impl_->engine.config.min_free_disk;
+    if (store->free_bytes() >= impl_->engine.config.min_free_disk) return std::nullopt;
+    return store->full_reason();
   } catch (const std::exception& e) {
     impl_->engine.warn_backend(e);
-    return false;
+    return "the shared backend (Redis) is unreachable";
   }
 }
 

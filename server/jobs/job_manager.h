@@ -130,9 +130,9 @@ class JobManager {
   std::uint64_t memory_budget() const;
   // The most memory one job's volumes (and an analysis of them) may take.
   std::uint64_t max_job_memory() const;
-  // Whether the data directory (or the shared store) has at least
-  // min_free_disk free.
-  bool storage_ok() const;
+  // Why the store takes no new jobs (its free space is under
+  // --min-free-disk, or it cannot be asked), or nothing when it takes them.
+  std::optional<std::string> storage_full() const;
   // Whether the shared backend answered lately (always true embedded).
   bool backend_ok() const;
   std::uint64_t memory_in_use() const;

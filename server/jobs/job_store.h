@@ -94,6 +94,9 @@ class JobStore {
   virtual void remove(const std::string& id) const = 0;
   // Bytes the store has free for this process.
   virtual std::uint64_t free_bytes() const = 0;
+  // Why it is not ready when free_bytes() is under --min-free-disk, in words
+  // that name what is full.
+  virtual std::string full_reason() const = 0;
 };
 
 }  // namespace voxd::server

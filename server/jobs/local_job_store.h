@@ -33,6 +33,7 @@ class LocalJobStore final : public JobStore {
   void share_volume(const std::string& from_id, const std::string& to_id) const override;
   void remove(const std::string& id) const override;
   std::uint64_t free_bytes() const override;
+  std::string full_reason() const override { return "the data directory's disk is full"; }
 
  private:
   std::filesystem::path job_dir(const std::string& id) const { return jobs_ / id; }

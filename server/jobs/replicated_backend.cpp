@@ -25,6 +25,15 @@ JobFailure input_expired() {
                     "the uploaded mesh was no longer kept when a worker took the job; submit it again"};
 }
 
+namespace {
+std::int64_t steady_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+// The keeper reports every 100 ms: silence this long is a backend that does
+// not answer (paused, partitioned), even while no call has failed yet.
+constexpr std::int64_t kContactStaleNs = std::int64_t{2'000'000'000};
+}  // namespace
+
 JobBackendFactory replicated_backend(ReplicatedBackendParts parts) {
   return [parts = std::move(parts)](JobEngine& engine) -> std::unique_ptr<JobBackend> {
     return std::make_unique<ReplicatedJobBackend>(engine, parts);
@@ -360,7 +369,10 @@ JobCounts ReplicatedJobBackend::counts() const {
   return c;
 }
 
-bool ReplicatedJobBackend::reachable() const { return engine_.backend_ok.load(); }
+
+bool ReplicatedJobBackend::reachable() const {
+  return engine_.backend_ok.load() && steady_ns() - last_contact_ns_.load() < kContactStaleNs;
+}
 
 std::size_t ReplicatedJobBackend::expire() {
   // The backend expires records and results itself; its index is pruned.
@@ -376,6 +388,7 @@ void ReplicatedJobBackend::start() {
   // Counted among the live replicas from the start, not a tick later.
   try {
     parts_.records->report_running({});
+    last_contact_ns_ = steady_ns();
   } catch (const std::exception& e) {
     engine_.warn_backend(e);
   }
@@ -416,6 +429,7 @@ void ReplicatedJobBackend::keep() {
     try {
       const std::vector<std::string> cancel = parts_.records->report_running(running);
       engine_.backend_ok = true;
+      last_contact_ns_ = steady_ns();
       std::lock_guard lock(engine_.mutex);
       for (const std::string& id : cancel) {
         if (auto it = engine_.jobs.find(id); it != engine_.jobs.end()) it->second->control.request_cancel();

@@ -102,6 +102,10 @@ class ReplicatedJobBackend final : public JobBackend {
   std::mutex keeper_mutex_;
   std::condition_variable keeper_wake_;
   bool keeper_stop_ = false;
+  // When the keeper last heard from the backend (steady clock, ns): a stalled
+  // backend makes the replica not ready within a second or two, without a
+  // probe waiting on it.
+  std::atomic<std::int64_t> last_contact_ns_{0};
 };
 
 }  // namespace voxd::server

@@ -104,12 +104,16 @@ timeval to_timeval(std::chrono::milliseconds t) {
   return timeval{static_cast<time_t>(t.count() / 1000), static_cast<suseconds_t>((t.count() % 1000) * 1000)};
 }
 
-// An error reply: out of memory is the store being full (HTTP 507), the
+// An error reply: out of memory is the store being full (HTTP 507); Redis
+// loading its data after a restart, busy with a script, or a replica cut off
+// from its master is Redis not available for now (HTTP 503, retry); the
 // rest are bugs or misconfiguration.
 [[noreturn]] void throw_error_reply(const redisReply* r) {
   const std::string text(r->str, r->len);
   if (text.rfind("OOM", 0) == 0)
     throw StorageFull("Redis is out of memory (maxmemory reached): " + text);
+  for (const char* transient : {"LOADING", "BUSY ", "MASTERDOWN", "TRYAGAIN", "CLUSTERDOWN"})
+    if (text.rfind(transient, 0) == 0) throw BackendUnavailable("Redis cannot answer for now: " + text);
   throw RedisError("Redis: " + text);
 }
 

@@ -78,11 +78,31 @@ void RedisJobQueue::ensure_group() const {
   group_ready_ = true;
 }
 
+// Redis can lose the stream and its group while this replica runs (a
+// restart without persistence, a FLUSHALL): the group is made again and the
+// command retried, so submissions work again at once, not after a restart.
+std::vector<RedisReply> RedisJobQueue::with_group(const std::vector<RedisArgs>& commands) const {
+  ensure_group();
+  try {
+    return pool_->pipeline(commands);
+  } catch (const RedisError& e) {
+    if (std::string(e.what()).find("NOGROUP") == std::string::npos) throw;
+    spdlog::warn("redis queue: the stream's consumer group is gone (Redis lost its data?): making it again");
+    group_ready_ = false;
+    ensure_group();
+    return pool_->pipeline(commands);
+  }
+}
+
+RedisReply RedisJobQueue::with_group(const RedisArgs& command) const {
+  std::vector<RedisReply> replies = with_group(std::vector<RedisArgs>{command});
+  return std::move(replies.front());
+}
+
 bool RedisJobQueue::submit(const std::string& id) {
   if (closed_) return false;
-  ensure_group();
   const std::string capacity = std::to_string(options_.capacity);
-  const RedisReply r = pool_->command({"EVAL", kSubmit, "2", stream_, job_key(id), group_, capacity, id});
+  const RedisReply r = with_group({"EVAL", kSubmit, "2", stream_, job_key(id), group_, capacity, id});
   return !r.is_nil();
 }
 
@@ -101,7 +121,7 @@ std::optional<TakenJob> RedisJobQueue::claim_stale() {
   }
   const std::string idle = std::to_string(options_.lease.count());
   const RedisReply r =
-      pool_->command({"XAUTOCLAIM", stream_, group_, options_.consumer, idle, cursor, "COUNT", "1"});
+      with_group({"XAUTOCLAIM", stream_, group_, options_.consumer, idle, cursor, "COUNT", "1"});
   {
     std::lock_guard lock(mutex_);
     claim_cursor_ = std::string(r.at(0).text());
@@ -116,7 +136,7 @@ std::optional<TakenJob> RedisJobQueue::claim_stale() {
       acknowledge(entry_id);
       continue;
     }
-    const RedisReply p = pool_->command({"XPENDING", stream_, group_, entry_id, entry_id, "1"});
+    const RedisReply p = with_group({"XPENDING", stream_, group_, entry_id, entry_id, "1"});
     const int deliveries = p.size() > 0 ? static_cast<int>(p.at(0).at(3).integer()) : 2;
     spdlog::warn("redis queue: job {} was left by its worker (lease of {} ms expired): taking it over, delivery {}", job,
                  options_.lease.count(), deliveries);
@@ -129,10 +149,9 @@ std::optional<TakenJob> RedisJobQueue::claim_stale() {
 
 std::optional<TakenJob> RedisJobQueue::take(std::chrono::milliseconds wait) {
   if (closed_) return std::nullopt;
-  ensure_group();
   if (auto stale = claim_stale()) return stale;
   const std::string block = std::to_string(std::max<std::int64_t>(wait.count(), 1));
-  const RedisReply r = pool_->command(
+  const RedisReply r = with_group(
       {"XREADGROUP", "GROUP", group_, options_.consumer, "COUNT", "1", "BLOCK", block, "STREAMS", stream_, ">"});
   if (r.is_nil() || r.size() == 0) return std::nullopt;
   const RedisReply entries = r.at(0).at(1);
@@ -157,7 +176,7 @@ std::optional<TakenJob> RedisJobQueue::take(std::chrono::milliseconds wait) {
 }
 
 void RedisJobQueue::acknowledge(const std::string& entry) {
-  pool_->pipeline({{"XACK", stream_, group_, entry}, {"XDEL", stream_, entry}});
+  with_group({{"XACK", stream_, group_, entry}, {"XDEL", stream_, entry}});
 }
 
 std::optional<std::string> RedisJobQueue::forget(const std::string& id) {
@@ -187,7 +206,7 @@ void RedisJobQueue::release(const std::string& id) {
   // Idle as if its lease had run out long ago: the next claim anywhere takes it.
   const std::string idle = std::to_string(options_.lease.count() * 100);
   try {
-    pool_->command({"XCLAIM", stream_, group_, options_.consumer, "0", *entry, "IDLE", idle, "JUSTID"});
+    with_group({"XCLAIM", stream_, group_, options_.consumer, "0", *entry, "IDLE", idle, "JUSTID"});
   } catch (const std::exception& e) {
     // No longer renewed: another replica takes it once the lease lapses.
     spdlog::warn("redis queue: cannot hand job {} back now ({}); it is taken over after its lease", id, e.what());
@@ -207,7 +226,7 @@ void RedisJobQueue::renew_leases() {
   }
   if (entries.empty()) return;
   for (const std::string& e : entries) args.push_back(e);
-  pool_->command(args);
+  with_group(args);
 }
 
 void RedisJobQueue::split(const std::string& id, const std::vector<std::string>& tasks) {
@@ -221,20 +240,19 @@ void RedisJobQueue::split(const std::string& id, const std::vector<std::string>&
   const std::string job = job_key(id);  // RedisArgs are views: kept alive here
   RedisArgs args{"EVAL", kSplit, "2", stream_, job, group_, entry};
   for (const std::string& t : tasks) args.push_back(t);
-  pool_->command(args);
+  with_group(args);
   forget(id);
 }
 
 bool RedisJobQueue::cancel(const std::string& id) {
-  const RedisReply entry = pool_->command({"HGET", job_key(id), "entry"});
+  const RedisReply entry = with_group({"HGET", job_key(id), "entry"});
   if (entry.is_nil()) return false;
   const std::string e(entry.text());
-  return pool_->command({"XDEL", stream_, e}).integer() == 1;
+  return with_group({"XDEL", stream_, e}).integer() == 1;
 }
 
 std::size_t RedisJobQueue::depth() const {
-  ensure_group();
-  const std::vector<RedisReply> r = pool_->pipeline({{"XLEN", stream_}, {"XPENDING", stream_, group_}});
+  const std::vector<RedisReply> r = with_group({{"XLEN", stream_}, {"XPENDING", stream_, group_}});
   const long long waiting = r[0].integer() - r[1].at(0).integer();
   return static_cast<std::size_t>(std::max(waiting, 0LL));
 }

@@ -46,6 +46,9 @@ class RedisJobQueue final : public JobQueue {
 
  private:
   void ensure_group() const;
+  // The commands, after making the group when Redis has lost it.
+  std::vector<RedisReply> with_group(const std::vector<RedisArgs>& commands) const;
+  RedisReply with_group(const RedisArgs& command) const;
   std::optional<TakenJob> claim_stale();
   // Drops a job taken here from the entries this replica renews; its entry.
   std::optional<std::string> forget(const std::string& id);

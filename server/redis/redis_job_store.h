@@ -72,6 +72,7 @@ class RedisJobStore final : public JobStore, public SharedJobRecords, public Sha
   void share_volume(const std::string& from_id, const std::string& to_id) const override;
   void remove(const std::string& id) const override;
   std::uint64_t free_bytes() const override;
+  std::string full_reason() const override { return "Redis is near its maxmemory: its free memory is under --min-free-disk"; }
 
   // SharedJobRecords
   std::optional<JobSnapshot> load(const std::string& id) const override;

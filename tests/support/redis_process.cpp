@@ -1,5 +1,7 @@
 #include "support/redis_process.h"
 
+#include "support/run_process.h"
+
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -111,6 +113,16 @@ void RedisProcess::stop() {
 void RedisProcess::start() {
   if (pid_ > 0) return;
   launch();
+}
+
+void RedisProcess::freeze(bool frozen) {
+  if (pid_ > 0) ::kill(pid_, frozen ? SIGSTOP : SIGCONT);
+}
+
+std::string RedisProcess::cli(const std::string& args) const {
+  const ProcessResult r = run_process("redis-cli -p " + std::to_string(port_) + " " + args);
+  if (r.exit_code != 0) throw std::runtime_error("redis-cli " + args + " failed: " + r.err);
+  return r.out;
 }
 
 }  // namespace voxd::test

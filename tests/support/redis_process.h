@@ -23,6 +23,11 @@ class RedisProcess {
   // Starts again on the same port and directory: it reloads the AOF.
   void start();
   bool running() const { return pid_ > 0; }
+  // SIGSTOP (true) or SIGCONT: Redis stands still, connections open, as in
+  // a stall (a swap storm, a paused container, a long fork).
+  void freeze(bool frozen);
+  // redis-cli against it (e.g. "FLUSHALL"); its output. Throws on failure.
+  std::string cli(const std::string& args) const;
 
  private:
   void launch();
