@@ -262,5 +262,95 @@ class BusyService(unittest.TestCase):
             VoxdClient("http://127.0.0.1:9", timeout=2).health()
 
 
+class StubServer:
+    """An HTTP server on loopback whose handler the test writes: for answers
+    no real voxd gives (a body cut short, a redirect to another host)."""
+
+    def __init__(self, do_get, host="127.0.0.1"):
+        self.seen = []
+        seen = self.seen
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            def do_GET(self):  # noqa: N802
+                seen.append((self.path, self.headers.get("Authorization")))
+                do_get(self)
+
+            def log_message(self, *args):
+                pass
+
+        self.server = http.server.HTTPServer((host, 0), Handler)
+        self.url = f"http://{host}:{self.server.server_port}"
+        threading.Thread(target=self.server.serve_forever, daemon=True).start()
+
+    def close(self):
+        self.server.shutdown()
+        self.server.server_close()
+
+
+class EdgeAnswers(unittest.TestCase):
+    """Issue #37's finding 8: a download cut short is an error, never a
+    whole file; the API key goes to no other host on a redirect."""
+
+    def test_a_fixed_length_answer_cut_short_is_a_transport_error_and_no_file(self):
+        def cut(handler):
+            handler.send_response(200)
+            handler.send_header("Content-Type", "application/json")
+            handler.send_header("Content-Length", "100000")
+            handler.end_headers()
+            handler.wfile.write(b"{" + b" " * 4999)
+            handler.wfile.flush()
+            handler.close_connection = True
+
+        stub = StubServer(cut)
+        try:
+            client = VoxdClient(stub.url, timeout=10)
+            dest = os.path.join(tempfile.mkdtemp(prefix="voxd-cut-"), "report.json")
+            with self.assertRaises(TransportError) as caught:
+                client.download("0" * 32, "analysis", dest=dest)
+            self.assertIn("5000 of 100000 bytes", str(caught.exception))
+            self.assertFalse(os.path.exists(dest))
+            self.assertFalse(os.path.exists(dest + ".partial"))
+            with self.assertRaises(TransportError):
+                client.download("0" * 32, "preview")
+            with self.assertRaises(TransportError):
+                client.analysis("0" * 32)
+        finally:
+            stub.close()
+
+    def test_the_api_key_follows_a_redirect_only_to_the_same_origin(self):
+        def target(handler):
+            body = b"result"
+            handler.send_response(200)
+            handler.send_header("Content-Length", str(len(body)))
+            handler.end_headers()
+            handler.wfile.write(body)
+
+        # Another host: 127.0.0.2 is loopback too, but not the same origin.
+        other = StubServer(target, host="127.0.0.2")
+
+        def redirect(handler):
+            if handler.path.endswith("/same"):
+                location = "/final"
+            else:
+                location = other.url + "/final"
+            if handler.path == "/final":
+                return target(handler)
+            handler.send_response(302)
+            handler.send_header("Location", location)
+            handler.send_header("Content-Length", "0")
+            handler.end_headers()
+
+        home = StubServer(redirect)
+        try:
+            client = VoxdClient(home.url, api_key="secret-key", timeout=10)
+            self.assertEqual(client.download("0" * 32, "elsewhere"), b"result")
+            self.assertEqual(other.seen, [("/final", None)], "the key went to another host")
+            self.assertEqual(client.download("0" * 32, "same"), b"result")
+            self.assertEqual(home.seen[-1], ("/final", "Bearer secret-key"))
+        finally:
+            home.close()
+            other.close()
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -168,16 +168,12 @@ class VoxdClient:
     def _fetch(self, path: str, query: Optional[Mapping[str, Any]], dest) -> Union[bytes, str]:
         with self.http.open("GET", path, query=query) as response:
             if dest is None:
-                return response.read()
+                return self.http.read_whole(response, f"GET {path}")
             dest = os.fspath(dest)
             partial = dest + ".partial"
             try:
                 with open(partial, "wb") as out:
-                    while True:
-                        chunk = response.read(1 << 20)
-                        if not chunk:
-                            break
-                        out.write(chunk)
+                    self.http.read_whole(response, f"GET {path}", out.write)
                 os.replace(partial, dest)
             except BaseException:
                 if os.path.exists(partial):

@@ -2,6 +2,7 @@
 and the retries a busy service asks for (429/503 with Retry-After)."""
 from __future__ import annotations
 
+import http.client
 import json
 import random
 import time
@@ -44,6 +45,25 @@ def multipart_body(fields: Iterable[Tuple[str, str, bytes, Optional[str]]]) -> T
     return bytes(out), f"multipart/form-data; boundary={boundary}"
 
 
+class _SameOriginRedirects(urllib.request.HTTPRedirectHandler):
+    """Follows redirects, but sends the API key only to the origin it was
+    meant for: a redirect to another host, port or scheme drops it."""
+
+    def redirect_request(self, req, fp, code, msg, headers, newurl):
+        new = super().redirect_request(req, fp, code, msg, headers, newurl)
+        if new is not None and _origin(new.full_url) != _origin(req.full_url):
+            for name in list(new.headers):
+                if name.lower() == "authorization":
+                    del new.headers[name]
+        return new
+
+
+def _origin(url: str) -> Tuple[str, str, Optional[int]]:
+    parts = urllib.parse.urlsplit(url)
+    default = 443 if parts.scheme == "https" else 80
+    return parts.scheme.lower(), (parts.hostname or "").lower(), parts.port or default
+
+
 class Transport:
     def __init__(self, base_url: str, api_key: Optional[str], timeout: float, retries: int, max_retry_wait: float,
                  sleep: Callable[[float], None] = time.sleep):
@@ -55,6 +75,7 @@ class Transport:
         self.retries = retries
         self.max_retry_wait = max_retry_wait
         self.sleep = sleep
+        self._opener = urllib.request.build_opener(_SameOriginRedirects)
 
     def url(self, path: str, query: Optional[Mapping[str, Any]] = None) -> str:
         if path.startswith(("http://", "https://")):
@@ -81,7 +102,7 @@ class Transport:
             for k, v in (headers or {}).items():
                 request.add_header(k, v)
             try:
-                return urllib.request.urlopen(request, timeout=timeout or self.timeout)
+                return self._opener.open(request, timeout=timeout or self.timeout)
             except urllib.error.HTTPError as answer:
                 error = self._problem_of(answer)
                 if isinstance(error, Busy) and retry and attempt < self.retries:
@@ -94,9 +115,33 @@ class Transport:
             except (urllib.error.URLError, OSError) as e:
                 raise TransportError(f"{method} {self.url(path)}: {getattr(e, 'reason', e)}") from e
 
+    @staticmethod
+    def read_whole(response, what: str, write: Optional[Callable[[bytes], Any]] = None) -> Optional[bytes]:
+        """The answer's body, all of it: a body that ends before its
+        Content-Length (the connection cut) raises TransportError rather than
+        passing for a whole result. With ``write``, chunks go there instead."""
+        expected = response.headers.get("Content-Length")
+        got = 0
+        chunks = []
+        try:
+            while True:
+                chunk = response.read(1 << 20)
+                if not chunk:
+                    break
+                got += len(chunk)
+                if write is None:
+                    chunks.append(chunk)
+                else:
+                    write(chunk)
+        except (http.client.HTTPException, OSError) as e:
+            raise TransportError(f"{what}: the answer broke off after {got} bytes: {e}") from e
+        if expected is not None and expected.isdigit() and got != int(expected):
+            raise TransportError(f"{what}: the answer was cut short: {got} of {expected} bytes")
+        return b"".join(chunks) if write is None else None
+
     def json(self, method: str, path: str, **kwargs) -> Any:
         with self.open(method, path, **kwargs) as response:
-            data = response.read()
+            data = self.read_whole(response, f"{method} {path}")
         try:
             return json.loads(data) if data else None
         except ValueError as e:
