@@ -84,8 +84,27 @@ ServiceProblem problem_of(const json& problem, int status) {
   return ServiceProblem(slug, message, exit_code_of(slug));
 }
 
+// Why a request got no answer, in words (httplib's own names are one word:
+// "Connection").
+std::string no_answer(httplib::Error error) {
+  switch (error) {
+    case httplib::Error::Connection:
+      return "cannot connect: the connection was refused, or nothing answers there (is voxd serving at --server?)";
+    case httplib::Error::ConnectionTimeout:
+      return "cannot connect: no answer within the connection timeout";
+    case httplib::Error::Read:
+      return "the connection broke (or timed out) while reading the answer";
+    case httplib::Error::Write:
+      return "the connection broke (or timed out) while sending the request";
+    case httplib::Error::BindIPAddress:
+      return "cannot bind the local address";
+    default:
+      return "no answer (" + httplib::to_string(error) + ")";
+  }
+}
+
 ServiceProblem problem_of(const httplib::Result& res, const std::string& what) {
-  if (!res) return ServiceProblem("unreachable", what + ": " + httplib::to_string(res.error()), api::kExitFailure);
+  if (!res) return ServiceProblem("unreachable", what + ": " + no_answer(res.error()), api::kExitFailure);
   try {
     return problem_of(json::parse(res->body), res->status);
   } catch (const json::exception&) {
@@ -96,7 +115,10 @@ ServiceProblem problem_of(const httplib::Result& res, const std::string& what) {
 
 class ServiceClient {
  public:
-  ServiceClient(const std::string& url, std::string api_key) : api_key_(std::move(api_key)) {
+  static constexpr std::size_t kMaxEventBytes = std::size_t{1} << 20;
+
+  ServiceClient(const std::string& url, std::string api_key) : url_(url), api_key_(std::move(api_key)) {
+    while (!url_.empty() && url_.back() == '/') url_.pop_back();
     if (url.rfind("http://", 0) != 0)
       throw UsageError("--server must be an http:// URL (put TLS in front of voxd with a proxy), got '" + url + "'");
     client_ = std::make_unique<httplib::Client>(url);
@@ -127,13 +149,13 @@ class ServiceClient {
     const httplib::MultipartFormDataItems items = {{"mesh", mesh, filename, "application/octet-stream"},
                                                    {"params", params.dump(), "", "application/json"}};
     auto res = with_retries([&] { return client_->Post("/v1/jobs", headers(), items); });
-    if (!res || (res->status != 200 && res->status != 202)) throw problem_of(res, "POST /v1/jobs");
+    if (!res || (res->status != 200 && res->status != 202)) throw problem_of(res, "POST " + url_ + "/v1/jobs");
     return json::parse(res->body);
   }
 
   json status(const std::string& id) {
     auto res = with_retries([&] { return client_->Get("/v1/jobs/" + id, headers()); });
-    if (!res || res->status != 200) throw problem_of(res, "GET /v1/jobs/" + id);
+    if (!res || res->status != 200) throw problem_of(res, "GET " + url_ + "/v1/jobs/" + id);
     return json::parse(res->body);
   }
 
@@ -170,6 +192,13 @@ class ServiceClient {
             handle_block(buffer.substr(0, cut));
             buffer.erase(0, cut + 2);
           }
+          // voxd's events are a few KB: a stream that sends this much
+          // without ending an event is not one, and is left for polling.
+          if (buffer.size() > kMaxEventBytes) {
+            std::cerr << "voxd submit: the event stream sent over " << (kMaxEventBytes >> 20)
+                      << " MiB without ending an event; polling instead\n";
+            return false;
+          }
           return !final.has_value();
         });
     return final;
@@ -195,18 +224,19 @@ class ServiceClient {
             },
             [&](const char* data, std::size_t n) {
               if (status == 200) sink.write(reinterpret_cast<const std::uint8_t*>(data), n);
-              else error_body.append(data, n);
+              else if (error_body.size() < kMaxEventBytes) error_body.append(data, std::min(n, kMaxEventBytes));
               return true;
             });
       });
       if (!res || res->status != 200) {
         if (res) res->body = error_body;
-        throw problem_of(res, "GET /v1/jobs/" + id + "/volume");  // write_output removes the partial file
+        throw problem_of(res, "GET " + url_ + "/v1/jobs/" + id + "/volume");  // write_output removes the partial file
       }
     });
   }
 
  private:
+  std::string url_;
   std::string api_key_;
   std::unique_ptr<httplib::Client> client_;
 };

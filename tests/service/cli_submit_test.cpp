@@ -2,8 +2,10 @@
 // bytes `voxd voxelize` writes for the same job, standard output holds only
 // the volume, errors exit as voxelize's do with the service's problem type,
 // and a terminal gets a progress bar.
+#include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "support/http_fixture.h"
 #include "support/run_process.h"
@@ -90,8 +92,52 @@ TEST_F(SubmitCli, ErrorsExitAsVoxelizeWithTheProblemType) {
   r = submit_cli(box + " -o " + dir_ + "/x.rle --server http://127.0.0.1:9");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_EQ(r.err.rfind("voxd: unreachable: ", 0), 0u) << r.err;
+  // Issue #37, finding 9: it names the server and says what happened.
+  EXPECT_NE(r.err.find("POST http://127.0.0.1:9/v1/jobs: cannot connect: the connection was refused"), std::string::npos)
+      << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/x.rle"));
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/x.rle.partial"));
+}
+
+// Issue #37, finding 9: an event stream that never ends an event is not
+// buffered without bound: submit drops it after a MiB and polls instead.
+TEST_F(SubmitCli, AnEventStreamThatNeverEndsAnEventIsDroppedForPolling) {
+  const std::string id(32, 'a');
+  const json done = {{"id", id}, {"state", "succeeded"}, {"progress", 1.0}, {"params", json::object()}};
+  std::atomic<std::uint64_t> streamed{0};
+  std::atomic<int> polls{0};
+  httplib::Server stub;
+  stub.Post("/v1/jobs", [&](const httplib::Request&, httplib::Response& res) {
+    res.status = 202;
+    res.set_content(json{{"id", id}, {"state", "queued"}}.dump(), "application/json");
+  });
+  stub.Get("/v1/jobs/" + id + "/events", [&](const httplib::Request&, httplib::Response& res) {
+    res.set_chunked_content_provider("text/event-stream", [&](std::size_t, httplib::DataSink& sink) {
+      const std::string line = "data: " + std::string(4096, 'x') + "\n";  // never a blank line
+      if (streamed > (std::uint64_t{256} << 20)) return false;
+      streamed += line.size();
+      return sink.write(line.data(), line.size());
+    });
+  });
+  stub.Get("/v1/jobs/" + id, [&](const httplib::Request&, httplib::Response& res) {
+    ++polls;
+    res.set_content(done.dump(), "application/json");
+  });
+  stub.Get("/v1/jobs/" + id + "/volume", [&](const httplib::Request&, httplib::Response& res) {
+    res.set_content("volume-bytes", "application/octet-stream");
+  });
+  const int port = stub.bind_to_any_port("127.0.0.1");
+  std::thread serving([&] { stub.listen_after_bind(); });
+  const std::string box = mesh_file("box.stl", to_binary_stl(make_box({0, 0, 0}, {1, 1, 1})));
+  const auto r = run_process("timeout 30 " + std::string(VOXD_BINARY) + " submit " + box + " -o " + dir_ +
+                             "/x.rle --no-progress --server http://127.0.0.1:" + std::to_string(port));
+  stub.stop();
+  serving.join();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("without ending an event; polling instead"), std::string::npos) << r.err;
+  EXPECT_GE(polls.load(), 1);
+  EXPECT_LT(streamed.load(), std::uint64_t{16} << 20) << "submit kept reading the stream";
+  EXPECT_EQ(text_of(read_file(dir_ + "/x.rle")), "volume-bytes");
 }
 
 TEST_F(SubmitCli, ATerminalGetsAProgressBarToTheEnd) {
