@@ -4,6 +4,7 @@
 // whatever the slab size (including grids whose z size is not a multiple of
 // it), the slabs are the stored voxels and every streamed analysis is
 // exactly its in-memory counterpart.
+#include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "voxd/analysis/preview.h"
 #include "voxd/analysis/radiography.h"
 #include "voxd/analysis/section.h"
+#include "voxd/byte_source.h"
 #include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
@@ -126,6 +128,62 @@ TEST(RleSlabs, ABrokenStreamStopsAtTheBadBlockWithItsOffset) {
   std::vector<std::uint8_t> padded = s.rle;
   padded.push_back(0);
   EXPECT_THROW(read_rle_bit_slabs(padded, 4, [](std::int64_t, const BitVolume&) {}), Error);
+}
+
+// The bytes a few at a time, as a store's chunks arrive (a source that is
+// not in memory): the slab reader's buffered path.
+class Trickle final : public ByteSource {
+ public:
+  Trickle(std::span<const std::uint8_t> data, std::size_t step) : data_(data), step_(step) {}
+  std::size_t read(std::uint8_t* out, std::size_t size) override {
+    const std::size_t n = std::min({size, step_, data_.size() - at_});
+    std::memcpy(out, data_.data() + at_, n);
+    at_ += n;
+    return n;
+  }
+
+ private:
+  std::span<const std::uint8_t> data_;
+  std::size_t step_, at_ = 0;
+};
+
+// Issue #37, finding 7: a stored result is replayed from a source read front
+// to back, never whole: the same slabs whatever the reads' sizes, and the
+// same errors where the stream is broken.
+TEST(RleSlabs, ASourceReadAPieceAtATimeGivesTheSameSlabsAndErrors) {
+  for (const Stored& s : cases()) {
+    for (std::size_t step : {std::size_t{1}, std::size_t{13}, std::size_t{4096}, s.rle.size()}) {
+      SCOPED_TRACE("reads of " + std::to_string(step));
+      Trickle header(s.rle, step);
+      EXPECT_EQ(read_rle_bit_grid(header).dims, s.volume.grid().dims);
+      BitVolume whole(s.volume.grid());
+      Trickle source(s.rle, step);
+      read_rle_bit_slabs(source, 3, [&](std::int64_t k0, const BitVolume& slab) {
+        std::memcpy(whole.slab(k0), slab.data(), slab.byte_size());
+      });
+      EXPECT_TRUE(same_words(whole, s.volume));
+    }
+  }
+  const Stored& s = cases()[1];
+  auto error_of = [](auto&& input) {
+    try {
+      read_rle_bit_slabs(input, 2, [](std::int64_t, const BitVolume&) {});
+    } catch (const Error& e) {
+      return std::make_pair(e.code(), std::string(e.what()));
+    }
+    return std::make_pair(ErrorCode::io_error, std::string("no error"));
+  };
+  const std::vector<std::uint8_t> cut(s.rle.begin(), s.rle.begin() + static_cast<std::ptrdiff_t>(s.rle.size() / 2));
+  Trickle cut_source(cut, 7);
+  const auto cut_error = error_of(cut_source);
+  EXPECT_EQ(cut_error, error_of(std::span<const std::uint8_t>(cut)));
+  EXPECT_EQ(cut_error.first, ErrorCode::truncated_input);
+  std::vector<std::uint8_t> padded = s.rle;
+  padded.push_back(0);
+  Trickle padded_source(padded, 7);
+  const auto padded_error = error_of(padded_source);
+  EXPECT_EQ(padded_error.first, ErrorCode::malformed_input);
+  EXPECT_NE(padded_error.second.find("unexpected bytes after the end block"), std::string::npos) << padded_error.second;
 }
 
 TEST(SlabAnalyses, MassPropertiesAreExactlyTheInMemoryOnesForAnySlabsAndThreads) {

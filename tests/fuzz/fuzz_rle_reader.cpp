@@ -1,12 +1,47 @@
 // libFuzzer harness for the RLE reader, every value type: a lying header or
 // runs past the grid must be an Error, never an allocation or a read past
 // the input.
+#include <algorithm>
 #include <cstdint>
 #include <span>
+#include <utility>
 
 #include "voxd/error.h"
 #include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
+
+namespace {
+
+// The bytes a few at a time, as a store's chunks arrive: the slab readers
+// must see the same stream through their buffered window.
+class Dribble final : public voxd::ByteSource {
+ public:
+  explicit Dribble(std::span<const std::uint8_t> data) : data_(data) {}
+  std::size_t read(std::uint8_t* out, std::size_t size) override {
+    const std::size_t n = std::min({size, data_.size() - at_, std::size_t{1} + (at_ * 7919) % 13});
+    std::copy_n(data_.data() + at_, n, out);
+    at_ += n;
+    return n;
+  }
+
+ private:
+  std::span<const std::uint8_t> data_;
+  std::size_t at_ = 0;
+};
+
+// Runs a slab read; its outcome (a digest of the slabs, or the error's code).
+template <class Read>
+std::pair<std::uint64_t, int> outcome(const Read& read) {
+  std::uint64_t digest = 0;
+  try {
+    read(digest);
+    return {digest, -1};
+  } catch (const voxd::Error& e) {
+    return {digest, static_cast<int>(e.code())};
+  }
+}
+
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::span<const std::uint8_t> bytes(data, size);
@@ -18,16 +53,25 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try { (void)voxd::read_rle_f32(bytes, limits); } catch (const voxd::Error&) {}
   try { (void)voxd::read_rle_rgba8(bytes, limits); } catch (const voxd::Error&) {}
   try { (void)voxd::read_rle_metadata(bytes); } catch (const voxd::Error&) {}
-  try {
-    std::uint64_t filled = 0;
-    voxd::read_rle_bit_slabs(bytes, 3, [&](std::int64_t, const voxd::BitVolume& slab) { filled += slab.count(); }, limits);
-  } catch (const voxd::Error&) {
-  }
-  try {
-    std::uint64_t layers = 0;
-    voxd::read_rle_value_slabs(bytes, 2, [&](std::int64_t, const voxd::ValueVolume& slab) { layers += voxd::grid_of(slab).dims.z; },
-                               limits);
-  } catch (const voxd::Error&) {
-  }
+  // The slab readers, from memory and from a source that dribbles: the same
+  // slabs, and the same error where the stream is bad.
+  auto bits = [&](auto&& input) {
+    return outcome([&](std::uint64_t& digest) {
+      voxd::read_rle_bit_slabs(input, 3, [&](std::int64_t k0, const voxd::BitVolume& slab) {
+        digest = digest * 31 + static_cast<std::uint64_t>(k0) * 7 + slab.count();
+      }, limits);
+    });
+  };
+  Dribble dribbled_bits(bytes);
+  if (bits(bytes) != bits(dribbled_bits)) __builtin_trap();
+  auto values = [&](auto&& input) {
+    return outcome([&](std::uint64_t& digest) {
+      voxd::read_rle_value_slabs(input, 2, [&](std::int64_t k0, const voxd::ValueVolume& slab) {
+        digest = digest * 31 + static_cast<std::uint64_t>(k0) * 7 + static_cast<std::uint64_t>(voxd::grid_of(slab).dims.z);
+      }, limits);
+    });
+  };
+  Dribble dribbled_values(bytes);
+  if (values(bytes) != values(dribbled_values)) __builtin_trap();
   return 0;
 }

@@ -4,11 +4,13 @@
 // that is valid end to end gets its volume allocated and filled (second pass).
 #include <algorithm>
 #include <bit>
+#include <cstdint>
 #include <string>
 
 #include "encode/bit_runs.h"
 #include "encode/byte_cursor.h"
 #include "encode/rle_stream.h"
+#include "encode/source_window.h"
 #include "encode/volume_checks.h"
 #include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
@@ -29,8 +31,9 @@ struct SlabBlock {
   std::size_t at;
 };
 
-// Checks the framing of slab block k of nz and steps over it.
-SlabBlock read_slab_block(ByteCursor& in, std::int64_t k, std::int64_t nz) {
+// Checks the head of slab block k of nz (tag, index) and reads its payload
+// length.
+std::uint64_t read_slab_head(ByteCursor& in, std::int64_t k, std::int64_t nz) {
   const std::size_t block_at = in.offset();
   const std::uint8_t tag = in.u8("a slab block tag");
   if (tag == encode::kEndTag)
@@ -45,13 +48,18 @@ SlabBlock read_slab_block(ByteCursor& in, std::int64_t k, std::int64_t nz) {
     in.fail(ErrorCode::malformed_input, "slab block at byte " + std::to_string(block_at) + " has index " +
                                             std::to_string(index) + " where slab " + std::to_string(k) +
                                             " was expected (slabs come in order from 0)");
-  const std::uint64_t length = in.varint("a slab payload length");
+  return in.varint("a slab payload length");
+}
+
+// Checks the framing of slab block k of nz and steps over it.
+SlabBlock read_slab_block(ByteCursor& in, std::int64_t k, std::int64_t nz) {
+  const std::uint64_t length = read_slab_head(in, k, nz);
   const std::size_t payload_at = in.offset();
   return {in.bytes(length, "a slab payload"), payload_at};
 }
 
-// Checks the end block after nz slab blocks and that nothing follows it.
-void read_end_block(ByteCursor& in, std::int64_t nz) {
+// Checks the end block after nz slab blocks.
+void read_end_head(ByteCursor& in, std::int64_t nz) {
   const std::size_t end_at = in.offset();
   const std::uint8_t tag = in.u8("the end block");
   if (tag == encode::kSlabTag)
@@ -65,6 +73,11 @@ void read_end_block(ByteCursor& in, std::int64_t nz) {
   if (count != static_cast<std::uint64_t>(nz))
     in.fail(ErrorCode::malformed_input, "the end block counts " + std::to_string(count) + " slabs, the header " +
                                             std::to_string(nz));
+}
+
+// Checks the end block after nz slab blocks and that nothing follows it.
+void read_end_block(ByteCursor& in, std::int64_t nz) {
+  read_end_head(in, nz);
   if (!in.at_end())
     in.fail(ErrorCode::malformed_input, std::to_string(in.remaining()) + " unexpected bytes after the end block");
 }
@@ -240,15 +253,90 @@ DenseVolume<Rgba8> read_rle_rgba8(std::span<const std::uint8_t> data, const Read
   return read_rle_values<Rgba8>(data, limits, encode::RleValueType::rgba8, "read_rle_rgba8");
 }
 
+namespace {
+
+using encode::SourceWindow;
+
+// The longest block head: a tag and two varints of at most 10 bytes.
+constexpr std::size_t kMaxBlockHead = 21;
+// The header is small but for its metadata JSON: read in growing pieces.
+constexpr std::size_t kMaxHeaderBytes = std::size_t{64} << 20;
+
+// The stream's header, from as many bytes as it takes.
+encode::RleHeader read_header(SourceWindow& window) {
+  for (std::size_t n = 4096;; n *= 4) {
+    const auto bytes = window.peek(n);
+    ByteCursor in(bytes, ErrorCode::truncated_input, "RLE stream");
+    try {
+      encode::RleHeader header = encode::read_rle_header(in);
+      window.consume(in.offset());
+      return header;
+    } catch (const Error& e) {
+      // More bytes may complete it, unless the source has no more.
+      if (e.code() != ErrorCode::truncated_input || bytes.size() < n || n >= kMaxHeaderBytes) throw;
+    }
+  }
+}
+
+encode::RleHeader read_header_of_type(SourceWindow& window, encode::RleValueType wanted, const char* reader) {
+  const encode::RleHeader header = read_header(window);
+  if (header.value_type != wanted)
+    throw Error(ErrorCode::malformed_input, std::string("RLE stream: the stream holds ") + to_string(header.value_type) +
+                                                " values; " + reader + " reads only " + to_string(wanted) + " streams");
+  return header;
+}
+
+// The next slab block's payload, k of nz, whose runs cannot need more than
+// `max_payload` bytes (a bound that keeps a corrupt length from taking the
+// rest of the stream into memory). The span is valid until the next peek.
+SlabBlock next_slab_block(SourceWindow& window, std::int64_t k, std::int64_t nz, std::uint64_t max_payload) {
+  ByteCursor head(window.peek(kMaxBlockHead), ErrorCode::truncated_input, "RLE stream", window.offset());
+  const std::uint64_t length = read_slab_head(head, k, nz);
+  window.consume(head.offset() - window.offset());
+  if (length > max_payload)
+    head.fail(ErrorCode::malformed_input, "slab " + std::to_string(k) + " declares a payload of " + std::to_string(length) +
+                                              " bytes, more than the runs of one layer can take");
+  const std::size_t at = window.offset();
+  const auto payload = window.peek(static_cast<std::size_t>(length));
+  if (payload.size() < length)
+    throw Error(ErrorCode::truncated_input,
+                "RLE stream: data ends inside a slab payload at byte " + std::to_string(at));
+  window.consume(payload.size());
+  return {payload, at};
+}
+
+void read_end(SourceWindow& window, std::int64_t nz) {
+  ByteCursor head(window.peek(kMaxBlockHead), ErrorCode::truncated_input, "RLE stream", window.offset());
+  read_end_head(head, nz);
+  window.consume(head.offset() - window.offset());
+  // In memory, all that follows is counted; from a source, a few bytes.
+  const std::size_t look = window.in_memory() ? SIZE_MAX : kMaxBlockHead;
+  if (const std::size_t more = window.peek(look).size(); more > 0)
+    throw Error(ErrorCode::malformed_input, "RLE stream: " + std::string(more == look ? "at least " : "") +
+                                                std::to_string(more) + " unexpected bytes after the end block");
+}
+
+// The most bytes one layer's runs take: every run a 10-byte varint (and a
+// value of up to 4 bytes), twice as many runs as voxels for bits.
+std::uint64_t max_bit_payload(std::uint64_t slab_voxels) { return 10 * (2 * slab_voxels + 2); }
+std::uint64_t max_value_payload(std::uint64_t slab_voxels) { return 14 * (slab_voxels + 1); }
+
+}  // namespace
+
 Grid read_rle_bit_grid(std::span<const std::uint8_t> data) {
   ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
   return read_header_of_type(in, encode::RleValueType::bit, "read_rle_bit_grid").grid;
 }
 
-void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume,
+Grid read_rle_bit_grid(ByteSource& source) {
+  SourceWindow window(source);
+  return read_header_of_type(window, encode::RleValueType::bit, "read_rle_bit_grid").grid;
+}
+
+void read_rle_bit_slabs(ByteSource& source, std::int64_t slab_layers, const BitSlabConsumer& consume,
                         const ReadLimits& limits) {
-  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
-  const Grid grid = read_header_of_type(in, encode::RleValueType::bit, "read_rle_bit_slabs").grid;
+  SourceWindow window(source);
+  const Grid grid = read_header_of_type(window, encode::RleValueType::bit, "read_rle_bit_slabs").grid;
   const std::int64_t nz = grid.dims.z;
   const std::uint64_t slab_voxels = slab_voxel_count(grid);
   const std::int64_t layers = std::clamp<std::int64_t>(slab_layers, 1, std::max<std::int64_t>(nz, 1));
@@ -258,7 +346,7 @@ void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_la
     // A fresh slab comes zeroed from the OS, as the streamed voxelizer's do.
     BitVolume slab(slab_grid(grid, k0, n));
     for (std::int64_t k = k0; k < k0 + n; ++k) {
-      const SlabBlock block = read_slab_block(in, k, nz);
+      const SlabBlock block = next_slab_block(window, k, nz, max_bit_payload(slab_voxels));
       std::uint64_t* layer = slab.slab(k - k0);
       decode_bit_payload(payload_cursor(block.payload, block.at, k), slab_voxels, [&](std::uint64_t first, std::uint64_t length) {
         set_run(layer, slab.row_words(), grid.dims.x, first, length);
@@ -266,13 +354,19 @@ void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_la
     }
     consume(k0, slab);
   }
-  read_end_block(in, nz);
+  read_end(window, nz);
+}
+
+void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume,
+                        const ReadLimits& limits) {
+  SpanSource source(data);
+  read_rle_bit_slabs(source, slab_layers, consume, limits);
 }
 
 namespace {
 
 template <class T>
-void read_value_slabs(ByteCursor& in, const Grid& grid, std::int64_t slab_layers, const ValueSlabConsumer& consume,
+void read_value_slabs(SourceWindow& window, const Grid& grid, std::int64_t slab_layers, const ValueSlabConsumer& consume,
                       const ReadLimits& limits) {
   const std::int64_t nz = grid.dims.z;
   const std::uint64_t slab_voxels = slab_voxel_count(grid);
@@ -283,30 +377,36 @@ void read_value_slabs(ByteCursor& in, const Grid& grid, std::int64_t slab_layers
     ValueVolume slab{std::in_place_type<DenseVolume<T>>, slab_grid(grid, k0, n), T{}};
     DenseVolume<T>& values = std::get<DenseVolume<T>>(slab);
     for (std::int64_t k = k0; k < k0 + n; ++k) {
-      const SlabBlock block = read_slab_block(in, k, nz);
+      const SlabBlock block = next_slab_block(window, k, nz, max_value_payload(slab_voxels));
       T* layer = values.slab(k - k0);
       decode_value_payload<T>(payload_cursor(block.payload, block.at, k), slab_voxels,
                               [&](std::uint64_t first, std::uint64_t length, T value) { std::fill_n(layer + first, length, value); });
     }
     consume(k0, slab);
   }
-  read_end_block(in, nz);
+  read_end(window, nz);
 }
 
 }  // namespace
 
-void read_rle_value_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const ValueSlabConsumer& consume,
+void read_rle_value_slabs(ByteSource& source, std::int64_t slab_layers, const ValueSlabConsumer& consume,
                           const ReadLimits& limits) {
-  ByteCursor in(data, ErrorCode::truncated_input, "RLE stream");
-  const encode::RleHeader header = encode::read_rle_header(in);
+  SourceWindow window(source);
+  const encode::RleHeader header = read_header(window);
   switch (header.value_type) {
-    case encode::RleValueType::u8: return read_value_slabs<std::uint8_t>(in, header.grid, slab_layers, consume, limits);
-    case encode::RleValueType::f32: return read_value_slabs<float>(in, header.grid, slab_layers, consume, limits);
-    case encode::RleValueType::rgba8: return read_value_slabs<Rgba8>(in, header.grid, slab_layers, consume, limits);
+    case encode::RleValueType::u8: return read_value_slabs<std::uint8_t>(window, header.grid, slab_layers, consume, limits);
+    case encode::RleValueType::f32: return read_value_slabs<float>(window, header.grid, slab_layers, consume, limits);
+    case encode::RleValueType::rgba8: return read_value_slabs<Rgba8>(window, header.grid, slab_layers, consume, limits);
     default: break;
   }
-  in.fail(ErrorCode::malformed_input, std::string("the stream holds ") + to_string(header.value_type) +
-                                          " values; read_rle_value_slabs reads u8, f32 and rgba8 streams");
+  throw Error(ErrorCode::malformed_input, std::string("RLE stream: the stream holds ") + to_string(header.value_type) +
+                                              " values; read_rle_value_slabs reads u8, f32 and rgba8 streams");
+}
+
+void read_rle_value_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const ValueSlabConsumer& consume,
+                          const ReadLimits& limits) {
+  SpanSource source(data);
+  read_rle_value_slabs(source, slab_layers, consume, limits);
 }
 
 std::string read_rle_metadata(std::span<const std::uint8_t> data) {

@@ -6,6 +6,7 @@
 #include <span>
 
 #include "voxd/bit_slabs.h"
+#include "voxd/byte_source.h"
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/grid.h"
@@ -14,6 +15,7 @@ namespace voxd {
 
 // The grid of a bit RLE stream, from its header. Throws like read_rle_bits.
 Grid read_rle_bit_grid(std::span<const std::uint8_t> data);
+Grid read_rle_bit_grid(ByteSource& source);
 
 // Decodes the stream's layers into slabs of `slab_layers` layers (the last
 // one shorter when nz is not a multiple), calling `consume` for each in z
@@ -25,10 +27,16 @@ Grid read_rle_bit_grid(std::span<const std::uint8_t> data);
 // dims are not trusted): Error(limit_exceeded) before anything is allocated.
 void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const BitSlabConsumer& consume,
                         const ReadLimits& limits = {});
+// The same from a source read front to back (a stored result fetched as it
+// is read): memory is one slab and one layer's block, never the stream.
+void read_rle_bit_slabs(ByteSource& source, std::int64_t slab_layers, const BitSlabConsumer& consume,
+                        const ReadLimits& limits = {});
 
 // The same for a stream of values (u8, f32 or rgba8), each slab a
 // ValueVolume of the stream's type (ValueSlabWriter's input).
 void read_rle_value_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const ValueSlabConsumer& consume,
+                          const ReadLimits& limits = {});
+void read_rle_value_slabs(ByteSource& source, std::int64_t slab_layers, const ValueSlabConsumer& consume,
                           const ReadLimits& limits = {});
 
 }  // namespace voxd
