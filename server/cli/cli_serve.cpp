@@ -106,7 +106,6 @@ int serve_command(int argc, char** argv) {
     ro.result_ttl = std::chrono::seconds(config.result_ttl);
     ro.inflight_ttl = std::max<std::chrono::milliseconds>(std::chrono::hours(24), ro.result_ttl);
     ro.max_result_bytes = config.max_result_bytes;
-    ro.spool_dir = std::filesystem::path(config.data_dir) / "spool";
     ro.replica_id = replica;
     auto store = std::make_shared<RedisJobStore>(pool, ro);
     RedisQueueOptions qo;

@@ -90,43 +90,43 @@ void answer_bits(httplib::Response& res, std::shared_ptr<const BitVolume> bits, 
 
 namespace {
 
-// The stored RLE as it is, in 1 MiB chunks.
-void send_stored(std::span<const std::uint8_t> stored, ByteSink& sink) {
+// The stored RLE as it is, in 1 MiB pieces.
+void send_stored(const StoredBlob& stored, ByteSink& sink) {
   constexpr std::size_t kChunk = std::size_t{1} << 20;
-  for (std::size_t at = 0; at < stored.size(); at += kChunk) sink.write(stored.subspan(at, std::min(kChunk, stored.size() - at)));
+  const auto source = stored.open();
+  std::vector<std::uint8_t> buffer(std::min<std::uint64_t>(kChunk, std::max<std::uint64_t>(stored.size(), 1)));
+  while (const std::size_t n = source->read(buffer.data(), buffer.size())) sink.write(std::span(buffer).first(n));
 }
 
 }  // namespace
 
-void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const VolumeRequest& v,
+void answer_stored_bits(httplib::Response& res, std::shared_ptr<const StoredBlob> rle, const VolumeRequest& v,
                         const std::string& filename, Metrics& metrics) {
   if (auto refusal = streaming_refusal(v.format)) throw std::logic_error(*refusal);
   res.set_header("X-Voxd-Value-Type", "bit");
   stream_encoded(
       res, media_type(v.format),
       [rle = std::move(rle), v](ByteSink& sink) {
-        const std::span<const std::uint8_t> stored = rle->bytes();
-        if (v.format == VolumeFormat::rle) return send_stored(stored, sink);
-        const Grid grid = read_rle_bit_grid(stored);
+        if (v.format == VolumeFormat::rle) return send_stored(*rle, sink);
+        const Grid grid = read_rle_bit_grid(*rle->open());
         BitSlabWriter writer(grid, v.format, v.options, sink);
-        read_rle_bit_slabs(stored, replay_bit_slab_layers(grid),
+        read_rle_bit_slabs(*rle->open(), replay_bit_slab_layers(grid),
                            [&](std::int64_t k0, const BitVolume& slab) { writer.write(k0, slab); }, kStoredSlabLimits);
         writer.finish();
       },
       v.gzip, filename, &metrics);
 }
 
-void answer_stored_values(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const Grid& grid,
+void answer_stored_values(httplib::Response& res, std::shared_ptr<const StoredBlob> rle, const Grid& grid,
                           const ValueVolume& type, const VolumeRequest& v, const std::string& filename, Metrics& metrics) {
   if (auto refusal = streaming_refusal(type, v.format, v.options)) throw std::logic_error(*refusal);
   res.set_header("X-Voxd-Value-Type", value_type_name(type));
   stream_encoded(
       res, media_type(v.format),
       [rle = std::move(rle), grid, type, v](ByteSink& sink) {
-        const std::span<const std::uint8_t> stored = rle->bytes();
-        if (v.format == VolumeFormat::rle) return send_stored(stored, sink);
+        if (v.format == VolumeFormat::rle) return send_stored(*rle, sink);
         ValueSlabWriter writer(grid, type, v.format, v.options, sink);
-        read_rle_value_slabs(stored, replay_value_slab_layers(grid),
+        read_rle_value_slabs(*rle->open(), replay_value_slab_layers(grid),
                              [&](std::int64_t k0, const ValueVolume& slab) { writer.write(k0, slab); }, kStoredSlabLimits);
         writer.finish();
       },

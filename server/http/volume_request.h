@@ -9,7 +9,7 @@
 
 #include "api/job_params.h"
 #include "server/jobs/job.h"
-#include "server/mapped_file.h"
+#include "server/jobs/stored_blob.h"
 #include "voxd/encode/volume_format.h"
 
 namespace voxd::server {
@@ -43,11 +43,11 @@ void answer_bits(httplib::Response& res, std::shared_ptr<const BitVolume> bits, 
 // and nrrd re-encoded as they are read (voxd/encode/slab_writer.h). A format
 // that does not stream (binvox) is refused here: the caller loads the
 // volume whole when it fits.
-void answer_stored_bits(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const VolumeRequest& v,
+void answer_stored_bits(httplib::Response& res, std::shared_ptr<const StoredBlob> rle, const VolumeRequest& v,
                         const std::string& filename, Metrics& metrics);
 
 // The same for a streamed job's stored values on `grid`, of `type`'s type.
-void answer_stored_values(httplib::Response& res, std::shared_ptr<const MappedFile> rle, const Grid& grid,
+void answer_stored_values(httplib::Response& res, std::shared_ptr<const StoredBlob> rle, const Grid& grid,
                           const ValueVolume& type, const VolumeRequest& v, const std::string& filename, Metrics& metrics);
 
 // Streams what the job's mode writes itself in this format.

@@ -18,7 +18,7 @@
 #include "api/job_params.h"
 #include "api/job_warning.h"
 #include "server/pipeline/job_pipeline.h"
-#include "server/mapped_file.h"
+#include "server/jobs/stored_blob.h"
 #include "voxd/analysis/mass_properties.h"
 #include "voxd/bit_volume.h"
 #include "voxd/enum_names.h"
@@ -102,8 +102,8 @@ struct JobOutput : api::JobVolumes {
   // A streamed job's volume as stored (solid is then null): what streams is
   // answered by replaying it slab by slab (voxd/encode/rle_slabs.h); and a
   // streamed job's values as stored (values is then null).
-  std::shared_ptr<const MappedFile> rle;
-  std::shared_ptr<const MappedFile> values_rle;
+  std::shared_ptr<const StoredBlob> rle;
+  std::shared_ptr<const StoredBlob> values_rle;
 };
 
 // What removing a job did: cancelled one that waited or ran, deleted a

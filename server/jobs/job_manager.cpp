@@ -105,12 +105,12 @@ std::shared_ptr<const BitVolume> JobManager::volume(const std::string& id) {
   return v;
 }
 
-std::shared_ptr<const MappedFile> JobManager::volume_rle(const std::string& id) {
+std::shared_ptr<const StoredBlob> JobManager::volume_rle(const std::string& id) {
   if (!impl_->succeeded(id)) return nullptr;
   return impl_->backend->store()->volume_rle(id);
 }
 
-std::shared_ptr<const MappedFile> JobManager::values_rle(const std::string& id) {
+std::shared_ptr<const StoredBlob> JobManager::values_rle(const std::string& id) {
   const auto s = impl_->backend->find(id);
   if (!s || s->state != JobState::succeeded || !s->has_value_volume()) return nullptr;
   return impl_->backend->store()->layer_rle(id, "values");

@@ -94,9 +94,9 @@ class JobManager {
   // A succeeded job's volume as stored (its RLE), to be read slab by slab:
   // how a streamed job's volume is served and analysed. nullptr if the job
   // is unknown or not succeeded.
-  std::shared_ptr<const MappedFile> volume_rle(const std::string& id);
+  std::shared_ptr<const StoredBlob> volume_rle(const std::string& id);
   // The same for a streamed job's values (nullptr for a job without values).
-  std::shared_ptr<const MappedFile> values_rle(const std::string& id);
+  std::shared_ptr<const StoredBlob> values_rle(const std::string& id);
   // A succeeded value job's values; nullptr for other jobs.
   std::shared_ptr<const ValueVolume> values(const std::string& id);
   // A succeeded job's volume of values by name: "values" or one of its

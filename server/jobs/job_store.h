@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "server/jobs/job.h"
-#include "server/mapped_file.h"
+#include "server/jobs/stored_blob.h"
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
 #include "voxd/encode/volume_format.h"
@@ -72,20 +72,20 @@ class JobStore {
   // save_volume would), never holding it whole; kept as atomically. Throws
   // StorageFull, or what `write` throws (then nothing is kept).
   virtual void write_volume(const std::string& id, const std::function<void(ByteSink&)>& write) const = 0;
-  // The stored RLE of the job's volume, mapped to be read front to back
+  // The stored RLE of the job's volume, to be read front to back
   // (voxd/encode/rle_slabs.h); nullptr when there is none.
-  virtual std::shared_ptr<const MappedFile> volume_rle(const std::string& id) const = 0;
+  virtual std::shared_ptr<const StoredBlob> volume_rle(const std::string& id) const = 0;
   // A value job's volume of values by name ("values", the result, or a layer
   // its mode keeps beside it, api::JobMode::stored_layers()).
   virtual void save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const = 0;
   virtual std::shared_ptr<const ValueVolume> load_layer(const std::string& id, const std::string& name) const = 0;
   // A volume of values made slab by slab (a streamed job's "values", of
   // `type`'s type): `write` writes its RLE (the bytes save_layer would), kept
-  // as atomically; and that stored RLE, mapped to be read front to back
-  // (nullptr when there is none).
+  // as atomically; and that stored RLE, to be read front to back (nullptr
+  // when there is none).
   virtual void write_layer(const std::string& id, const std::string& name, const ValueVolume& type,
                            const std::function<void(ByteSink&)>& write) const = 0;
-  virtual std::shared_ptr<const MappedFile> layer_rle(const std::string& id, const std::string& name) const = 0;
+  virtual std::shared_ptr<const StoredBlob> layer_rle(const std::string& id, const std::string& name) const = 0;
   // Shares a finished result (volume and layers) with a job created from an
   // identical submission, so that deleting either leaves the other's intact.
   // Throws when the original's result is gone.

@@ -124,11 +124,11 @@ void LocalJobStore::write_volume(const std::string& id, const std::function<void
   write_atomically(job_dir(id) / "volume.rle", write);
 }
 
-std::shared_ptr<const MappedFile> LocalJobStore::volume_rle(const std::string& id) const {
+std::shared_ptr<const StoredBlob> LocalJobStore::volume_rle(const std::string& id) const {
   const fs::path path = job_dir(id) / "volume.rle";
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return nullptr;
-  return std::make_shared<const MappedFile>(path.string(), MapAccess::sequential);
+  return mapped_blob(path.string());
 }
 
 void LocalJobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {
@@ -141,11 +141,11 @@ void LocalJobStore::write_layer(const std::string& id, const std::string& name, 
   write_atomically(job_dir(id) / (name + "." + value_type_name(type) + ".rle"), write);
 }
 
-std::shared_ptr<const MappedFile> LocalJobStore::layer_rle(const std::string& id, const std::string& name) const {
+std::shared_ptr<const StoredBlob> LocalJobStore::layer_rle(const std::string& id, const std::string& name) const {
   for (const char* type : {"u8", "f32", "rgba8"}) {
     const fs::path path = job_dir(id) / (name + "." + type + ".rle");
     std::error_code ec;
-    if (fs::is_regular_file(path, ec)) return std::make_shared<const MappedFile>(path.string(), MapAccess::sequential);
+    if (fs::is_regular_file(path, ec)) return mapped_blob(path.string());
   }
   return nullptr;
 }

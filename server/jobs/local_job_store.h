@@ -24,12 +24,12 @@ class LocalJobStore final : public JobStore {
   void save_volume(const std::string& id, const BitVolume& volume) const override;
   std::shared_ptr<const BitVolume> load_volume(const std::string& id) const override;
   void write_volume(const std::string& id, const std::function<void(ByteSink&)>& write) const override;
-  std::shared_ptr<const MappedFile> volume_rle(const std::string& id) const override;
+  std::shared_ptr<const StoredBlob> volume_rle(const std::string& id) const override;
   void save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const override;
   std::shared_ptr<const ValueVolume> load_layer(const std::string& id, const std::string& name) const override;
   void write_layer(const std::string& id, const std::string& name, const ValueVolume& type,
                    const std::function<void(ByteSink&)>& write) const override;
-  std::shared_ptr<const MappedFile> layer_rle(const std::string& id, const std::string& name) const override;
+  std::shared_ptr<const StoredBlob> layer_rle(const std::string& id, const std::string& name) const override;
   void share_volume(const std::string& from_id, const std::string& to_id) const override;
   void remove(const std::string& id) const override;
   std::uint64_t free_bytes() const override;

@@ -3,6 +3,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstring>
 #include <random>
 #include <sstream>
 
@@ -246,12 +248,7 @@ std::int64_t created_ms(const JobSnapshot& job) {
 }  // namespace
 
 RedisJobStore::RedisJobStore(std::shared_ptr<RedisPool> pool, RedisBackendOptions options)
-    : pool_(std::move(pool)), options_(std::move(options)) {
-  std::error_code ec;
-  std::filesystem::create_directories(options_.spool_dir, ec);
-  if (ec)
-    throw Error(ErrorCode::io_error, "cannot create the spool directory '" + options_.spool_dir.string() + "': " + ec.message());
-}
+    : pool_(std::move(pool)), options_(std::move(options)) {}
 
 bool RedisJobStore::write_record(const JobSnapshot& job, const std::string& from) const {
   const std::string record = stored_record(job).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
@@ -381,20 +378,84 @@ bool RedisJobStore::write_blob(const std::string& id, const std::string& name,
   return false;
 }
 
-std::shared_ptr<const MappedFile> RedisJobStore::spool_blob(const std::string& id, const std::string& name) const {
-  const std::filesystem::path path = options_.spool_dir / (random_hex(24) + ".rle");
-  // The file is unlinked as soon as it is mapped: the mapping keeps it,
-  // and nothing is left behind by a crash after this call returns.
-  struct Unlink {
-    std::string path;
-    ~Unlink() { ::unlink(path.c_str()); }
-  } unlink_after{path.string()};
-  {
-    FileSink file(path.string());
-    if (!read_chunks(id, name, [&](std::string_view c) { file.write(c.data(), c.size()); })) return nullptr;
-    file.close();
+namespace {
+
+// Where a blob's chunks are: prefix + index, `chunks` of them, `size` bytes.
+struct ChunkList {
+  std::shared_ptr<RedisPool> pool;
+  std::string prefix;
+  std::size_t chunks = 0;
+  std::uint64_t size = 0;
+};
+
+// A blob's chunks, read as they are needed in slices of up to 1 MiB: a
+// reader holds a slice, never the blob, however slowly its client reads.
+class ChunkSource final : public ByteSource {
+ public:
+  explicit ChunkSource(ChunkList list) : list_(std::move(list)) {}
+  std::size_t read(std::uint8_t* out, std::size_t size) override {
+    if (at_ == slice_.size()) next_slice();
+    const std::size_t n = std::min(size, slice_.size() - at_);
+    if (n > 0) std::memcpy(out, slice_.data() + at_, n);
+    at_ += n;
+    return n;
   }
-  return std::make_shared<const MappedFile>(path.string(), MapAccess::sequential);
+
+ private:
+  static constexpr std::size_t kSlice = std::size_t{1} << 20;
+  void next_slice() {
+    slice_.clear();
+    at_ = 0;
+    while (slice_.empty()) {
+      if (chunk_ == list_.chunks) {
+        if (read_ != list_.size) gone();
+        return;
+      }
+      const std::string key = list_.prefix + std::to_string(chunk_);
+      const std::string first = std::to_string(offset_), last = std::to_string(offset_ + kSlice - 1);
+      // GETRANGE answers "" for a key that is gone: EXISTS tells them apart.
+      const std::vector<RedisReply> r = list_.pool->pipeline({{"EXISTS", key}, {"GETRANGE", key, first, last}});
+      if (r[0].integer() != 1) gone();
+      const std::string_view bytes = r[1].text();
+      slice_.assign(bytes.begin(), bytes.end());
+      read_ += bytes.size();
+      if (bytes.size() < kSlice) {  // the chunk's end
+        ++chunk_;
+        offset_ = 0;
+      } else {
+        offset_ += kSlice;
+      }
+    }
+  }
+  [[noreturn]] static void gone() {
+    throw Error(ErrorCode::io_error, "the stored result was deleted or expired while it was read");
+  }
+
+  ChunkList list_;
+  std::vector<std::uint8_t> slice_;
+  std::size_t at_ = 0;
+  std::size_t chunk_ = 0;
+  std::uint64_t offset_ = 0, read_ = 0;
+};
+
+class ChunkedBlob final : public StoredBlob {
+ public:
+  explicit ChunkedBlob(ChunkList list) : list_(std::move(list)) {}
+  std::uint64_t size() const override { return list_.size; }
+  std::unique_ptr<ByteSource> open() const override { return std::make_unique<ChunkSource>(list_); }
+
+ private:
+  ChunkList list_;
+};
+
+}  // namespace
+
+std::shared_ptr<const StoredBlob> RedisJobStore::stored_blob(const std::string& id, const std::string& name) const {
+  const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
+  if (m.at(0).is_nil()) return nullptr;
+  const std::string prefix = key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":";
+  return std::make_shared<const ChunkedBlob>(ChunkList{pool_, prefix, parse_number<std::size_t>(m.at(1).text()).value_or(0),
+                                                       parse_number<std::uint64_t>(m.at(2).text()).value_or(0)});
 }
 
 std::optional<std::string> RedisJobStore::load_artifact(const std::string& id, const std::string& key_name) const {
@@ -421,7 +482,7 @@ std::shared_ptr<const BitVolume> RedisJobStore::load_volume(const std::string& i
   return std::make_shared<const BitVolume>(read_rle_bits(*bytes, kStoredVolumeLimits));
 }
 
-std::shared_ptr<const MappedFile> RedisJobStore::volume_rle(const std::string& id) const { return spool_blob(id, "volume"); }
+std::shared_ptr<const StoredBlob> RedisJobStore::volume_rle(const std::string& id) const { return stored_blob(id, "volume"); }
 
 void RedisJobStore::save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const {
   write_layer(id, name, values, [&](ByteSink& sink) { encode_volume(values, VolumeFormat::rle, sink); });
@@ -443,9 +504,9 @@ std::shared_ptr<const ValueVolume> RedisJobStore::load_layer(const std::string& 
   return nullptr;
 }
 
-std::shared_ptr<const MappedFile> RedisJobStore::layer_rle(const std::string& id, const std::string& name) const {
+std::shared_ptr<const StoredBlob> RedisJobStore::layer_rle(const std::string& id, const std::string& name) const {
   for (const char* type : kValueTypes)
-    if (auto file = spool_blob(id, "layer:" + name + "." + type)) return file;
+    if (auto blob = stored_blob(id, "layer:" + name + "." + type)) return blob;
   return nullptr;
 }
 

@@ -46,8 +46,6 @@ struct RedisBackendOptions {
   // instead of filling Redis; 0 = no cap. Admission refuses jobs whose
   // estimate is over it already (JobManagerConfig::max_result_bytes).
   std::uint64_t max_result_bytes = 0;
-  // Stored RLE read slab by slab is copied here (an unlinked file) to be mapped.
-  std::filesystem::path spool_dir = "voxd-data/spool";
   std::string replica_id;  // this process, in the heartbeat set
 };
 
@@ -63,12 +61,12 @@ class RedisJobStore final : public JobStore, public SharedJobRecords, public Sha
   void save_volume(const std::string& id, const BitVolume& volume) const override;
   std::shared_ptr<const BitVolume> load_volume(const std::string& id) const override;
   void write_volume(const std::string& id, const std::function<void(ByteSink&)>& write) const override;
-  std::shared_ptr<const MappedFile> volume_rle(const std::string& id) const override;
+  std::shared_ptr<const StoredBlob> volume_rle(const std::string& id) const override;
   void save_layer(const std::string& id, const std::string& name, const ValueVolume& values) const override;
   std::shared_ptr<const ValueVolume> load_layer(const std::string& id, const std::string& name) const override;
   void write_layer(const std::string& id, const std::string& name, const ValueVolume& type,
                    const std::function<void(ByteSink&)>& write) const override;
-  std::shared_ptr<const MappedFile> layer_rle(const std::string& id, const std::string& name) const override;
+  std::shared_ptr<const StoredBlob> layer_rle(const std::string& id, const std::string& name) const override;
   void share_volume(const std::string& from_id, const std::string& to_id) const override;
   void remove(const std::string& id) const override;
   std::uint64_t free_bytes() const override;
@@ -114,7 +112,8 @@ class RedisJobStore final : public JobStore, public SharedJobRecords, public Sha
   // when there is none, or it expired or was deleted while read.
   bool read_chunks(const std::string& id, const std::string& name,
                    const std::function<void(std::string_view)>& chunk) const;
-  std::shared_ptr<const MappedFile> spool_blob(const std::string& id, const std::string& name) const;
+  // A blob read as it is needed (nullptr when there is none).
+  std::shared_ptr<const StoredBlob> stored_blob(const std::string& id, const std::string& name) const;
   bool write_record(const JobSnapshot& job, const std::string& from) const;
 
   std::shared_ptr<RedisPool> pool_;

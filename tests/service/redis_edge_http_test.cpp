@@ -9,10 +9,12 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <filesystem>
 #include <chrono>
 #include <thread>
 
 #include "support/http_fixture.h"
+#include "support/raw_socket.h"
 #include "support/redis_process.h"
 
 namespace voxd::test {
@@ -185,6 +187,43 @@ TEST_F(RedisEdge, ReadyzNamesRedisMemoryNotTheDisk) {
   EXPECT_EQ(status, 503) << body;
   EXPECT_NE(body.find("maxmemory"), std::string::npos) << body;
   EXPECT_EQ(body.find("disk is full"), std::string::npos) << body;
+}
+
+// Finding 7: slow readers of a large stored result on a Redis replica hold a
+// slice each, not a copy of the whole result in memory or on disk.
+TEST_F(RedisEdge, SlowReadersOfAStoredResultHoldASliceEachNotACopy) {
+  RedisProcess redis(dir_ + "/redis");
+  start_replica(redis.url());
+  // 128 plates across x: every row of the grid has 256 runs, so the stored
+  // RLE is about 32 MB.
+  std::vector<Mesh> plates;
+  for (int i = 0; i < 128; ++i) plates.push_back(make_box({4.0 * i + 0.5, 0.5, 0.5}, {4.0 * i + 2.5, 511.5, 255.5}));
+  const std::string id = finished(submit(to_binary_stl(concat(plates)),
+                                         R"({"streaming": "on", "grid": {"voxel_size": 1, "origin": [0, 0, 0], "dims": [512, 512, 256]}})"));
+  const std::uint64_t before = server_->peak_rss();
+  constexpr int kReaders = 12;
+  std::vector<std::unique_ptr<RawSocket>> readers;
+  for (int i = 0; i < kReaders; ++i) {
+    readers.push_back(std::make_unique<RawSocket>(server_->port()));
+    readers.back()->send("GET /v1/jobs/" + id + "/volume?format=" + (i % 2 ? "rle" : "raw") + " HTTP/1.1\r\nHost: t\r\n\r\n");
+  }
+  // Each reads its first bytes, then stalls (its socket buffers fill).
+  for (auto& r : readers) EXPECT_EQ(r->read_some(10s).rfind("HTTP/1.1 200", 0), 0u);
+  std::this_thread::sleep_for(2s);
+  const std::uint64_t after = server_->peak_rss();
+  EXPECT_LT(after - before, std::uint64_t{96} << 20)
+      << "peak RSS went from " << (before >> 20) << " MiB to " << (after >> 20) << " MiB with " << kReaders << " slow readers";
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/data/spool")) << "a spool directory";
+  // A reader that reads it all gets the whole result.
+  readers.clear();
+  const std::string rle = volume(id, "?format=rle");
+  EXPECT_GT(rle.size(), std::size_t{24} << 20);
+  const std::string raw = volume(id, "?format=raw");
+  ASSERT_EQ(raw.size(), std::size_t{512} * 512 * 256);
+  const std::size_t row = 512 * 300 + std::size_t{512} * 512 * 100;
+  EXPECT_EQ(raw[row + 0], 0) << "x = 0 is outside every plate";
+  EXPECT_NE(raw[row + 1], 0) << "x = 1 is inside the first plate";
+  EXPECT_EQ(raw[row + 3], 0) << "x = 3 is between plates";
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "server/jobs/job_record.h"
 #include "server/redis/redis_job_queue.h"
 #include "server/redis/redis_job_store.h"
+#include "voxd/error.h"
 #include "support/redis_process.h"
 #include "support/run_process.h"
 #include "support/test_meshes.h"
@@ -42,7 +43,6 @@ class RedisStoreTest : public ::testing::Test {
     pool_ = std::make_shared<RedisPool>(parse_redis_url(redis_->url()));
     RedisBackendOptions o;
     o.chunk_bytes = 1000;  // many chunks from small blobs
-    o.spool_dir = dir_ + "/spool";
     o.replica_id = "test";
     store_ = std::make_unique<RedisJobStore>(pool_, o);
   }
@@ -82,11 +82,18 @@ TEST_F(RedisStoreTest, BlobsAreChunkedReadBackWholeAndWrittenOnce) {
   EXPECT_FALSE(store_->write_blob("j1", "volume", [&](ByteSink& s) { s.write(other.data(), other.size()); }));
   EXPECT_EQ(keys(), before);
   EXPECT_EQ(store_->read_blob("j1", "volume"), bytes);
-  // Mapped for reading slab by slab: the same bytes.
-  auto mapped = store_->volume_rle("j1");
-  ASSERT_TRUE(mapped);
-  EXPECT_TRUE(std::equal(mapped->bytes().begin(), mapped->bytes().end(), bytes.begin(), bytes.end()));
-  EXPECT_TRUE(std::filesystem::is_empty(dir_ + "/spool")) << "the spooled copy is unlinked once mapped";
+  // Read front to back as it is needed (issue #37, finding 7: never copied
+  // whole first), in reads of any size: the same bytes, and no spool file.
+  auto stored = store_->volume_rle("j1");
+  ASSERT_TRUE(stored);
+  EXPECT_EQ(stored->size(), bytes.size());
+  for (std::size_t piece : {std::size_t{1}, std::size_t{7}, std::size_t{1000}, std::size_t{65536}}) {
+    auto source = stored->open();
+    std::vector<std::uint8_t> got, buffer(piece);
+    while (const std::size_t n = source->read(buffer.data(), buffer.size())) got.insert(got.end(), buffer.begin(), buffer.begin() + n);
+    EXPECT_EQ(got, bytes) << "reads of " << piece;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/spool"));
   // A failed write leaves nothing.
   EXPECT_THROW(store_->write_blob("j1", "layer:x.u8", [&](ByteSink& s) {
     s.write(bytes.data(), bytes.size());
@@ -95,6 +102,15 @@ TEST_F(RedisStoreTest, BlobsAreChunkedReadBackWholeAndWrittenOnce) {
   EXPECT_EQ(keys(), before);
   // Nothing is written for a job that is gone.
   EXPECT_FALSE(store_->write_blob("nope", "volume", [&](ByteSink& s) { s.write(bytes.data(), 10); }));
+  // A reader whose blob is deleted meanwhile fails, never ends short.
+  {
+    auto source = stored->open();
+    std::uint8_t first[10];
+    ASSERT_EQ(source->read(first, sizeof first), sizeof first);
+    pool_->command({"DEL", "voxd:chunk:j1:volume:" + std::string(pool_->command({"HGET", "voxd:blob:j1:volume", "gen"}).text()) + ":2"});
+    std::vector<std::uint8_t> rest(100000);
+    EXPECT_THROW({ while (source->read(rest.data(), rest.size()) > 0) {} }, voxd::Error);
+  }
 }
 
 TEST_F(RedisStoreTest, TransitionsAreCompareAndSetAndRemovalReachesEveryKey) {
@@ -145,16 +161,19 @@ TEST_F(RedisStoreTest, TheQueueIsBoundedAndALapsedLeaseIsClaimedWithItsDeliveryC
   EXPECT_EQ(a.depth(), 1u);
   EXPECT_TRUE(b.submit("q3")) << "a job taken leaves room";
   EXPECT_TRUE(b.cancel("q3"));
-  // a stops renewing (its replica died): after the lease b claims q1.
+  // a stops renewing (its replica died): b sees q1 idle past the lease,
+  // watches it for half a lease more by its own clock (its next look, a
+  // second later), then claims it. Meanwhile it takes what is queued.
   std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  auto second = b.take(std::chrono::milliseconds(100));
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->id, "q2") << "q1 is only watched at first sight";
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
   auto claimed = b.take(std::chrono::milliseconds(100));
   ASSERT_TRUE(claimed);
   EXPECT_EQ(claimed->id, "q1");
   EXPECT_EQ(claimed->deliveries, 2);
   b.ack("q1");
-  auto second = b.take(std::chrono::milliseconds(100));
-  ASSERT_TRUE(second);
-  EXPECT_EQ(second->id, "q2");
   // Renewed leases are not claimed.
   for (int i = 0; i < 8; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(60));
@@ -210,6 +229,37 @@ TEST(SlabTaskPlan, TasksTileTheGridInWholeSlabsUpToTheCap) {
 // A split on the queue: the tasks are queued once (past the capacity) and
 // the job's entry ends with it, even when its entry was handed out twice;
 // each task's blocks are kept once, counted once, and dropped with the plan.
+// Issue #37, finding 6: Redis counts an entry's idle time through a stall
+// of its own, so right after Redis resumes a running job looks abandoned.
+// Its owner renews at its next tick: a replica that looked during that tick
+// must not take the job over.
+TEST_F(RedisStoreTest, AnEntryIdleOnlyThroughAStallIsNotTakenOver) {
+  RedisQueueOptions o;
+  o.lease = std::chrono::milliseconds(600);
+  o.consumer = "owner";
+  RedisJobQueue owner(pool_, o);
+  o.consumer = "other";
+  RedisJobQueue other(pool_, o);
+  store_->save(record("s1", JobState::queued));
+  ASSERT_TRUE(owner.submit("s1"));
+  ASSERT_TRUE(owner.take(std::chrono::milliseconds(100)));
+  // The owner cannot renew for longer than a lease (Redis stood still).
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  // Redis moves again: the other replica looks first, then the owner renews.
+  EXPECT_FALSE(other.take(std::chrono::milliseconds(10))) << "taken over at the first look after a stall";
+  owner.renew_leases();
+  for (int i = 0; i < 4; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(350));
+    owner.renew_leases();
+    EXPECT_FALSE(other.take(std::chrono::milliseconds(10))) << "a renewed lease taken over, look " << i;
+  }
+  const RedisReply p = pool_->command({"XPENDING", "voxd:queue", "voxd:workers", "-", "+", "10"});
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p.at(0).at(1).text(), "owner");
+  EXPECT_EQ(p.at(0).at(3).integer(), 1) << "delivered once";
+  owner.ack("s1");
+}
+
 TEST_F(RedisStoreTest, AJobIsSplitOnceAndItsTasksAreCountedAndDroppedOnce) {
   RedisQueueOptions o;
   o.capacity = 1;
@@ -221,8 +271,11 @@ TEST_F(RedisStoreTest, AJobIsSplitOnceAndItsTasksAreCountedAndDroppedOnce) {
   store_->save(record("big", JobState::queued));
   ASSERT_TRUE(a.submit("big"));
   ASSERT_TRUE(a.take(std::chrono::milliseconds(100)));
-  // a's lease lapses: b takes the same entry; both split it.
+  // a's lease lapses: b sees it, watches it a while, takes the same entry;
+  // both split it.
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_FALSE(b.take(std::chrono::milliseconds(10)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
   const auto again = b.take(std::chrono::milliseconds(100));
   ASSERT_TRUE(again);
   ASSERT_EQ(again->id, "big");

@@ -35,7 +35,7 @@ void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from
   const Grid& grid = in.job.grid;
   JobControl* control = in.control;
   const double slabs_total = static_cast<double>(grid.dims.z);
-  read_rle_bit_slabs(in.output.rle->bytes(), replay_bit_slab_layers(grid),
+  read_rle_bit_slabs(*in.output.rle->open(), replay_bit_slab_layers(grid),
                      [&](std::int64_t k0, const BitVolume& slab) {
                        if (control) control->check_cancelled();
                        consume(k0, slab);
@@ -50,7 +50,7 @@ void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume) {
   const Grid& grid = in.job.grid;
   JobControl* control = in.control;
   const double slabs_total = static_cast<double>(grid.dims.z);
-  read_rle_value_slabs(in.output.values_rle->bytes(), replay_value_slab_layers(grid),
+  read_rle_value_slabs(*in.output.values_rle->open(), replay_value_slab_layers(grid),
                        [&](std::int64_t k0, const ValueVolume& slab) {
                          if (control) control->check_cancelled();
                          consume(k0, slab);
