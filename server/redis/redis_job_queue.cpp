@@ -106,31 +106,47 @@ bool RedisJobQueue::submit(const std::string& id) {
   return !r.is_nil();
 }
 
+// An entry is taken over only when its owner has stayed silent for a lease
+// by this replica's own clock, not Redis's: Redis counts an entry's idle
+// time through a stall of its own, so right after Redis resumes every
+// running job looks abandoned though its owner renews at its next tick.
+// Entries idle past the lease are watched from the first time they are seen;
+// one still idle past the lease half a lease later (its owner would have
+// renewed it by then: renewals come every third of a lease) is claimed, and
+// XCLAIM's own idle check makes the claim atomic against a renewal.
 std::optional<TakenJob> RedisJobQueue::claim_stale() {
+  const auto now = std::chrono::steady_clock::now();
   {
     // Once a second per replica is enough: a lease is many seconds.
     std::lock_guard lock(mutex_);
-    const auto now = std::chrono::steady_clock::now();
     if (now - last_claim_ < std::chrono::seconds(1)) return std::nullopt;
     last_claim_ = now;
   }
-  std::string cursor;
-  {
-    std::lock_guard lock(mutex_);
-    cursor = claim_cursor_;
-  }
   const std::string idle = std::to_string(options_.lease.count());
-  const RedisReply r =
-      with_group({"XAUTOCLAIM", stream_, group_, options_.consumer, idle, cursor, "COUNT", "1"});
+  const RedisReply pending = with_group({"XPENDING", stream_, group_, "IDLE", idle, "-", "+", "16"});
+  std::vector<std::string> ready;
   {
     std::lock_guard lock(mutex_);
-    claim_cursor_ = std::string(r.at(0).text());
+    std::map<std::string, std::chrono::steady_clock::time_point> still;
+    for (std::size_t i = 0; i < pending.size(); ++i) {
+      const RedisReply p = pending.at(i);
+      const std::string entry(p.at(0).text());
+      if (p.at(1).text() == options_.consumer) continue;  // this replica's own: it renews them
+      const auto seen = stale_since_.find(entry);
+      const auto first = seen == stale_since_.end() ? now : seen->second;
+      still[entry] = first;
+      if (now - first >= options_.lease / 2) ready.push_back(entry);
+    }
+    stale_since_.swap(still);  // entries renewed or ended meanwhile are forgotten
   }
-  const RedisReply claimed = r.at(1);
-  for (std::size_t i = 0; i < claimed.size(); ++i) {
-    const RedisReply entry = claimed.at(i);
-    if (entry.is_nil() || !entry.is_array()) continue;
-    const std::string entry_id(entry.at(0).text());
+  for (const std::string& entry_id : ready) {
+    const RedisReply claimed = with_group({"XCLAIM", stream_, group_, options_.consumer, idle, entry_id});
+    if (claimed.size() == 0) continue;  // renewed, ended or claimed by another since the look
+    const RedisReply entry = claimed.at(0);
+    if (entry.is_nil() || !entry.is_array()) {
+      acknowledge(entry_id);  // deleted from the stream (a cancelled job)
+      continue;
+    }
     const std::string job = job_of(entry);
     if (job.empty()) {
       acknowledge(entry_id);
@@ -138,9 +154,10 @@ std::optional<TakenJob> RedisJobQueue::claim_stale() {
     }
     const RedisReply p = with_group({"XPENDING", stream_, group_, entry_id, entry_id, "1"});
     const int deliveries = p.size() > 0 ? static_cast<int>(p.at(0).at(3).integer()) : 2;
-    spdlog::warn("redis queue: job {} was left by its worker (lease of {} ms expired): taking it over, delivery {}", job,
-                 options_.lease.count(), deliveries);
+    spdlog::warn("redis queue: job {} was left by its worker (silent for a lease of {} ms): taking it over, delivery {}",
+                 job, options_.lease.count(), deliveries);
     std::lock_guard lock(mutex_);
+    stale_since_.erase(entry_id);
     entries_[job] = entry_id;
     return TakenJob{job, deliveries};
   }

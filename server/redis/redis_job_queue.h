@@ -64,7 +64,9 @@ class RedisJobQueue final : public JobQueue {
   std::mutex mutex_;
   std::map<std::string, std::string> entries_;  // job id -> stream entry, of jobs taken here
   std::chrono::steady_clock::time_point last_claim_{}, last_renew_{};
-  std::string claim_cursor_ = "0-0";
+  // Other replicas' entries seen idle past the lease, and since when (this
+  // replica's clock): claim_stale takes one over only after watching it.
+  std::map<std::string, std::chrono::steady_clock::time_point> stale_since_;
 };
 
 }  // namespace voxd::server
