@@ -21,6 +21,7 @@
 #include "server/http/http_api.h"
 #include "server/http/metrics.h"
 #include "server/http/routes.h"
+#include "server/http/stream_requests.h"
 #include "server/cli/cli_serve_config.h"
 #include "server/jobs/job_manager.h"
 #include "server/jobs/replicated_backend.h"

@@ -10,6 +10,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
+#include <charconv>
+#include <climits>
 #include <atomic>
 #include <condition_variable>
 #include <cstring>
@@ -49,6 +52,7 @@ class Connection final : public httplib::Stream {
     deadline_ = deadline;
     in_body_ = false;
     close_after_ = false;
+    status_ = 0;
   }
   // `announced` is what the head says the body holds: its Content-Length (0
   // without one), or for a chunked body at least its last chunk's 5 bytes.
@@ -65,7 +69,12 @@ class Connection final : public httplib::Stream {
   // for every early answer (a 401, a preflight, a 413, a refused part) without
   // each having to remember it, and for a request httplib answered itself
   // before the body's start was known (a 400 or 414 on a broken head).
-  bool must_close() const { return close_after_ || !in_body_ || body_bytes_ < body_announced_; }
+  // And an error answer to a request with a body closes it too: httplib
+  // answers 400 when it cannot read a body (a broken chunk) and leaves the
+  // rest where the next request would be parsed from.
+  bool must_close() const {
+    return close_after_ || !in_body_ || body_bytes_ < body_announced_ || (body_announced_ > 0 && status_ >= 400);
+  }
   bool has_buffered() const { return pos_ < len_; }
   std::string_view buffered() const { return {buffer_.data() + pos_, len_ - pos_}; }
   int fd() const { return fd_; }
@@ -100,6 +109,10 @@ class Connection final : public httplib::Stream {
   }
 
   ssize_t write(const char* ptr, size_t size) override {
+    // The status of the answer, from its status line (httplib writes the
+    // head in one piece; a 100 Continue comes first and is not final).
+    if (status_ < 200 && size >= 12 && std::string_view(ptr, 9) == "HTTP/1.1 ")
+      status_ = (ptr[9] - '0') * 100 + (ptr[10] - '0') * 10 + (ptr[11] - '0');
     std::size_t done = 0;
     while (done < size) {
       if (!wait(POLLOUT, limits_.write_timeout.count() * 1000)) return done ? static_cast<ssize_t>(done) : -1;
@@ -158,10 +171,12 @@ class Connection final : public httplib::Stream {
   Clock::time_point body_start_;
   std::size_t body_bytes_ = 0;
   std::uint64_t body_announced_ = 0;
+  int status_ = 0;  // of the answer being written (0 before its status line)
   bool close_after_ = false;
 };
 
 thread_local Connection* current_connection = nullptr;
+thread_local bool on_stream_thread_flag = false;
 
 // A whole problem response written straight to a socket that no HTTP thread
 // serves (never blocks: what does not fit the socket buffer is dropped).
@@ -180,6 +195,74 @@ void send_canned(int fd, int status, const char* reason, const char* slug, const
 // The end of a request head in what has arrived so far.
 bool has_complete_head(std::string_view data) {
   return data.find("\r\n\r\n") != std::string_view::npos || data.find("\n\n") != std::string_view::npos;
+}
+
+bool is_token_char(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+         std::string_view("!#$%&'*+-.^_`|~").find(c) != std::string_view::npos;
+}
+
+// Why a request head is not strict HTTP/1.1 (RFC 9112), or null when it is:
+// lines end in CRLF; the request line is METHOD SP TARGET SP HTTP/1.x; each
+// header line is a token, a colon, and a value without CR, LF or NUL (no
+// line folding). `data` may go on past the head (a body, or a head cut by the
+// peer's close: then it is incomplete, which httplib answers itself).
+bool equal_ignoring_case(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+std::string_view trim_blanks(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+const char* head_syntax_error(std::string_view data) {
+  std::size_t at = 0;
+  bool first = true;
+  int lengths = 0, codings = 0;
+  for (;;) {
+    const std::size_t lf = data.find('\n', at);
+    if (lf == std::string_view::npos) return nullptr;  // cut short: httplib refuses it
+    if (lf == at || data[lf - 1] != '\r') return "a line of the request head does not end in CRLF";
+    const std::string_view line = data.substr(at, lf - 1 - at);
+    at = lf + 1;
+    if (line.find('\r') != std::string_view::npos || line.find('\0') != std::string_view::npos)
+      return "a line of the request head holds a CR or NUL";
+    if (first) {
+      first = false;
+      const std::size_t sp1 = line.find(' '), sp2 = line.rfind(' ');
+      if (sp1 == std::string_view::npos || sp2 == sp1 || sp1 == 0 || sp2 == sp1 + 1 ||
+          line.substr(sp2 + 1, 7) != "HTTP/1." || line.size() != sp2 + 9 ||
+          !std::all_of(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(sp1), is_token_char) ||
+          line.substr(sp1 + 1, sp2 - sp1 - 1).find_first_of(" \t") != std::string_view::npos)
+        return "the request line is not METHOD SP TARGET SP HTTP/1.1";
+      continue;
+    }
+    if (line.empty()) {  // the end of the head
+      if (lengths > 1 || (lengths == 1 && codings > 0))
+        return "the request gives its body's length twice (two Content-Length headers, or Content-Length with "
+               "Transfer-Encoding): send one";
+      return nullptr;
+    }
+    const std::size_t colon = line.find(':');
+    if (colon == 0 || colon == std::string_view::npos ||
+        !std::all_of(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(colon), is_token_char))
+      return "a header line is not NAME: VALUE (a token, then a colon; no space before it, no folding)";
+    // The headers that frame the body are read one way only.
+    const std::string_view name = line.substr(0, colon), value = trim_blanks(line.substr(colon + 1));
+    if (equal_ignoring_case(name, "Content-Length")) {
+      ++lengths;
+      if (value.empty() || value.size() > 19 || !std::all_of(value.begin(), value.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        return "Content-Length is not a number of bytes";
+    } else if (equal_ignoring_case(name, "Transfer-Encoding")) {
+      ++codings;
+      if (codings > 1 || !equal_ignoring_case(value, "chunked"))
+        return "the only Transfer-Encoding this service reads is a single \"chunked\"";
+    }
+  }
 }
 
 }  // namespace
@@ -311,7 +394,7 @@ struct ConnectionServer::Impl {
           continue;
         }
         auto it = waiting.find(fd);
-        if (it != waiting.end()) examine(it);
+        if (it != waiting.end()) examine(it, (events[static_cast<std::size_t>(i)].events & (EPOLLRDHUP | EPOLLHUP)) != 0);
       }
       expire();
     }
@@ -351,7 +434,8 @@ struct ConnectionServer::Impl {
     waiting.erase(it);
   }
 
-  void examine(std::unordered_map<int, Waiting>::iterator it) {
+  // `hung_up`: the client has closed its side (what it sent is all there is).
+  void examine(std::unordered_map<int, Waiting>::iterator it, bool hung_up = false) {
     Waiting& w = it->second;
     const int fd = it->first;
     if (w.phase == Phase::lingering) {
@@ -386,9 +470,23 @@ struct ConnectionServer::Impl {
     }
     // A head longer than the peek is left to httplib's own limits; the client
     // closing its side after a whole head still gets its answer.
-    const bool peer_done = r == 0 || failed;
-    if (has_complete_head(data) || static_cast<std::size_t>(std::max<ssize_t>(r, 0)) == head.size() || peer_done)
-      dispatch(it, is_stream && is_stream(std::string_view(data).substr(0, data.find_first_of("\r\n"))));
+    const bool peer_done = r == 0 || failed || hung_up;
+    const bool complete = has_complete_head(data);
+    if (!complete && static_cast<std::size_t>(std::max<ssize_t>(r, 0)) == head.size()) {
+      send_canned(fd, 431, "Request Header Fields Too Large", "header-too-large", "Request head too large",
+                  "the request line and headers take more than 16 KiB; send a shorter head", false);
+      return linger(it);
+    }
+    if (!complete && !peer_done) return;
+    // Only a head every reader frames the same way goes to httplib, which is
+    // lenient (it skips header lines it cannot read): a proxy in front could
+    // frame such a head otherwise, and what one takes for a body the other
+    // takes for a request.
+    if (const char* why = head_syntax_error(data)) {
+      send_canned(fd, 400, "Bad Request", "bad-request", "Bad request", why, false);
+      return linger(it);
+    }
+    dispatch(it, is_stream && is_stream(std::string_view(data).substr(0, data.find_first_of("\r\n"))));
   }
 
   // After an answer that ends the connection while the client may still be
@@ -451,6 +549,7 @@ struct ConnectionServer::Impl {
   }
 
   void work_streams() {
+    on_stream_thread_flag = true;
     for (;;) {
       Waiting w;
       {
@@ -581,9 +680,28 @@ bool ConnectionServer::process_and_close_socket(socket_t sock) {
   return true;
 }
 
-void begin_request_body(std::uint64_t content_length, bool chunked) {
-  if (current_connection) current_connection->begin_body(content_length, chunked);
+bool ambiguous_body_length(const httplib::Request& req) {
+  const std::size_t lengths = req.headers.count("Content-Length");
+  return lengths > 1 || (lengths == 1 && req.has_header("Transfer-Encoding"));
 }
+
+void begin_request_body(const httplib::Request& req) {
+  if (!current_connection) return;
+  // A length that is not plain digits is as good as unknown: whatever httplib
+  // made of it, the connection is not trusted after the answer.
+  std::uint64_t length = 0;
+  if (req.has_header("Content-Length")) {
+    const std::string text = req.get_header_value("Content-Length");
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), length);
+    if (text.empty() || error != std::errc() || end != text.data() + text.size()) length = UINT64_MAX;
+  }
+  // Any Transfer-Encoding counts as a body, even one httplib does not read
+  // (it reads only exactly "chunked"), so that one closes the connection too.
+  current_connection->begin_body(length, req.has_header("Transfer-Encoding"));
+  if (ambiguous_body_length(req)) current_connection->close_after();
+}
+
+bool on_stream_thread() { return on_stream_thread_flag; }
 
 void close_connection_after_response() {
   if (current_connection) current_connection->close_after();

@@ -66,10 +66,16 @@ class ConnectionServer : public httplib::Server {
 };
 
 // For the handler running on this thread (no effect outside a request):
-// the request head is done, its body is read from now on. The head announced
-// `content_length` bytes (0 when it gave none), or a chunked body. Whatever
-// part of it the answer leaves unread, the connection closes after it.
-void begin_request_body(std::uint64_t content_length, bool chunked);
+// the request head is done, its body is read from now on. Whatever part of
+// the body the head announces (Content-Length, or any Transfer-Encoding) the
+// answer leaves unread, the connection closes after it; and after a head
+// whose length is ambiguous (two Content-Lengths, or one with a
+// Transfer-Encoding: RFC 9112 6.3) in any case.
+void begin_request_body(const httplib::Request& req);
+// Whether the head's body length is ambiguous, as above.
+bool ambiguous_body_length(const httplib::Request& req);
+// Whether this thread is one of the stream threads (a long-lived request).
+bool on_stream_thread();
 // The body was left unread: close the connection after the response.
 void close_connection_after_response();
 // Whether the client has closed or reset its side of the connection.

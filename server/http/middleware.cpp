@@ -51,9 +51,7 @@ void start_request(const Request& req, Response& res) {
   // The head is parsed: the body's deadline applies from here, and a body the
   // answer leaves unread closes the connection (a 401 or a preflight answers
   // before httplib reads it).
-  // Any Transfer-Encoding counts as a body, even one httplib does not read
-  // (only exactly "chunked" is), so that one closes the connection too.
-  begin_request_body(declared_length(req).value_or(0), req.has_header("Transfer-Encoding"));
+  begin_request_body(req);
   current_request.start = std::chrono::steady_clock::now();
   const std::string client_id = req.get_header_value("X-Request-Id");
   current_request.request_id = is_plain_request_id(client_id) ? client_id : new_request_id();

@@ -37,9 +37,6 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs);
 void install_mode_routes(RouteTable& routes, JobManager& jobs);
 void install_event_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics);
 void install_web_routes(RouteTable& routes);
-// Whether a request line ("GET /v1/jobs/ID/events?x HTTP/1.1") asks for an
-// event stream: the connection server runs those on its stream threads.
-bool is_event_stream_request(std::string_view request_line);
 void install_voxelize_route(RouteTable& routes, JobManager& jobs, Metrics& metrics, const ServeConfig& config,
                             const api::JsonLimits& params_limits);
 

@@ -57,7 +57,8 @@ TEST_F(HttpEdge, NothingAfterARefusedBodyIsParsedAsARequest) {
   const std::string chunked_smuggle = "5\r\nhello\r\n0\r\n\r\n" + smuggled;
   struct Case {
     std::string name, head, body, expect;
-  } cases[] = {
+  };
+  std::vector<Case> cases = {
       {"401 with a Content-Length body",
        "POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: application/octet-stream\r\nContent-Length: " +
            std::to_string(smuggled.size()) + "\r\n\r\n",
@@ -72,9 +73,19 @@ TEST_F(HttpEdge, NothingAfterARefusedBodyIsParsedAsARequest) {
        "OPTIONS /v1/jobs HTTP/1.1\r\nHost: t\r\nOrigin: https://app.example\r\nAccess-Control-Request-Method: POST\r\n"
        "Content-Length: " + std::to_string(smuggled.size()) + "\r\n\r\n",
        smuggled, "HTTP/1.1 204"},
-      {"401 with a transfer coding httplib does not read",
-       "POST /v1/jobs HTTP/1.1\r\nHost: t\r\nTransfer-Encoding: gzip, chunked\r\n\r\n", chunked_smuggle, "HTTP/1.1 401"},
+      // Refused before httplib sees it: it reads only "chunked".
+      {"a transfer coding httplib does not read",
+       "POST /v1/jobs HTTP/1.1\r\nHost: t\r\nTransfer-Encoding: gzip, chunked\r\n\r\n", chunked_smuggle, "HTTP/1.1 400"},
   };
+  // Two readers could frame these two ways (RFC 9112 6.3): refused, closed.
+  cases.push_back({"two Content-Lengths",
+                   "POST /v1/jobs HTTP/1.1\r\nHost: t\r\nAuthorization: Bearer k1\r\nContent-Length: 0\r\nContent-Length: " +
+                       std::to_string(smuggled.size()) + "\r\n\r\n",
+                   smuggled, "HTTP/1.1 400"});
+  cases.push_back({"Content-Length with Transfer-Encoding",
+                   "POST /v1/jobs HTTP/1.1\r\nHost: t\r\nAuthorization: Bearer k1\r\nContent-Length: 3\r\n"
+                   "Transfer-Encoding: chunked\r\n\r\n",
+                   chunked_smuggle, "HTTP/1.1 400"});
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     RawSocket s(server_->port());
@@ -150,8 +161,16 @@ TEST_F(HttpEdge, EventStreamsInAnySpellingLeaveTheHttpThreadsFree) {
   std::string first;
   streams.push_back(open_stream(server_->port(), "GET " + encoded_events_path(id) + " HTTP/1.1\r\nHost: t\r\n\r\n", &first));
   EXPECT_EQ(first.rfind("HTTP/1.1 200", 0), 0u) << first;
-  streams.push_back(open_stream(server_->port(), "GET  /v1/jobs/" + id + "/event%73?x=1  HTTP/1.1\r\nHost: t\r\n\r\n", &first));
+  streams.push_back(open_stream(server_->port(), "GET /v1/jobs/" + id + "/event%73?x=1 HTTP/1.1\r\nHost: t\r\n\r\n", &first));
   EXPECT_EQ(first.rfind("HTTP/1.1 200", 0), 0u) << first;
+  // A line that is not strict HTTP/1.1 (httplib would read runs of spaces as
+  // one) is refused before any thread takes it.
+  {
+    RawSocket odd(server_->port());
+    odd.send("GET  /v1/jobs/" + id + "/events  HTTP/1.1\r\nHost: t\r\n\r\n");
+    const std::string refused = odd.read_until_closed(5s);
+    EXPECT_EQ(refused.rfind("HTTP/1.1 400", 0), 0u) << refused;
+  }
   // Pipelined behind a plain request: both answers come, the stream stays.
   streams.push_back(open_stream(server_->port(),
                                 "GET /healthz HTTP/1.1\r\nHost: t\r\n\r\nGET /v1/jobs/" + id + "/events HTTP/1.1\r\nHost: t\r\n\r\n",

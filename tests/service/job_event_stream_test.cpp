@@ -8,6 +8,7 @@
 
 #include "server/http/job_event_stream.h"
 #include "server/http/routes.h"
+#include "server/http/stream_requests.h"
 
 namespace voxd::server {
 namespace {
@@ -124,6 +125,14 @@ TEST(EventStreamRequest, OnlyAGetOfAJobsEventsIsAStream) {
   EXPECT_FALSE(is_event_stream_request("GET /x/v1/jobs/" + id + "/events HTTP/1.1"));
   EXPECT_FALSE(is_event_stream_request(""));
   EXPECT_FALSE(is_event_stream_request("GET"));
+  // As httplib reads the line (issue #37, finding 2): the path decoded, runs
+  // of spaces and tabs around the words.
+  EXPECT_TRUE(is_event_stream_request("GET /v1/jobs/%" + std::string("61") + id.substr(1) + "/events HTTP/1.1"));
+  EXPECT_TRUE(is_event_stream_request("GET /v1/jobs/" + id + "/event%73 HTTP/1.1"));
+  EXPECT_TRUE(is_event_stream_request("GET /v1/jobs/" + id + "%2Fevents HTTP/1.1"));
+  EXPECT_TRUE(is_event_stream_request("GET  \t/v1/jobs/" + id + "/events\t  HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("GET /v1/jobs/" + id + "/events%3F HTTP/1.1"));
+  EXPECT_FALSE(is_event_stream_request("HEAD /v1/jobs/" + id + "/events HTTP/1.1"));
 }
 
 }  // namespace
