@@ -239,6 +239,11 @@ const char* head_syntax_error(std::string_view data) {
           !std::all_of(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(sp1), is_token_char) ||
           line.substr(sp1 + 1, sp2 - sp1 - 1).find_first_of(" \t") != std::string_view::npos)
         return "the request line is not METHOD SP TARGET SP HTTP/1.1";
+      // A path ("/..."), or "*" for OPTIONS: httplib takes the first
+      // non-empty piece between '?'s for the path, so "?/v1/jobs/..." would
+      // be routed as "/v1/jobs/..." where a proxy sees no such path.
+      const std::string_view target = line.substr(sp1 + 1, sp2 - sp1 - 1);
+      if (target.front() != '/' && target != "*") return "the request target is not a path starting with /";
       continue;
     }
     if (line.empty()) {  // the end of the head

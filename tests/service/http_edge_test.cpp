@@ -165,11 +165,12 @@ TEST_F(HttpEdge, EventStreamsInAnySpellingLeaveTheHttpThreadsFree) {
   EXPECT_EQ(first.rfind("HTTP/1.1 200", 0), 0u) << first;
   // A line that is not strict HTTP/1.1 (httplib would read runs of spaces as
   // one) is refused before any thread takes it.
-  {
+  // Nor a target that is not a path (httplib routes "?/v1/..." as "/v1/...").
+  for (const std::string& line : {"GET  /v1/jobs/" + id + "/events  HTTP/1.1", "GET ?/v1/jobs/" + id + "/events HTTP/1.1"}) {
     RawSocket odd(server_->port());
-    odd.send("GET  /v1/jobs/" + id + "/events  HTTP/1.1\r\nHost: t\r\n\r\n");
+    odd.send(line + "\r\nHost: t\r\n\r\n");
     const std::string refused = odd.read_until_closed(5s);
-    EXPECT_EQ(refused.rfind("HTTP/1.1 400", 0), 0u) << refused;
+    EXPECT_EQ(refused.rfind("HTTP/1.1 400", 0), 0u) << line << ": " << refused;
   }
   // Pipelined behind a plain request: both answers come, the stream stays.
   streams.push_back(open_stream(server_->port(),
@@ -213,7 +214,8 @@ TEST_F(HttpEdge, ABurstOfStreamsAllStartAtOnce) {
     std::vector<std::unique_ptr<RawSocket>> earlier;
     for (int i = 0; i < 20; ++i)
       earlier.push_back(open_stream(server_->port(), "GET /v1/jobs/" + first + "/events HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n"));
-    for (auto& s : earlier) EXPECT_NE(s->read_until_closed(60s).find("event: end"), std::string::npos);
+    wait_for_job(http(), first, 600);  // however slow the build (a sanitizer's is)
+    for (auto& s : earlier) EXPECT_NE(s->read_until_closed(30s).find("event: end"), std::string::npos);
   }
   ASSERT_FALSE(job_finished(id)) << "the queued job ended too soon: make the jobs slower";
   constexpr int kStreams = 40;
