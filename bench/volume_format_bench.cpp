@@ -7,9 +7,12 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <span>
 
 #include <benchmark/benchmark.h>
 
+#include "voxd/byte_source.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
 
 namespace {
@@ -109,6 +112,50 @@ void BM_BinvoxDecodeSphere(benchmark::State& s) {
   for (auto _ : s) benchmark::DoNotOptimize(voxd::read_binvox(sink.data));
 }
 
+// A stored result replayed slab by slab (voxd/encode/rle_slabs.h), as a
+// streamed job's /volume and analyses do: from memory (a mapped file), and
+// from a source that hands out 1 MiB at a time and is not in memory (the
+// Redis store's slices), to see what the buffered window costs.
+class SliceSource final : public voxd::ByteSource {
+ public:
+  explicit SliceSource(std::span<const std::uint8_t> data) : data_(data) {}
+  std::size_t read(std::uint8_t* out, std::size_t size) override {
+    const std::size_t n = std::min({size, std::size_t{1} << 20, data_.size() - at_});
+    std::copy_n(data_.data() + at_, n, out);
+    at_ += n;
+    return n;
+  }
+
+ private:
+  std::span<const std::uint8_t> data_;
+  std::size_t at_ = 0;
+};
+
+void replay_bench(benchmark::State& state, const BitVolume& volume, bool sliced) {
+  voxd::VectorSink sink;
+  voxd::write_rle(volume, sink);
+  std::uint64_t filled = 0;
+  for (auto _ : state) {
+    filled = 0;
+    auto count = [&](std::int64_t, const BitVolume& slab) { filled += slab.count(); };
+    if (sliced) {
+      SliceSource source(sink.data);
+      voxd::read_rle_bit_slabs(source, 16, count);
+    } else {
+      voxd::read_rle_bit_slabs(sink.data, 16, count);
+    }
+  }
+  benchmark::DoNotOptimize(filled);
+  state.counters["rle_MiB"] = static_cast<double>(sink.data.size()) / (1 << 20);
+  state.counters["voxels/s"] = benchmark::Counter(static_cast<double>(volume.grid().voxel_count()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_RleReplaySphereFromMemory(benchmark::State& s) { replay_bench(s, sphere(s.range(0)), false); }
+void BM_RleReplaySphereFromSlices(benchmark::State& s) { replay_bench(s, sphere(s.range(0)), true); }
+void BM_RleReplayRandomFromMemory(benchmark::State& s) { replay_bench(s, random_bits(s.range(0)), false); }
+void BM_RleReplayRandomFromSlices(benchmark::State& s) { replay_bench(s, random_bits(s.range(0)), true); }
+
 }  // namespace
 
 BENCHMARK(BM_RleEncodeSphere)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -119,3 +166,7 @@ BENCHMARK(BM_RleEncodeRandom)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealT
 BENCHMARK(BM_BinvoxEncodeRandom)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RleDecodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_BinvoxDecodeSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RleReplaySphereFromMemory)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RleReplaySphereFromSlices)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RleReplayRandomFromMemory)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RleReplayRandomFromSlices)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
