@@ -5,6 +5,7 @@
 #include "voxd/bit_slabs.h"
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
+#include "voxd/byte_source.h"
 #include "voxd/dense_volume.h"
 #include "voxd/enum_names.h"
 #include "voxd/error.h"
