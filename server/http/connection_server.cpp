@@ -10,15 +10,13 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cctype>
 #include <charconv>
-#include <climits>
-#include <atomic>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
 #include <mutex>
-#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -202,11 +200,6 @@ bool is_token_char(char c) {
          std::string_view("!#$%&'*+-.^_`|~").find(c) != std::string_view::npos;
 }
 
-// Why a request head is not strict HTTP/1.1 (RFC 9112), or null when it is:
-// lines end in CRLF; the request line is METHOD SP TARGET SP HTTP/1.x; each
-// header line is a token, a colon, and a value without CR, LF or NUL (no
-// line folding). `data` may go on past the head (a body, or a head cut by the
-// peer's close: then it is incomplete, which httplib answers itself).
 bool equal_ignoring_case(std::string_view a, std::string_view b) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
            return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
@@ -219,6 +212,11 @@ std::string_view trim_blanks(std::string_view s) {
   return s;
 }
 
+// Why a request head is not strict HTTP/1.1 (RFC 9112), or null when it is:
+// lines end in CRLF; the request line is METHOD SP TARGET SP HTTP/1.x; each
+// header line is a token, a colon, and a value without CR, LF or NUL (no
+// line folding). `data` may go on past the head (a body, or a head cut by the
+// peer's close: then it is incomplete, which httplib answers itself).
 const char* head_syntax_error(std::string_view data) {
   std::size_t at = 0;
   bool first = true;
@@ -473,8 +471,8 @@ struct ConnectionServer::Impl {
       w.phase = Phase::head;
       w.deadline = Clock::now() + limits.header_timeout;
     }
-    // A head longer than the peek is left to httplib's own limits; the client
-    // closing its side after a whole head still gets its answer.
+    // A head longer than the peek cannot be checked: 431. The client closing
+    // its side after a whole head still gets its answer.
     const bool peer_done = r == 0 || failed || hung_up;
     const bool complete = has_complete_head(data);
     if (!complete && static_cast<std::size_t>(std::max<ssize_t>(r, 0)) == head.size()) {
