@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "server/cli/cli.h"
+#include "server/cli/cli_args.h"
 #include "server/draco_isolation.h"
 #include "server/pipeline/job_pipeline.h"
 #include "server/http/connection_server.h"
@@ -28,6 +29,10 @@
 #include "server/redis/redis_job_queue.h"
 #include "server/redis/redis_job_store.h"
 #include "server/log_safe.h"
+#include "server/redis/redis_webhook_outbox.h"
+#include "server/tenants/tenant_directory.h"
+#include "server/webhooks/local_webhook_outbox.h"
+#include "server/webhooks/webhook_dispatcher.h"
 #include "voxd/error.h"
 
 namespace voxd::cli {
@@ -56,6 +61,7 @@ int serve_command(int argc, char** argv) {
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGTERM);
   sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGHUP);  // reads the tenants file again
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
   // Buffers of 1 MiB and more (uploads, decoded meshes, analyses' arrays)
@@ -86,16 +92,13 @@ int serve_command(int argc, char** argv) {
   jc.min_free_disk = config.min_free_disk;
   jc.max_job_memory = config.max_job_memory;
   jc.result_ttl = std::chrono::seconds(config.result_ttl);
-  jc.on_state_change = [&](const JobSnapshot& s) {
-    if (s.state == JobState::succeeded || s.state == JobState::failed)
-      for (const auto& [stage, seconds] : s.timings) metrics.observe_stage(stage, seconds);
-    if (config.log_format == "json")
-      spdlog::info(nlohmann::json{{"event", "job"}, {"id", s.id}, {"state", to_string(s.state)},
-                                  {"error", s.failure ? s.failure->detail : ""}}
-                       .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
-    else
-      spdlog::info("job {} {}{}", s.id, to_string(s.state), s.failure ? ": " + log_safe(s.failure->detail) : "");
-  };
+  std::unique_ptr<TenantDirectory> tenants;
+  try {
+    tenants = std::make_unique<TenantDirectory>(config.tenants_file, config.api_keys, config.webhook_hosts, config.webhook_secret);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--tenants: ") + e.what());
+  }
+  std::shared_ptr<WebhookOutbox> outbox;
   if (!config.redis_url.empty()) {
     // Scale-out: queue, records and results on the shared Redis.
     char host[256] = {};
@@ -121,10 +124,25 @@ int serve_command(int argc, char** argv) {
     parts.slab_tasks = store;
     parts.slab_task_bytes = config.slab_task_bytes;
     jc.backend = replicated_backend(std::move(parts));
+    outbox = std::make_shared<RedisWebhookOutbox>(pool, ro.prefix);
     jc.max_result_bytes = config.max_result_bytes;
     log("shared backend: Redis at " + pool->url().redacted() + " as replica " + replica +
         (store->reachable() ? "" : " (not reachable yet: not ready until it is)"));
   }
+  if (!outbox) outbox = std::make_shared<LocalWebhookOutbox>(std::filesystem::path(config.data_dir) / "webhooks");
+  // Declared before the jobs: it takes their ends until they are shut down.
+  WebhookDispatcher webhooks(outbox, *tenants, metrics);
+  jc.on_state_change = [&](const JobSnapshot& s) {
+    webhooks.job_ended(s);
+    if (s.state == JobState::succeeded || s.state == JobState::failed)
+      for (const auto& [stage, seconds] : s.timings) metrics.observe_stage(stage, seconds);
+    if (config.log_format == "json")
+      spdlog::info(nlohmann::json{{"event", "job"}, {"id", s.id}, {"state", to_string(s.state)},
+                                  {"error", s.failure ? s.failure->detail : ""}}
+                       .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+    else
+      spdlog::info("job {} {}{}", s.id, to_string(s.state), s.failure ? ": " + log_safe(s.failure->detail) : "");
+  };
   JobManager jobs(jc);
 
   ConnectionLimits limits;
@@ -140,7 +158,7 @@ int serve_command(int argc, char** argv) {
   limits.keep_alive_max_count = 1000;  // batch clients reuse one connection
   ConnectionServer server(limits);
   server.set_stream_requests(is_event_stream_request);
-  HttpApi api(config, jobs, metrics);
+  HttpApi api(config, jobs, metrics, *tenants);
   api.install(server);
   server.set_payload_max_length(config.max_upload_bytes);
   // Small answers must not wait for the peer's delayed ACK (Nagle): it cost
@@ -165,7 +183,7 @@ int serve_command(int argc, char** argv) {
 
   std::thread stopper([&] {
     int signal = 0;
-    sigwait(&stop_signals, &signal);
+    while (sigwait(&stop_signals, &signal) == 0 && signal == SIGHUP) tenants->reload();
     log(std::string("received ") + (signal == SIGTERM ? "SIGTERM" : "SIGINT") + ": draining");
     api.set_draining();
     jobs.shutdown(std::chrono::seconds(config.shutdown_grace));

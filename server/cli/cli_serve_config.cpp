@@ -121,6 +121,19 @@ const std::vector<Option>& options() {
       {"api-keys", "comma-separated bearer keys required on /v1 routes",
        [](ServeConfig& c, const std::string& v, const std::string&) { c.api_keys = to_list(v); },
        [](const ServeConfig& c) { return c.api_keys.empty() ? std::string() : std::string("(set)"); }},
+      {"tenants", "JSON key file: tenants, their hashed keys, quotas, admin role and webhook secrets, and the webhook allow-list "
+                  "(docs/security.md); read again when it changes and on SIGHUP",
+       [](ServeConfig& c, const std::string& v, const std::string&) { c.tenants_file = v; },
+       [](const ServeConfig& c) { return c.tenants_file; }},
+      {"webhook-hosts", "comma-separated host or host:port that job callbacks may go to (beside the tenants file's)",
+       [](ServeConfig& c, const std::string& v, const std::string&) { c.webhook_hosts = to_list(v); },
+       [](const ServeConfig& c) { return join(c.webhook_hosts); }},
+      {"webhook-secret", "signs the callbacks of jobs submitted without a tenant (--api-keys or no keys); 16 characters at least",
+       [](ServeConfig& c, const std::string& v, const std::string& s) {
+         if (!v.empty() && v.size() < 16) throw UsageError(s + " must be at least 16 characters");
+         c.webhook_secret = v;
+       },
+       [](const ServeConfig& c) { return c.webhook_secret.empty() ? std::string() : std::string("(set)"); }},
       {"log-format", "text or json",
        [](ServeConfig& c, const std::string& v, const std::string& s) {
          if (v != "text" && v != "json") throw UsageError(s + " must be text or json, got '" + v + "'");

@@ -40,6 +40,11 @@ The job runs on the service, with its limits; the flags are voxd voxelize's.
                          http://127.0.0.1:8080)
   --api-key KEY          its API key (default: $VOXD_API_KEY)
   --params JSON|@FILE    job parameters, the same JSON the HTTP API takes
+  --name NAME            the job's name in the service's lists (default:
+                         MESH's file name)
+  --tags JSON            tags, a JSON object of strings: {"project": "pump"}
+  --callback URL         a URL the service calls (signed) when the job ends;
+                         its host must be in the service's allow-list
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ,
   --padding P, --mode M, --inside T, --units U, --streaming S
                          as for voxd voxelize (they override --params)
@@ -145,9 +150,12 @@ class ServiceClient {
     }
   }
 
-  json submit(const std::string& mesh, const std::string& filename, const json& params) {
-    const httplib::MultipartFormDataItems items = {{"mesh", mesh, filename, "application/octet-stream"},
-                                                   {"params", params.dump(), "", "application/json"}};
+  // `labels`: the job's name, tags and callback, as the parts the API takes.
+  json submit(const std::string& mesh, const std::string& filename, const json& params,
+              const std::vector<std::pair<std::string, std::string>>& labels) {
+    httplib::MultipartFormDataItems items = {{"mesh", mesh, filename, "application/octet-stream"},
+                                             {"params", params.dump(), "", "application/json"}};
+    for (const auto& [part, value] : labels) items.push_back({part, value, "", "text/plain"});
     auto res = with_retries([&] { return client_->Post("/v1/jobs", headers(), items); });
     if (!res || (res->status != 200 && res->status != 202)) throw problem_of(res, "POST " + url_ + "/v1/jobs");
     return json::parse(res->body);
@@ -272,7 +280,7 @@ class ProgressBar {
 int submit(int argc, char** argv) {
   std::set<std::string> valued(std::begin(kParamFlags), std::end(kParamFlags));
   valued.insert(std::begin(kOutputFlags), std::end(kOutputFlags));
-  valued.insert({"server", "api-key", "streaming"});
+  valued.insert({"server", "api-key", "streaming", "name", "tags", "callback"});
   Args args(argc, argv, 2, valued, {"json", "report", "no-progress", "help"});
   if (args.has("help")) {
     std::cout << with_format_list(kUsage);
@@ -298,7 +306,10 @@ int submit(int argc, char** argv) {
   const auto bytes = file.bytes();
   const std::string filename = mesh_path.substr(mesh_path.find_last_of('/') == std::string::npos ? 0 : mesh_path.find_last_of('/') + 1);
   const auto start = std::chrono::steady_clock::now();
-  json job = client.submit(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), filename, params);
+  std::vector<std::pair<std::string, std::string>> labels;
+  for (const char* label : {"name", "tags", "callback"})
+    if (auto v = args.value(label)) labels.emplace_back(label, *v);
+  json job = client.submit(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), filename, params, labels);
   const std::string id = job.at("id");
 
   ProgressBar bar(!args.has("no-progress") && isatty(STDERR_FILENO));

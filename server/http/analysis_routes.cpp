@@ -65,7 +65,7 @@ struct KeptAnalysis {
 // worker has made ready; nothing for any other job or request.
 std::optional<KeptAnalysis> ready_while_running(JobManager& jobs, const std::string& id,
                                                 const api::AnalysisRequest& request) {
-  const auto job = jobs.get(id);
+  const auto job = visible_job(jobs, id);
   if (!job || job->state != JobState::running || !job->analyses.is_array()) return std::nullopt;
   for (const auto& entry : job->analyses) {
     if (api::to_json(request) != entry.value("request", nlohmann::json()) || entry.value("state", "") != "ready") continue;

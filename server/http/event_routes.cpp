@@ -37,7 +37,7 @@ void install_event_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics
     const std::string id = req.matches[1];
     // Counted before the first look, so a change between the two is seen.
     const std::uint64_t seen = jobs.wait_for_change(~std::uint64_t{0}, std::chrono::milliseconds(0));
-    const auto job = jobs.get(id);
+    const auto job = visible_job(jobs, id);
     if (!job) throw unknown_job(id);
     // An EventSource reconnects by itself after the stream ends, saying the
     // last event it had: for a job that has ended there is nothing more,

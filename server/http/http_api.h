@@ -7,6 +7,7 @@
 #include "server/http/metrics.h"
 #include "server/http/server_config.h"
 #include "server/jobs/job_manager.h"
+#include "server/tenants/tenant_directory.h"
 
 namespace httplib {
 class Server;
@@ -16,8 +17,8 @@ namespace voxd::server {
 
 class HttpApi {
  public:
-  HttpApi(const ServeConfig& config, JobManager& jobs, Metrics& metrics)
-      : config_(config), jobs_(jobs), metrics_(metrics) {}
+  HttpApi(const ServeConfig& config, JobManager& jobs, Metrics& metrics, TenantDirectory& tenants)
+      : config_(config), jobs_(jobs), metrics_(metrics), tenants_(tenants) {}
   void install(httplib::Server& server);
   // Readiness turns false for the rest of the process (SIGTERM received).
   void set_draining() { draining_ = true; }
@@ -26,6 +27,7 @@ class HttpApi {
   const ServeConfig& config_;
   JobManager& jobs_;
   Metrics& metrics_;
+  TenantDirectory& tenants_;
   api::JsonLimits params_limits_;
   std::atomic<bool> draining_{false};
 };

@@ -2,6 +2,8 @@
 
 #include <httplib.h>
 
+#include "server/http/caller.h"
+#include "server/http/job_labels.h"
 #include "server/http/job_lookup.h"
 #include "server/http/json_response.h"
 #include "server/http/metrics.h"
@@ -32,34 +34,66 @@ std::size_t query_size(const Request& req, const char* name, std::size_t fallbac
                                       std::to_string(hi) + ", got '" + v + "'"));
 }
 
+// A tenant's job quotas, checked before its upload is read (a refused body
+// closes the connection: connection_server.h). Counted at this moment, so
+// submissions racing each other may each pass: a quota is held to within
+// the submissions in flight at once.
+void check_job_quotas(const JobManager& jobs, const Caller& caller, Metrics& metrics) {
+  const TenantQuotas& q = caller.tenant.quotas;
+  if (q.concurrent_jobs == 0 && q.queued_jobs == 0 && q.stored_bytes == 0) return;
+  const TenantUsage u = jobs.usage(caller.tenant.name);
+  auto refuse = [&](const char* quota, const std::string& detail, int retry_after) {
+    metrics.count_rejected("quota-exceeded");
+    metrics.count_tenant_rejected(caller.tenant.name, quota);
+    throw ProblemError(quota_exceeded(detail, retry_after));
+  };
+  if (q.queued_jobs > 0 && u.queued >= q.queued_jobs)
+    refuse("queued_jobs", "your tenant has " + std::to_string(u.queued) + " jobs waiting for a worker, its quota of queued jobs; retry when one has started", 5);
+  if (q.concurrent_jobs > 0 && u.queued + u.running >= q.concurrent_jobs)
+    refuse("concurrent_jobs", "your tenant has " + std::to_string(u.queued + u.running) +
+                                  " jobs queued or running, its quota of concurrent jobs; retry when one has finished", 5);
+  if (q.stored_bytes > 0 && u.stored_bytes >= q.stored_bytes)
+    refuse("stored_bytes", "your tenant's results take " + std::to_string(u.stored_bytes) + " bytes, at or over its quota of " +
+                               std::to_string(q.stored_bytes) + "; delete jobs you no longer need (DELETE /v1/jobs/{id}) or wait for them to expire", 60);
+}
+
 }  // namespace
 
 void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, const ServeConfig& config,
-                        const api::JsonLimits& params_limits) {
+                        const api::JsonLimits& params_limits, TenantDirectory& tenants) {
   routes.post_upload("/v1/jobs", [&](const Request& req, Response& res, const httplib::ContentReader& reader) {
+    const Caller& caller = current_caller();
+    check_job_quotas(jobs, caller, metrics);
     Submission s = read_submission(req, reader, metrics, config.max_upload_bytes, params_limits);
-    const JobSnapshot job = jobs.submit(std::move(s.mesh), s.filename, s.params);
+    const JobLabels labels = job_labels_of(s, caller, tenants);
+    const JobSnapshot job = jobs.submit(std::move(s.mesh), s.filename, s.params, labels);
+    metrics.count_tenant_job(caller.tenant.name);
     res.set_header("Location", "/v1/jobs/" + job.id);
     send_json(res, 202, job_status_json(job));
   });
   routes.get("/v1/jobs", [&](const Request& req, Response& res) {
     const std::size_t offset = query_size(req, "offset", 0, 0, std::size_t{1} << 40);
     const std::size_t limit = query_size(req, "limit", 20, 1, 100);
+    const JobFilter filter = job_filter_of(req, current_caller());
     std::size_t total = 0;
     json list = json::array();
-    for (const auto& job : jobs.list(offset, limit, &total)) list.push_back(job_status_json(job));
+    for (const auto& job : jobs.list(offset, limit, &total, filter)) list.push_back(job_status_json(job));
     const bool more = offset + limit < total;
+    // The next page keeps the filter.
+    std::string filters;
+    if (!filter.name.empty()) filters += "&name=" + httplib::detail::encode_query_param(filter.name);
+    for (const auto& [key, value] : filter.tags) filters += "&tag=" + httplib::detail::encode_query_param(key + ":" + value);
     send_json(res, 200, {{"jobs", list}, {"total", total}, {"offset", offset}, {"limit", limit},
-                         {"next", more ? json("/v1/jobs?offset=" + std::to_string(offset + limit) + "&limit=" + std::to_string(limit)) : json(nullptr)}});
+                         {"next", more ? json("/v1/jobs?offset=" + std::to_string(offset + limit) + "&limit=" + std::to_string(limit) + filters)
+                                       : json(nullptr)}});
   });
 
   routes.get(kJobPath, [&](const Request& req, Response& res) {
-    const auto job = jobs.get(req.matches[1]);
-    if (!job) throw unknown_job(req.matches[1]);
-    send_json(res, 200, job_status_json(*job));
+    send_json(res, 200, job_status_json(known_job(jobs, req.matches[1])));
   });
   routes.del(kJobPath, [&](const Request& req, Response& res) {
     const std::string id = req.matches[1];
+    (void)known_job(jobs, id);  // another tenant's is unknown here
     switch (jobs.cancel_or_delete(id)) {
       case JobManager::RemoveResult::not_found: throw unknown_job(id);
       case JobManager::RemoveResult::deleted: res.status = 204; return;

@@ -19,6 +19,29 @@ void Metrics::count_rejected(const std::string& reason) {
   ++rejected_[reason];
 }
 
+void Metrics::count_tenant_request(const std::string& tenant) {
+  if (tenant.empty()) return;
+  std::lock_guard lock(mutex_);
+  ++tenant_requests_[tenant];
+}
+
+void Metrics::count_tenant_job(const std::string& tenant) {
+  if (tenant.empty()) return;
+  std::lock_guard lock(mutex_);
+  ++tenant_jobs_[tenant];
+}
+
+void Metrics::count_tenant_rejected(const std::string& tenant, const std::string& quota) {
+  if (tenant.empty()) return;
+  std::lock_guard lock(mutex_);
+  ++tenant_rejected_[{tenant, quota}];
+}
+
+void Metrics::count_webhook(const std::string& outcome) {
+  std::lock_guard lock(mutex_);
+  ++webhooks_[outcome];
+}
+
 void Metrics::observe_stage(const std::string& stage, double seconds) {
   std::lock_guard lock(mutex_);
   Histogram& h = stages_[stage];
@@ -59,6 +82,26 @@ std::string Metrics::render(const JobCounts& jobs) const {
       << std::get<2>(key) << "\"} " << n << '\n';
   o << "# HELP voxd_rejected_requests_total Requests refused, by reason.\n# TYPE voxd_rejected_requests_total counter\n";
   for (const auto& [reason, n] : rejected_) o << "voxd_rejected_requests_total{reason=\"" << reason << "\"} " << n << '\n';
+  if (!tenant_requests_.empty()) {
+    o << "# HELP voxd_tenant_requests_total /v1 requests by tenant (names from the tenants file).\n"
+         "# TYPE voxd_tenant_requests_total counter\n";
+    for (const auto& [tenant, n] : tenant_requests_) o << "voxd_tenant_requests_total{tenant=\"" << tenant << "\"} " << n << '\n';
+  }
+  if (!tenant_jobs_.empty()) {
+    o << "# HELP voxd_tenant_jobs_submitted_total Jobs accepted by tenant.\n# TYPE voxd_tenant_jobs_submitted_total counter\n";
+    for (const auto& [tenant, n] : tenant_jobs_) o << "voxd_tenant_jobs_submitted_total{tenant=\"" << tenant << "\"} " << n << '\n';
+  }
+  if (!tenant_rejected_.empty()) {
+    o << "# HELP voxd_tenant_quota_rejections_total Requests a tenant's quota refused (429), by quota.\n"
+         "# TYPE voxd_tenant_quota_rejections_total counter\n";
+    for (const auto& [key, n] : tenant_rejected_)
+      o << "voxd_tenant_quota_rejections_total{tenant=\"" << key.first << "\",quota=\"" << key.second << "\"} " << n << '\n';
+  }
+  o << "# HELP voxd_webhook_deliveries_total Webhook delivery attempts by outcome.\n# TYPE voxd_webhook_deliveries_total counter\n";
+  for (const char* outcome : {"delivered", "retried", "failed"}) {
+    auto it = webhooks_.find(outcome);
+    o << "voxd_webhook_deliveries_total{outcome=\"" << outcome << "\"} " << (it == webhooks_.end() ? 0 : it->second) << '\n';
+  }
   o << "# HELP voxd_stage_duration_seconds Duration of job stages.\n# TYPE voxd_stage_duration_seconds histogram\n";
   for (const auto& [stage, h] : stages_) {
     for (std::size_t i = 0; i < bounds().size(); ++i)

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
+#include "server/http/caller.h"
 #include "server/http/connection_server.h"
 #include "server/http/metrics.h"
 #include "server/http/problem.h"
@@ -18,6 +19,8 @@
 #include "server/http/server_config.h"
 #include "server/http/submission.h"
 #include "server/log_safe.h"
+#include "server/tenants/request_rate.h"
+#include "server/tenants/tenant_directory.h"
 
 namespace voxd::server {
 namespace {
@@ -36,13 +39,6 @@ std::string new_request_id() {
   char buf[17];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(rng()));
   return buf;
-}
-
-bool constant_time_equal(const std::string& a, const std::string& b) {
-  if (a.size() != b.size()) return false;
-  unsigned char diff = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
-  return diff == 0;
 }
 
 // Every request gets an id (the client's, if it is a plain token) in its
@@ -76,28 +72,53 @@ bool answer_cors(const Request& req, Response& res, const ServeConfig& config) {
   return true;
 }
 
-// Optional API keys on the /v1 routes; probes and metrics stay open. True
-// when the request was refused.
-bool refuse_unauthorized(const Request& req, Response& res, const ServeConfig& config, Metrics& metrics) {
-  if (config.api_keys.empty() || req.path.rfind("/v1/", 0) != 0) return false;
+// Who asks (server/http/caller.h): the tenant its key names on the /v1
+// routes, within its request rate; probes, metrics and the page stay open.
+// True when the request was refused.
+bool refuse_caller(const Request& req, Response& res, TenantDirectory& tenants, RequestRate& rate, Metrics& metrics) {
+  Caller caller;
+  caller.tenant.admin = tenants.unnamed_sees_all();
+  if (req.path.rfind("/v1/", 0) != 0 || !tenants.needs_key()) {
+    set_current_caller(std::move(caller));
+    return false;
+  }
   const std::string auth = req.get_header_value("Authorization");
-  bool ok = false;
+  std::optional<Tenant> tenant;
   // The scheme is case-insensitive (RFC 9110 11.1): "bearer KEY" is as good.
-  if (auth.size() > 7 && strncasecmp(auth.c_str(), "Bearer ", 7) == 0)
-    for (const auto& key : config.api_keys) ok = constant_time_equal(auth.substr(7), key) || ok;
-  if (ok) return false;
-  metrics.count_rejected("unauthorized");
-  res.set_header("WWW-Authenticate", "Bearer");
-  send_problem(res, make_problem(401, "unauthorized", "Unauthorized", "this service needs an API key: send Authorization: Bearer KEY"), req.path);
-  return true;
+  if (auth.size() > 7 && strncasecmp(auth.c_str(), "Bearer ", 7) == 0) tenant = tenants.authenticate(auth.substr(7));
+  if (!tenant) {
+    set_current_caller(Caller{Tenant{"", false, {}, {}}});
+    metrics.count_rejected("unauthorized");
+    res.set_header("WWW-Authenticate", "Bearer");
+    send_problem(res, make_problem(401, "unauthorized", "Unauthorized", "this service needs an API key: send Authorization: Bearer KEY"), req.path);
+    return true;
+  }
+  const bool sees_all = tenant->name.empty() && caller.tenant.admin;
+  caller.tenant = std::move(*tenant);
+  caller.tenant.admin = caller.tenant.admin || sees_all;
+  metrics.count_tenant_request(caller.tenant.name);
+  if (const std::optional<int> wait = rate.take(caller.tenant.name, caller.tenant.quotas.requests_per_minute)) {
+    metrics.count_rejected("quota-exceeded");
+    metrics.count_tenant_rejected(caller.tenant.name, "requests_per_minute");
+    send_problem(res,
+                 quota_exceeded("this tenant may make " + std::to_string(caller.tenant.quotas.requests_per_minute) +
+                                    " requests a minute (to each replica); retry in " + std::to_string(*wait) + " s",
+                                *wait),
+                 req.path);
+    set_current_caller(std::move(caller));
+    return true;
+  }
+  set_current_caller(std::move(caller));
+  return false;
 }
 
 }  // namespace
 
-void install_middleware(httplib::Server& server, const ServeConfig& config, Metrics& metrics) {
-  server.set_pre_routing_handler([&config, &metrics](const Request& req, Response& res) {
+void install_middleware(httplib::Server& server, const ServeConfig& config, Metrics& metrics, TenantDirectory& tenants) {
+  static RequestRate rate;  // one service a process
+  server.set_pre_routing_handler([&config, &metrics, &tenants](const Request& req, Response& res) {
     start_request(req, res);
-    if (answer_cors(req, res, config) || refuse_unauthorized(req, res, config, metrics))
+    if (answer_cors(req, res, config) || refuse_caller(req, res, tenants, rate, metrics))
       return httplib::Server::HandlerResponse::Handled;
     return httplib::Server::HandlerResponse::Unhandled;
   });

@@ -22,6 +22,12 @@ Problem make_problem(int status, std::string slug, std::string title, std::strin
   return p;
 }
 
+Problem quota_exceeded(std::string detail, int retry_after_seconds) {
+  Problem p = make_problem(429, "quota-exceeded", "Quota exceeded", std::move(detail));
+  p.headers.emplace_back("Retry-After", std::to_string(retry_after_seconds));
+  return p;
+}
+
 Problem problem_from_current_exception() {
   try {
     throw;

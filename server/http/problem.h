@@ -34,6 +34,8 @@ class ProblemError : public std::runtime_error {
 };
 
 Problem make_problem(int status, std::string slug, std::string title, std::string detail);
+// 429 quota-exceeded: a tenant's quota (server/tenants/), with Retry-After.
+Problem quota_exceeded(std::string detail, int retry_after_seconds);
 // Maps the exception being handled (call inside a catch block).
 Problem problem_from_current_exception();
 void send_problem(httplib::Response& res, const Problem& p, const std::string& instance);

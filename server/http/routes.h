@@ -4,8 +4,10 @@
 // handlers are guarded and other methods get 405.
 //  - service_routes.cpp: /healthz, /readyz (not while draining, with a full
 //    queue or a full disk), /metrics, /openapi.json; open without an API key.
-//  - job_routes.cpp: POST and GET /v1/jobs, GET and DELETE /v1/jobs/{id},
-//    GET /v1/jobs/{id}/volume in any format the job's mode can take.
+//  - job_routes.cpp: POST and GET /v1/jobs (the caller's tenant's, with its
+//    quotas, names and tags), GET and DELETE /v1/jobs/{id},
+//    GET /v1/jobs/{id}/volume in any format the job's mode can take. Every
+//    /v1/jobs/{id} route finds its job through job_lookup.h.
 //  - analysis_routes.cpp: /v1/jobs/{id}/{analysis,radiography,section,
 //    preview,thickness}, computed on first request from the stored volume
 //    unless the worker prepared them (the job JSON's "analyses"), and kept
@@ -27,12 +29,13 @@ namespace voxd::server {
 class RouteTable;
 class JobManager;
 class Metrics;
+class TenantDirectory;
 struct ServeConfig;
 
 void install_service_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, const ServeConfig& config,
                             const std::atomic<bool>& draining);
 void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, const ServeConfig& config,
-                        const api::JsonLimits& params_limits);
+                        const api::JsonLimits& params_limits, TenantDirectory& tenants);
 void install_analysis_routes(RouteTable& routes, JobManager& jobs);
 void install_mode_routes(RouteTable& routes, JobManager& jobs);
 void install_event_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics);

@@ -34,7 +34,10 @@ struct ServeConfig {
   int read_timeout = 30;   // seconds without progress before a request is dropped
   int write_timeout = 30;
   std::vector<std::string> cors_origins;  // "*" allows any
-  std::vector<std::string> api_keys;      // empty: no authentication
+  std::vector<std::string> api_keys;      // empty: no authentication (unless a tenants file)
+  std::string tenants_file;               // server/tenants/tenant_directory.h; empty: none
+  std::vector<std::string> webhook_hosts;  // callbacks may go to these (beside the file's)
+  std::string webhook_secret;             // the unnamed tenant's callbacks' signing secret
   std::string log_format = "text";        // text | json
   int shutdown_grace = 30;                // seconds running jobs get on SIGTERM
   // Scale-out: replicas sharing one Redis (docs/scale-out.md). Empty: embedded.

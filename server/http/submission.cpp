@@ -11,6 +11,8 @@ namespace {
 using nlohmann::json;
 using httplib::Request;
 
+constexpr std::size_t kMaxLabelPartBytes = 64 * 1024;
+
 ProblemError params_too_large(std::size_t limit) {
   return ProblemError(make_problem(413, "params-too-large", "Job parameters too large",
                                    "the job parameters are over the limit of " + std::to_string(limit) +
@@ -61,8 +63,9 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
   };
   bool read_ok = true;
   if (req.is_multipart_form_data()) {
-    enum class Part { mesh, params, other } part = Part::other;
+    enum class Part { mesh, params, label, other } part = Part::other;
     std::string params_text;
+    std::optional<std::string>* label = nullptr;
     bool has_mesh = false, has_params = false, params_over_limit = false;
     read_ok = reader(
         [&](const httplib::MultipartFormData& header) {
@@ -75,6 +78,10 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
             part = Part::params;
             has_params = true;
             params_text.clear();
+          } else if (header.name == "name" || header.name == "tags" || header.name == "callback") {
+            part = Part::label;
+            label = header.name == "name" ? &s.name : header.name == "tags" ? &s.tags : &s.callback;
+            label->emplace();
           } else {
             part = Part::other;
           }
@@ -91,6 +98,13 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
               return false;
             }
             params_text.append(data, n);
+          } else if (part == Part::label) {
+            // Labels are short: a part past 64 KiB is refused with the params.
+            if ((*label)->size() + n > kMaxLabelPartBytes) {
+              params_over_limit = true;
+              return false;
+            }
+            (*label)->append(data, n);
           }
           return true;
         });
@@ -114,6 +128,8 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
       return true;
     });
     s.filename = req.get_param_value("filename");
+    for (const auto& [field, label] : {std::pair{"name", &s.name}, {"tags", &s.tags}, {"callback", &s.callback}})
+      if (req.has_param(field)) *label = req.get_param_value(field);
     if (read_ok) s.params = parse_params_text(req.get_param_value("params"), params_limits);
   }
   set_body_consumed(read_ok);

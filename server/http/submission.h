@@ -1,6 +1,6 @@
 #pragma once
 // Reading a job submission: either multipart/form-data (parts "mesh" and
-// "params") or the raw mesh as the body with params in the query string. The
+// "params", and the optional "name", "tags", "callback") or the raw mesh as the body with params in the query string. The
 // body is read here, through httplib's content reader, not by httplib before
 // routing: that keeps `curl --data-binary` (sent as
 // application/x-www-form-urlencoded) from being parsed as a form, and counts
@@ -24,6 +24,9 @@ struct Submission {
   std::vector<std::uint8_t> mesh;
   std::string filename;
   nlohmann::json params;
+  // The job's labels as sent (parts or query parameters "name", "tags" as
+  // a JSON object, "callback"), checked by job_labels_of (job_labels.h).
+  std::optional<std::string> name, tags, callback;
 };
 
 Submission read_submission(const httplib::Request& req, const httplib::ContentReader& reader, Metrics& metrics,

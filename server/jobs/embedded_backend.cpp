@@ -122,12 +122,13 @@ std::optional<JobSnapshot> EmbeddedJobBackend::find(const std::string& id) const
   return engine_.snapshot_of(*it->second);
 }
 
-std::vector<JobSnapshot> EmbeddedJobBackend::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
+std::vector<JobSnapshot> EmbeddedJobBackend::list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                                  const JobFilter& filter) const {
   std::vector<JobSnapshot> all;
   {
     std::lock_guard lock(engine_.mutex);
     for (const auto& [id, job] : engine_.jobs)
-      if (job->backend == this) all.push_back(engine_.snapshot_of(*job));
+      if (job->backend == this && filter.matches(job->snap)) all.push_back(engine_.snapshot_of(*job));
   }
   std::sort(all.begin(), all.end(), [](const JobSnapshot& a, const JobSnapshot& b) {
     return a.created_at != b.created_at ? a.created_at > b.created_at : a.id > b.id;
@@ -187,6 +188,19 @@ void EmbeddedJobBackend::save_artifact(const std::string& id, const std::string&
   } catch (const std::exception& e) {
     spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
   }
+}
+
+TenantUsage EmbeddedJobBackend::usage(const std::string& tenant) const {
+  TenantUsage u;
+  std::lock_guard lock(engine_.mutex);
+  for (const auto& [id, job] : engine_.jobs) {
+    const JobSnapshot& s = job->snap;
+    if (job->backend != this || s.labels.tenant != tenant) continue;
+    if (s.state == JobState::queued) ++u.queued;
+    if (s.state == JobState::running) ++u.running;
+    if (s.state == JobState::succeeded) u.stored_bytes += s.stored_bytes;
+  }
+  return u;
 }
 
 JobCounts EmbeddedJobBackend::counts() const {

@@ -33,7 +33,9 @@ class EmbeddedJobBackend final : public JobBackend {
   void close_out(Job& job, const JobSnapshot& done, bool backend_lost) override;
 
   std::optional<JobSnapshot> find(const std::string& id) const override;
-  std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const override;
+  std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                const JobFilter& filter) const override;
+  TenantUsage usage(const std::string& tenant) const override;
   RemoveResult cancel_or_delete(const std::string& id) override;
   void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) override;
   JobCounts counts() const override;

@@ -4,6 +4,7 @@
 // submission is refused before it is a job. Everything that keeps, moves or
 // shows jobs includes this (the store, the shared records, the events, the
 // analyses, the routes), not the engine that runs them (job_manager.h).
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -47,9 +48,23 @@ inline JobFailure internal_failure() {
   return JobFailure{"internal", "Internal error", "the job failed unexpectedly; it was logged"};
 }
 
+// Who a job belongs to and how its owner knows it, given at submission and
+// kept apart from its params: none of it changes what the job makes, so
+// none of it is in the params' canonical JSON (the tenant is in the content
+// hash, so that one tenant's upload never answers another's).
+struct JobLabels {
+  // The tenant that submitted it (server/tenants/tenant_directory.h); empty
+  // for a service without tenants and for --api-keys holders.
+  std::string tenant;
+  std::string name;                                  // the client's, else the uploaded file's name
+  std::vector<std::pair<std::string, std::string>> tags;  // sorted by key, keys unique
+  std::string callback;                              // URL notified when the job ends (webhooks)
+};
+
 // A consistent copy of one job, safe to use after the job table changes.
 struct JobSnapshot {
   std::string id;  // 32 lowercase hex characters, random
+  JobLabels labels;
   JobState state = JobState::queued;
   double progress = 0.0;  // 0..1, never going back while the job runs
   // What a running job is doing now ("mesh report", "voxelize" or the mode's
@@ -74,7 +89,11 @@ struct JobSnapshot {
   // preparing the job, then from running it.
   std::vector<api::JobWarning> warnings;
   std::optional<JobFailure> failure;                    // when failed
-  std::string content_hash;  // SHA-256 of mesh bytes + canonical params JSON (hex)
+  std::string content_hash;  // SHA-256 of mesh bytes + canonical params JSON + tenant (hex)
+  // Bytes its result takes in the store once succeeded (volume, layers,
+  // kept mesh and analyses made by its worker): what a tenant's stored-bytes
+  // quota counts.
+  std::uint64_t stored_bytes = 0;
   bool cached = false;       // answered from an identical earlier job's result
   // The volume was made slab by slab and is kept only as its stored RLE:
   // it is re-encoded and analysed slab by slab, never loaded whole past
@@ -131,6 +150,29 @@ class NotAccepting : public std::runtime_error {
 // jobs (queued by it and waiting here for nothing: 0; running here; and
 // finished by its workers since it started), the shared queue's depth and
 // the replicas alive.
+// What one tenant holds now, against its quotas (server/tenants/).
+struct TenantUsage {
+  std::uint64_t queued = 0, running = 0;
+  std::uint64_t stored_bytes = 0;  // of its succeeded jobs
+};
+
+// Which jobs a listing shows: one tenant's (all when `tenant` is unset),
+// with this name, carrying every one of these tags.
+struct JobFilter {
+  std::optional<std::string> tenant;
+  std::string name;  // empty: any
+  std::vector<std::pair<std::string, std::string>> tags;
+  bool matches(const JobSnapshot& s) const {
+    if (tenant && s.labels.tenant != *tenant) return false;
+    if (!name.empty() && s.labels.name != name) return false;
+    for (const auto& tag : tags)
+      if (std::find(s.labels.tags.begin(), s.labels.tags.end(), tag) == s.labels.tags.end()) return false;
+    return true;
+  }
+  // Whether it asks for more than the tenant (the shared index has only that).
+  bool by_label() const { return !name.empty() || !tags.empty(); }
+};
+
 struct JobCounts {
   std::uint64_t queued = 0, running = 0, succeeded = 0, failed = 0, cancelled = 0;
   std::size_t queue_depth = 0;

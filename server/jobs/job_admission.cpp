@@ -32,7 +32,8 @@ std::uint64_t result_volume_bytes(const Grid& grid, const api::JobParams& params
 }  // namespace
 
 std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint8_t>& mesh_bytes,
-                                      const std::string& name_hint, const nlohmann::json& params_json,
+                                      const std::string& name_hint, const JobLabels& labels,
+                                      const nlohmann::json& params_json,
                                       JobSnapshot* cached_out, std::uint64_t max_voxels) {
   JobStore* const store = backend.store();
   {
@@ -48,7 +49,11 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
                       " MiB free and takes no new jobs until results expire or are deleted; retry later");
   // A job that is never stored is never answered from the store: it skips
   // the hash (a tenth of a small job's time).
-  const std::string hash = store ? content_hash(mesh_bytes, params_json.dump()) : std::string();
+  // The tenant is part of the identity: one tenant's upload never answers
+  // another's (nor tells it that the same part was submitted).
+  const std::string hash =
+      store ? content_hash(mesh_bytes, labels.tenant.empty() ? params_json.dump() : params_json.dump() + "\ntenant:" + labels.tenant)
+            : std::string();
 
   // An identical earlier submission that succeeded answers this one.
   if (store && cached_out) {
@@ -58,6 +63,7 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
       s.created_at = s.started_at = s.finished_at = format_now();
       s.params = params_json;
       s.job = parsed;
+      s.labels = labels;
       s.cached = true;
       s.timings.clear();
       s.analyses = analyses_status(params.analyses, "on_request");
@@ -114,6 +120,7 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
   s.created_at = format_now();
   s.params = params_json;
   s.job = parsed;
+  s.labels = labels;
   s.mesh_format = to_string(prepared.format);
   s.triangles = prepared.triangles;
   s.grid = prepared.grid;

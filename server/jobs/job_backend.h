@@ -103,10 +103,16 @@ class JobBackend {
     (void)id;
     return std::nullopt;
   }
-  virtual std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const {
+  virtual std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                        const JobFilter& filter) const {
     (void)offset;
     (void)limit;
+    (void)filter;
     if (total) *total = 0;
+    return {};
+  }
+  virtual TenantUsage usage(const std::string& tenant) const {
+    (void)tenant;
     return {};
   }
   virtual RemoveResult cancel_or_delete(const std::string& id) {

@@ -130,6 +130,7 @@ class JobEngine {
   // submission the backend can answer from is answered: `cached_out` is then
   // set and null is returned. Throws like JobManager::submit.
   std::shared_ptr<Job> admit(JobBackend& backend, std::vector<std::uint8_t>& mesh_bytes, const std::string& name_hint,
+                             const JobLabels& labels,
                              const nlohmann::json& params_json, JobSnapshot* cached_out, std::uint64_t max_voxels);
 
   // How a backend whose jobs run where they were accepted (embedded,

@@ -57,10 +57,10 @@ JobManager::JobManager(JobManagerConfig config) : impl_(std::make_unique<Impl>(s
 JobManager::~JobManager() { shutdown(std::chrono::seconds(0)); }
 
 JobSnapshot JobManager::submit(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
-                               const nlohmann::json& params_json) {
+                               const nlohmann::json& params_json, const JobLabels& labels) {
   JobEngine& e = impl_->engine;
   JobSnapshot cached;
-  std::shared_ptr<Job> job = e.admit(*impl_->backend, mesh_bytes, name_hint, params_json, &cached, 0);
+  std::shared_ptr<Job> job = e.admit(*impl_->backend, mesh_bytes, name_hint, labels, params_json, &cached, 0);
   if (!job) {
     {
       std::lock_guard lock(e.mutex);
@@ -82,9 +82,12 @@ std::uint64_t JobManager::wait_for_change(std::uint64_t seen, std::chrono::milli
   return e.changes;
 }
 
-std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
-  return impl_->backend->list(offset, limit, total);
+std::vector<JobSnapshot> JobManager::list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                          const JobFilter& filter) const {
+  return impl_->backend->list(offset, limit, total, filter);
 }
+
+TenantUsage JobManager::usage(const std::string& tenant) const { return impl_->backend->usage(tenant); }
 
 JobManager::RemoveResult JobManager::cancel_or_delete(const std::string& id) { return impl_->backend->cancel_or_delete(id); }
 
@@ -138,7 +141,7 @@ JobOutput JobManager::run_sync(std::vector<std::uint8_t> mesh_bytes, const std::
                                const nlohmann::json& params_json, JobSnapshot* snapshot, std::uint64_t max_voxels,
                                const std::function<bool()>& abandoned) {
   JobEngine& e = impl_->engine;
-  std::shared_ptr<Job> job = e.admit(impl_->synchronous, mesh_bytes, name_hint, params_json, nullptr, max_voxels);
+  std::shared_ptr<Job> job = e.admit(impl_->synchronous, mesh_bytes, name_hint, JobLabels{}, params_json, nullptr, max_voxels);
   std::unique_lock lock(e.mutex);
   bool cancelled = false;
   while (!e.finished_cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return finished(job->snap.state); })) {

@@ -68,9 +68,11 @@ class JobManager {
   // the job. An identical earlier submission (same mesh bytes and canonical
   // params) that succeeded and has not expired is answered from its result:
   // the new job is created already succeeded with cached = true.
+  // `labels` say whose it is and how its owner knows it (job.h); an
+  // identical earlier submission answers only one of the same tenant.
   // Throws QueueFull, NotAccepting, voxd::Error, api::InvalidParams.
   JobSnapshot submit(std::vector<std::uint8_t> mesh_bytes, const std::string& name_hint,
-                     const nlohmann::json& params_json);
+                     const nlohmann::json& params_json, const JobLabels& labels = {});
 
   std::optional<JobSnapshot> get(const std::string& id) const;
 
@@ -80,8 +82,11 @@ class JobManager {
   // and so do jobs other replicas change: watchers poll get() as well.
   std::uint64_t wait_for_change(std::uint64_t seen, std::chrono::milliseconds timeout) const;
 
-  // Newest first. `total` receives the number of jobs.
-  std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const;
+  // Newest first, those `filter` matches. `total` receives their number.
+  std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                const JobFilter& filter = {}) const;
+  // What a tenant's jobs hold now (queued, running, stored bytes), for its quotas.
+  TenantUsage usage(const std::string& tenant) const;
 
   using RemoveResult = server::RemoveResult;
   // Queued or running: cancel (a running voxelization stops within ~50 ms and

@@ -111,7 +111,14 @@ json record_json(const JobSnapshot& job) {
       // The mesh file's unit, as given; every length here is in millimetres.
       {"units", {{"mesh", job.job ? to_string(job.job->units) : "mm"}, {"lengths", "mm"}}},
       {"warnings", api::to_json(job.warnings)},
+      {"name", job.labels.name},
+      {"tenant", job.labels.tenant.empty() ? json(nullptr) : json(job.labels.tenant)},
+      {"callback", job.labels.callback.empty() ? json(nullptr) : json(job.labels.callback)},
+      {"stored_bytes", job.stored_bytes},
   };
+  json tags = json::object();
+  for (const auto& [key, value] : job.labels.tags) tags[key] = value;
+  out["tags"] = tags;
   json timings = json::object();
   for (const auto& [stage, seconds] : job.timings) timings[stage] = seconds;
   out["timings"] = timings;
@@ -181,6 +188,13 @@ JobSnapshot job_from_json(const json& r) {
   const std::optional<ExecutionPath> path = value_named(kExecutionPathNames, r.value("execution", std::string()));
   job.execution = path ? *path : job.streamed ? ExecutionPath::slabs : ExecutionPath::memory;
   job.content_hash = r.at("content_hash");
+  // Records of earlier releases have no labels: no tenant, no name.
+  job.labels.name = r.value("name", std::string());
+  if (r.contains("tenant") && r.at("tenant").is_string()) job.labels.tenant = r.at("tenant");
+  if (r.contains("callback") && r.at("callback").is_string()) job.labels.callback = r.at("callback");
+  if (r.contains("tags") && r.at("tags").is_object())
+    for (const auto& [key, value] : r.at("tags").items()) job.labels.tags.emplace_back(key, value.get<std::string>());
+  job.stored_bytes = r.value("stored_bytes", std::uint64_t{0});
   return job;
 }
 

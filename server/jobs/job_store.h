@@ -90,6 +90,8 @@ class JobStore {
   // identical submission, so that deleting either leaves the other's intact.
   // Throws when the original's result is gone.
   virtual void share_volume(const std::string& from_id, const std::string& to_id) const = 0;
+  // Bytes a job's blobs take (its result, layers and artifacts).
+  virtual std::uint64_t stored_bytes(const std::string& id) const = 0;
   // Removes a job's record and blobs.
   virtual void remove(const std::string& id) const = 0;
   // Bytes the store has free for this process.

@@ -150,8 +150,10 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
     // Only a job with a store has analyses (admission refuses them otherwise).
     nlohmann::json analyses_done =
         analyses.empty() ? nlohmann::json::array() : prepare_analyses(job, *store, analyses, r, output);
+    const std::uint64_t stored = store ? store->stored_bytes(id) : 0;
     std::lock_guard lock(mutex);
     record_success(job.snap, r, analyses.empty() ? std::nullopt : std::optional(std::move(analyses_done)));
+    job.snap.stored_bytes = stored;
     home.succeeded(job, output);
   } catch (const Error& e) {
     std::lock_guard lock(mutex);

@@ -194,6 +194,14 @@ std::shared_ptr<const ValueVolume> LocalJobStore::load_layer(const std::string& 
   return nullptr;
 }
 
+std::uint64_t LocalJobStore::stored_bytes(const std::string& id) const {
+  std::uint64_t n = 0;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(job_dir(id), ec), end; !ec && it != end; it.increment(ec))
+    if (it->is_regular_file(ec)) n += it->file_size(ec);
+  return n;
+}
+
 void LocalJobStore::remove(const std::string& id) const {
   std::error_code ec;
   fs::remove_all(job_dir(id), ec);

@@ -31,6 +31,7 @@ class LocalJobStore final : public JobStore {
                    const std::function<void(ByteSink&)>& write) const override;
   std::shared_ptr<const StoredBlob> layer_rle(const std::string& id, const std::string& name) const override;
   void share_volume(const std::string& from_id, const std::string& to_id) const override;
+  std::uint64_t stored_bytes(const std::string& id) const override;
   void remove(const std::string& id) const override;
   std::uint64_t free_bytes() const override;
   std::string full_reason() const override { return "the data directory's disk is full"; }

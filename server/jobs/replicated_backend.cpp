@@ -287,8 +287,9 @@ std::optional<JobSnapshot> ReplicatedJobBackend::find(const std::string& id) con
   return parts_.records->load(id);
 }
 
-std::vector<JobSnapshot> ReplicatedJobBackend::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
-  std::vector<JobSnapshot> page = parts_.records->list(offset, limit, total);
+std::vector<JobSnapshot> ReplicatedJobBackend::list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                                    const JobFilter& filter) const {
+  std::vector<JobSnapshot> page = parts_.records->list(offset, limit, total, filter);
   // Those running here show their live progress.
   std::lock_guard lock(engine_.mutex);
   for (JobSnapshot& s : page)
@@ -296,6 +297,8 @@ std::vector<JobSnapshot> ReplicatedJobBackend::list(std::size_t offset, std::siz
       s = engine_.snapshot_of(*it->second);
   return page;
 }
+
+TenantUsage ReplicatedJobBackend::usage(const std::string& tenant) const { return parts_.records->usage(tenant); }
 
 RemoveResult ReplicatedJobBackend::cancel_or_delete(const std::string& id) {
   {

@@ -176,6 +176,7 @@ void ReplicatedJobBackend::assemble(const std::shared_ptr<Job>& job, const JobSn
   nlohmann::json analyses_done = engine_.prepare_analyses(*job, *parts_.store, analyses, r, output);
   JobSnapshot done = record;
   JobEngine::record_success(done, r, analyses.empty() ? std::nullopt : std::optional(std::move(analyses_done)));
+  done.stored_bytes = parts_.store->stored_bytes(done.id);
   job->memory.release();
   spdlog::info("job {} put together from {} slab tasks ({} s)", id, tasks, assembly);
   end(std::move(done), {JobState::running}, qid);

@@ -23,8 +23,11 @@ class SharedJobRecords {
   // A job's record, with the live progress of a running one; nullopt when
   // unknown, deleted or expired.
   virtual std::optional<JobSnapshot> load(const std::string& id) const = 0;
-  // Newest first; `total` receives the number of jobs.
-  virtual std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const = 0;
+  // Newest first, those `filter` matches; `total` receives their number.
+  virtual std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                        const JobFilter& filter) const = 0;
+  // What a tenant's jobs hold now.
+  virtual TenantUsage usage(const std::string& tenant) const = 0;
   // Writes `job` only when its stored state is one of `from`. False when it
   // is not (another replica or a client moved it on) or the job is gone. A
   // finished record starts the job's expiry (result_ttl), and a succeeded

@@ -37,16 +37,21 @@ std::string ms_text(std::chrono::milliseconds t) { return std::to_string(std::ma
 // can interleave with. (Keys outside KEYS are touched: a single Redis, not a
 // Redis Cluster, as docs/scale-out.md says.)
 
-// KEYS: job, index, keys set, hash index key. ARGV: record, state, created
-// ms, id, result ttl ms, allowed current states (",a,b," or "" for any),
-// content hash (succeeded jobs).
+// KEYS: job, index, keys set, hash index key, the set of tenant indexes.
+// ARGV: record, state, created ms, id, result ttl ms, allowed current states
+// (",a,b," or "" for any), content hash (succeeded jobs), tenant ("" for
+// none), tenant index, stored bytes.
 constexpr const char* kWriteRecord = R"lua(
 if ARGV[6] ~= '' then
   local cur = redis.call('HGET', KEYS[1], 'state')
   if not cur or not string.find(ARGV[6], ',' .. cur .. ',', 1, true) then return 0 end
 end
-redis.call('HSET', KEYS[1], 'record', ARGV[1], 'state', ARGV[2])
+redis.call('HSET', KEYS[1], 'record', ARGV[1], 'state', ARGV[2], 'tenant', ARGV[8], 'bytes', ARGV[10])
 redis.call('ZADD', KEYS[2], ARGV[3], ARGV[4])
+if ARGV[8] ~= '' then
+  redis.call('ZADD', ARGV[9], ARGV[3], ARGV[4])
+  redis.call('SADD', KEYS[5], ARGV[9])
+end
 local s = ARGV[2]
 if s == 'succeeded' or s == 'failed' or s == 'cancelled' then
   redis.call('HDEL', KEYS[1], 'cancel', 'progress', 'live')
@@ -59,6 +64,31 @@ if s == 'succeeded' or s == 'failed' or s == 'cancelled' then
   end
 end
 return 1
+)lua";
+
+// KEYS: a tenant's index. ARGV: job key prefix. What the tenant's jobs hold
+// now: {queued, running, stored bytes of the succeeded}; entries of records
+// Redis expired are dropped on the way.
+constexpr const char* kTenantUsage = R"lua(
+local queued, running, bytes = 0, 0, 0
+for _, id in ipairs(redis.call('ZRANGE', KEYS[1], 0, -1)) do
+  local f = redis.call('HMGET', ARGV[1] .. id, 'state', 'bytes')
+  if not f[1] then
+    redis.call('ZREM', KEYS[1], id)
+  elseif f[1] == 'queued' then queued = queued + 1
+  elseif f[1] == 'running' then running = running + 1
+  elseif f[1] == 'succeeded' then bytes = bytes + (tonumber(f[2]) or 0) end
+end
+return {queued, running, tostring(bytes)}
+)lua";
+
+// KEYS: keys set. The bytes of the job's blobs (their chunks).
+constexpr const char* kStoredBytes = R"lua(
+local n = 0
+for _, k in ipairs(redis.call('SMEMBERS', KEYS[1])) do
+  if redis.call('TYPE', k).ok == 'string' then n = n + redis.call('STRLEN', k) end
+end
+return tostring(n)
 )lua";
 
 // KEYS: manifest, job, keys set. ARGV: generation, chunks, size, ttl for a
@@ -76,8 +106,11 @@ if redis.call('PTTL', KEYS[3]) < ttl then redis.call('PEXPIRE', KEYS[3], ttl) en
 return 1
 )lua";
 
-// KEYS: job, index, keys set. ARGV: id, hash index key prefix.
+// KEYS: job, index, keys set. ARGV: id, hash index key prefix, tenant
+// index key prefix.
 constexpr const char* kRemoveJob = R"lua(
+local t = redis.call('HGET', KEYS[1], 'tenant')
+if t and t ~= '' then redis.call('ZREM', ARGV[3] .. t, ARGV[1]) end
 local h = redis.call('HGET', KEYS[1], 'hash')
 if h then
   local k = ARGV[2] .. h
@@ -254,9 +287,10 @@ bool RedisJobStore::write_record(const JobSnapshot& job, const std::string& from
   const std::string record = stored_record(job).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   const std::string created = std::to_string(created_ms(job));
   const std::string hash = job.state == JobState::succeeded ? job.content_hash : std::string();
-  const RedisReply r = pool_->command({"EVAL", kWriteRecord, "4", key("job", job.id), options_.prefix + "jobs",
-                                       key("keys", job.id), key("hash", hash), record, to_string(job.state), created,
-                                       job.id, ms_text(options_.result_ttl), from, hash});
+  const RedisReply r = pool_->command({"EVAL", kWriteRecord, "5", key("job", job.id), options_.prefix + "jobs",
+                                       key("keys", job.id), key("hash", hash), options_.prefix + "tenant-indexes", record,
+                                       to_string(job.state), created, job.id, ms_text(options_.result_ttl), from, hash,
+                                       job.labels.tenant, tenant_index(job.labels.tenant), std::to_string(job.stored_bytes)});
   return r.integer() == 1;
 }
 
@@ -292,8 +326,13 @@ std::optional<JobSnapshot> RedisJobStore::load(const std::string& id) const {
   return record_of(r);
 }
 
-std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t limit, std::size_t* total) const {
-  const std::string index = options_.prefix + "jobs";
+std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                             const JobFilter& filter) const {
+  // The unnamed tenant's jobs have no index of their own: they are found
+  // among all, as are names and tags.
+  const bool unnamed = filter.tenant && filter.tenant->empty();
+  const std::string index = filter.tenant && !unnamed ? tenant_index(*filter.tenant) : options_.prefix + "jobs";
+  if (filter.by_label() || unnamed) return list_matching(index, offset, limit, total, filter);
   const std::string first = std::to_string(offset), last = std::to_string(offset + std::max<std::size_t>(limit, 1) - 1);
   const std::vector<RedisReply> page = pool_->pipeline({{"ZCARD", index}, {"ZREVRANGE", index, first, last}});
   std::size_t count = static_cast<std::size_t>(page[0].integer());
@@ -302,17 +341,29 @@ std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t lim
     if (total) *total = count;
     return jobs;
   }
+  std::vector<std::string> ids;
+  for (std::size_t i = 0; i < page[1].size(); ++i) ids.emplace_back(page[1].at(i).text());
+  std::size_t gone = 0;
+  jobs = load_listed(index, ids, &gone);
+  count = count > gone ? count - gone : 0;
+  if (total) *total = count;
+  return jobs;
+}
+
+std::vector<JobSnapshot> RedisJobStore::load_listed(const std::string& index, const std::vector<std::string>& ids,
+                                                    std::size_t* gone) const {
   std::vector<RedisArgs> gets;
   std::vector<std::string> keys;
-  keys.reserve(page[1].size());
-  for (std::size_t i = 0; i < page[1].size(); ++i) keys.push_back(key("job", std::string(page[1].at(i).text())));
-  for (std::size_t i = 0; i < keys.size(); ++i) gets.push_back({"HMGET", keys[i], "record", "progress", "live"});
+  keys.reserve(ids.size());
+  for (const std::string& id : ids) keys.push_back(key("job", id));
+  for (const std::string& k : keys) gets.push_back({"HMGET", k, "record", "progress", "live"});
   const std::vector<RedisReply> records = pool_->pipeline(gets);
+  std::vector<JobSnapshot> jobs;
   for (std::size_t i = 0; i < records.size(); ++i) {
     if (records[i].at(0).is_nil()) {
       // Expired by Redis since: not listed, and no longer counted.
-      pool_->command({"ZREM", index, page[1].at(i).text()});
-      count = count > 0 ? count - 1 : 0;
+      pool_->command({"ZREM", index, ids[i]});
+      ++*gone;
       continue;
     }
     try {
@@ -321,8 +372,46 @@ std::vector<JobSnapshot> RedisJobStore::list(std::size_t offset, std::size_t lim
       spdlog::warn("job store: skipping unreadable record {}: {}", keys[i], e.what());
     }
   }
-  if (total) *total = count;
   return jobs;
+}
+
+// Names and tags are in the records only: the index is read newest first,
+// a page of records at a time, and every match counted.
+std::vector<JobSnapshot> RedisJobStore::list_matching(const std::string& index, std::size_t offset, std::size_t limit,
+                                                      std::size_t* total, const JobFilter& filter) const {
+  constexpr long long kPage = 500;
+  std::vector<JobSnapshot> out;
+  std::size_t matched = 0;
+  for (long long first = 0;; first += kPage) {
+    const RedisReply ids = pool_->command({"ZREVRANGE", index, std::to_string(first), std::to_string(first + kPage - 1)});
+    std::vector<std::string> page;
+    for (std::size_t i = 0; i < ids.size(); ++i) page.emplace_back(ids.at(i).text());
+    std::size_t gone = 0;
+    for (JobSnapshot& s : load_listed(index, page, &gone)) {
+      if (!filter.matches(s)) continue;
+      if (matched >= offset && out.size() < limit) out.push_back(std::move(s));
+      ++matched;
+    }
+    first -= static_cast<long long>(gone);
+    if (page.size() < static_cast<std::size_t>(kPage)) break;
+  }
+  if (total) *total = matched;
+  return out;
+}
+
+TenantUsage RedisJobStore::usage(const std::string& tenant) const {
+  if (tenant.empty()) return {};  // the unnamed tenant has no quotas
+  const RedisReply r = pool_->command({"EVAL", kTenantUsage, "1", tenant_index(tenant), options_.prefix + "job:"});
+  TenantUsage u;
+  u.queued = static_cast<std::uint64_t>(r.at(0).integer());
+  u.running = static_cast<std::uint64_t>(r.at(1).integer());
+  u.stored_bytes = parse_number<std::uint64_t>(r.at(2).text()).value_or(0);
+  return u;
+}
+
+std::uint64_t RedisJobStore::stored_bytes(const std::string& id) const {
+  const RedisReply r = pool_->command({"EVAL", kStoredBytes, "1", key("keys", id)});
+  return parse_number<std::uint64_t>(r.text()).value_or(0);
 }
 
 bool RedisJobStore::read_chunks(const std::string& id, const std::string& name,
@@ -520,7 +609,7 @@ void RedisJobStore::share_volume(const std::string& from_id, const std::string& 
 
 void RedisJobStore::remove(const std::string& id) const {
   pool_->command({"EVAL", kRemoveJob, "3", key("job", id), options_.prefix + "jobs", key("keys", id), id,
-                  options_.prefix + "hash:"});
+                  options_.prefix + "hash:", options_.prefix + "jobs:t:"});
 }
 
 std::uint64_t RedisJobStore::free_bytes() const {
@@ -614,10 +703,15 @@ std::size_t RedisJobStore::live_replicas() const {
 }
 
 void RedisJobStore::prune() const {
-  const std::string index = options_.prefix + "jobs";
   pool_->command({"ZREMRANGEBYSCORE", options_.prefix + "replicas", "-inf", std::to_string(now_ms() - 3600 * 1000)});
-  // Records Redis expired still have their index entry: drop those, a page
-  // at a time.
+  prune_index(options_.prefix + "jobs");
+  const RedisReply tenants = pool_->command({"SMEMBERS", options_.prefix + "tenant-indexes"});
+  for (std::size_t i = 0; i < tenants.size(); ++i) prune_index(std::string(tenants.at(i).text()));
+}
+
+// Records Redis expired still have their index entry: drop those, a page
+// at a time.
+void RedisJobStore::prune_index(const std::string& index) const {
   constexpr long long kPage = 1000;
   for (long long first = 0;; first += kPage) {
     const RedisReply ids = pool_->command({"ZRANGE", index, std::to_string(first), std::to_string(first + kPage - 1)});

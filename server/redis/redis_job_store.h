@@ -5,6 +5,10 @@
 //   PREFIX job:ID        hash: record (the job JSON), state, progress,
 //                        cancel (asked), entry (its queue entry), hash
 //   PREFIX jobs          sorted set: every job by creation time (the list)
+//   PREFIX jobs:t:TENANT sorted set: a tenant's jobs by creation time (its
+//                        list and its quotas' count); the record's hash
+//                        has its tenant and stored bytes beside its state
+//   PREFIX tenant-indexes  set: the tenant indexes, for pruning
 //   PREFIX hash:SHA256   the succeeded job answering identical submissions
 //   PREFIX blob:ID:NAME  hash: gen, chunks, size of one blob (the input, the
 //                        volume's RLE, a layer's RLE, an artifact)
@@ -74,7 +78,10 @@ class RedisJobStore final : public JobStore, public SharedJobRecords, public Sha
 
   // SharedJobRecords
   std::optional<JobSnapshot> load(const std::string& id) const override;
-  std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total) const override;
+  std::vector<JobSnapshot> list(std::size_t offset, std::size_t limit, std::size_t* total,
+                                const JobFilter& filter) const override;
+  TenantUsage usage(const std::string& tenant) const override;
+  std::uint64_t stored_bytes(const std::string& id) const override;
   bool transition(const JobSnapshot& job, std::initializer_list<JobState> from) const override;
   void save_input(const std::string& id, const std::vector<std::uint8_t>& bytes, const std::string& name_hint) const override;
   std::optional<Input> load_input(const std::string& id) const override;
@@ -107,6 +114,11 @@ class RedisJobStore final : public JobStore, public SharedJobRecords, public Sha
 
  private:
   std::string key(const std::string& kind, const std::string& id) const { return options_.prefix + kind + ":" + id; }
+  std::string tenant_index(const std::string& tenant) const { return options_.prefix + "jobs:t:" + tenant; }
+  std::vector<JobSnapshot> load_listed(const std::string& index, const std::vector<std::string>& ids, std::size_t* gone) const;
+  std::vector<JobSnapshot> list_matching(const std::string& index, std::size_t offset, std::size_t limit,
+                                         std::size_t* total, const JobFilter& filter) const;
+  void prune_index(const std::string& index) const;
   std::string blob_key(const std::string& id, const std::string& name) const { return key("blob", id) + ":" + name; }
   // Hands a blob's chunks to `chunk` in order, a few per round trip; false
   // when there is none, or it expired or was deleted while read.

@@ -68,6 +68,28 @@ TEST_F(SubmitCli, StandardOutputHoldsOnlyTheVolumeAndTheServerComesFromTheEnviro
   EXPECT_EQ(json::parse(res->body).at("state"), "succeeded");
 }
 
+TEST_F(SubmitCli, TheJobsNameAndTagsAreTheFlagsOrTheFilesName) {
+  start();
+  const std::string path = mesh_file("box.stl", to_binary_stl(make_box({0, 0, 0}, {2, 3, 4})));
+  auto job_of = [&](const ProcessResult& r) {
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    auto res = http().Get(("/v1/jobs/" + json::parse(r.out).at("job").get<std::string>()).c_str());
+    return json::parse(res->body);
+  };
+  const json named = job_of(submit_cli(path + " -o " + dir_ + "/a.rle --resolution 8 --json --name 'pump housing' --tags "
+                                       "'{\"project\": \"pump\"}' --server " + server_url()));
+  EXPECT_EQ(named.at("name"), "pump housing");
+  EXPECT_EQ(named.at("tags"), json({{"project", "pump"}}));
+  const json plain = job_of(submit_cli(path + " -o " + dir_ + "/b.rle --resolution 9 --json --server " + server_url()));
+  EXPECT_EQ(plain.at("name"), "box.stl");
+  EXPECT_EQ(plain.at("tags"), json::object());
+  // A callback the service does not allow is its 422, with the field.
+  const auto refused = submit_cli(path + " -o " + dir_ + "/c.rle --callback http://127.0.0.1:1/ --server " + server_url());
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_NE(refused.err.find("invalid-params"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("allow-list"), std::string::npos) << refused.err;
+}
+
 TEST_F(SubmitCli, ErrorsExitAsVoxelizeWithTheProblemType) {
   start({"--max-voxels", "1000"});
   const std::string box = mesh_file("box.stl", to_binary_stl(make_box({0, 0, 0}, {2, 3, 4})));

@@ -489,7 +489,8 @@ TEST_F(HttpApiTest, MetricsCountJobsRequestsBytesAndStageDurations) {
     }
     if (values["voxd_stage_duration_seconds_count{stage=\"voxelize\"}"] == 1 &&
         values["voxd_http_requests_total{method=\"POST\",route=\"/v1/jobs\",status=\"422\"}"] == 1 &&
-        values["voxd_http_requests_total{method=\"GET\",route=\"other\",status=\"404\"}"] == 1)
+        values["voxd_http_requests_total{method=\"GET\",route=\"other\",status=\"404\"}"] == 1 &&
+        values["voxd_http_requests_total{method=\"GET\",route=\"/v1/jobs/{id}/layers/{k}\",status=\"409\"}"] == 2)
       break;
     std::this_thread::sleep_for(10ms);
   }

@@ -131,13 +131,13 @@ TEST_F(RedisStoreTest, TransitionsAreCompareAndSetAndRemovalReachesEveryKey) {
   EXPECT_GT(pool_->command({"PTTL", "voxd:job:j2"}).integer(), 0) << "a finished job expires";
   EXPECT_GT(pool_->command({"PTTL", "voxd:blob:j2:volume"}).integer(), 0);
   std::size_t total = 0;
-  EXPECT_EQ(store_->list(0, 10, &total).size(), 1u);
+  EXPECT_EQ(store_->list(0, 10, &total, {}).size(), 1u);
   EXPECT_EQ(total, 1u);
   store_->remove("j2");
   EXPECT_FALSE(store_->load("j2"));
   EXPECT_FALSE(store_->succeeded_with_hash("abj2"));
   EXPECT_EQ(pool_->command({"KEYS", "voxd:*j2*"}).size(), 0u);
-  EXPECT_EQ(store_->list(0, 10, &total).size(), 0u);
+  EXPECT_EQ(store_->list(0, 10, &total, {}).size(), 0u);
   EXPECT_EQ(total, 0u);
 }
 

@@ -150,6 +150,23 @@ class ClientAgainstVoxd(unittest.TestCase):
         self.assertTrue(ids.issubset(listed))
         self.assertEqual(len(listed), len(set(listed)))
 
+    def test_names_and_tags_find_jobs_again(self):
+        tags = {"project": "pump-%d" % os.getpid(), "rev": "b"}
+        named = self.client.submit(BOX, {"grid": {"resolution": 30}}, filename="box.stl", name="housing", tags=tags)
+        self.assertEqual(named["name"], "housing")
+        self.assertEqual(named["tags"], tags)
+        default = self.client.submit(BOX, {"grid": {"resolution": 31}}, filename="C:\\parts\\bracket.stl",
+                                     tags={"project": tags["project"]})
+        self.assertEqual(default["name"], "bracket.stl", "the uploaded file's name, without its directory")
+        self.assertEqual([j["id"] for j in self.client.jobs(tags={"project": tags["project"]})],
+                         [default["id"], named["id"]])
+        self.assertEqual([j["id"] for j in self.client.jobs(tags=tags)], [named["id"]])
+        self.assertEqual([j["id"] for j in self.client.jobs(name="bracket.stl", tags={"project": tags["project"]})],
+                         [default["id"]])
+        with self.assertRaises(InvalidParams) as caught:
+            self.client.submit(BOX, {}, filename="box.stl", callback="http://127.0.0.1:1/")
+        self.assertEqual(caught.exception.errors[0]["path"], "/callback")
+
     def test_events_parser_reads_what_the_service_streams(self):
         job = self.client.run(BOX, {"grid": {"resolution": 8}}, filename="box.stl")
         with self.client.http.open("GET", f"/v1/jobs/{job['id']}/events") as stream:

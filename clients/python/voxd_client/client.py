@@ -46,15 +46,24 @@ class VoxdClient:
     # ---- jobs -------------------------------------------------------------
 
     def submit(self, mesh: MeshInput, params: Optional[Mapping[str, Any]] = None,
-               filename: Optional[str] = None) -> Dict[str, Any]:
+               filename: Optional[str] = None, name: Optional[str] = None,
+               tags: Optional[Mapping[str, str]] = None, callback: Optional[str] = None) -> Dict[str, Any]:
         """Uploads a mesh (a path, bytes or a binary file) with the job
         parameters (proto-schemas/job-params.schema.json) and returns the
         job's status (queued, or already succeeded when an identical job's
-        result is kept)."""
-        data, name = _mesh_bytes(mesh, filename)
-        parts = [("mesh", name, data, "application/octet-stream")]
+        result is kept). ``name`` (default: the file's name) and ``tags``
+        find the job again in ``jobs()``; ``callback`` is a URL the service
+        calls, signed, when the job ends (docs/security.md, Webhooks)."""
+        data, file_name = _mesh_bytes(mesh, filename)
+        parts = [("mesh", file_name, data, "application/octet-stream")]
         if params is not None:
             parts.append(("params", "", json.dumps(params).encode(), "application/json"))
+        if name is not None:
+            parts.append(("name", "", name.encode(), "text/plain; charset=utf-8"))
+        if tags is not None:
+            parts.append(("tags", "", json.dumps(dict(tags)).encode(), "application/json"))
+        if callback is not None:
+            parts.append(("callback", "", callback.encode(), "text/plain"))
         body, content_type = multipart_body(parts)
         return self.http.json("POST", "/v1/jobs", body=body, headers={"Content-Type": content_type})
 
@@ -62,11 +71,19 @@ class VoxdClient:
         """The job's status now."""
         return self.http.json("GET", f"/v1/jobs/{job_id(job)}")
 
-    def jobs(self, page_size: int = 100) -> Iterator[Dict[str, Any]]:
-        """Every job the service keeps, newest first, page after page."""
+    def jobs(self, page_size: int = 100, name: Optional[str] = None,
+             tags: Optional[Mapping[str, str]] = None) -> Iterator[Dict[str, Any]]:
+        """Every job the service keeps for this key's tenant, newest first,
+        page after page; only those of this ``name`` and carrying every one
+        of these ``tags`` when given."""
         offset = 0
         while True:
-            page = self.http.json("GET", "/v1/jobs", query={"offset": offset, "limit": page_size})
+            query: Dict[str, Any] = {"offset": offset, "limit": page_size}
+            if name is not None:
+                query["name"] = name
+            if tags:
+                query["tag"] = tuple(f"{k}:{v}" for k, v in tags.items())
+            page = self.http.json("GET", "/v1/jobs", query=query)
             yield from page["jobs"]
             if not page.get("next") or not page["jobs"]:
                 return

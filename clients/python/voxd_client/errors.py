@@ -62,7 +62,7 @@ class Unauthorized(ProblemError):
 
 
 class Busy(ProblemError):
-    """429 or 503 (queue-full, memory-busy, too-many-requests, shutting-down, ...): retry after ``retry_after`` seconds."""
+    """429 or 503 (queue-full, quota-exceeded, memory-busy, too-many-requests, shutting-down, ...): retry after ``retry_after`` seconds."""
 
 
 class JobFailed(ProblemError):
@@ -108,6 +108,7 @@ _BY_SLUG = {
     "job-not-finished": NotFinished,
     "unauthorized": Unauthorized,
     "queue-full": Busy,
+    "quota-exceeded": Busy,
     "memory-busy": Busy,
     "too-many-requests": Busy,
     "too-many-streams": Busy,

@@ -83,7 +83,9 @@ class Transport:
         else:
             url = self.base_url + (path if path.startswith("/") else "/" + path)
         if query:
-            pairs = [(k, _query_text(v)) for k, v in query.items() if v is not None]
+            # A tuple is a parameter given once per item (tag=a:1&tag=b:2).
+            pairs = [(k, _query_text(item)) for k, v in query.items() if v is not None
+                     for item in (v if isinstance(v, tuple) else (v,))]
             url += ("&" if "?" in url else "?") + urllib.parse.urlencode(pairs)
         return url
 
