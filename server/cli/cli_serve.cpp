@@ -28,6 +28,7 @@
 #include "server/jobs/replicated_backend.h"
 #include "server/redis/redis_job_queue.h"
 #include "server/redis/redis_job_store.h"
+#include "server/json_log.h"
 #include "server/log_safe.h"
 #include "server/redis/redis_webhook_outbox.h"
 #include "server/tenants/tenant_directory.h"
@@ -46,7 +47,7 @@ int serve_command(int argc, char** argv) {
     }
   const ServeConfig config = parse_serve_config(argc, argv, 2);
   if (config.log_format == "json")
-    spdlog::set_pattern(R"({"time":"%Y-%m-%dT%H:%M:%S.%eZ","level":"%l","message":%v})", spdlog::pattern_time_type::utc);
+    use_json_log_lines();
   else
     spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%eZ %l %v", spdlog::pattern_time_type::utc);
   // JSON log lines carry their message as a JSON value.

@@ -66,7 +66,7 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
     enum class Part { mesh, params, label, other } part = Part::other;
     std::string params_text;
     std::optional<std::string>* label = nullptr;
-    bool has_mesh = false, has_params = false, params_over_limit = false;
+    bool has_mesh = false, has_params = false, params_over_limit = false, label_over_limit = false;
     read_ok = reader(
         [&](const httplib::MultipartFormData& header) {
           if (header.name == "mesh") {
@@ -99,9 +99,9 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
             }
             params_text.append(data, n);
           } else if (part == Part::label) {
-            // Labels are short: a part past 64 KiB is refused with the params.
+            // Labels are short: a part past 64 KiB is refused as it crosses it.
             if ((*label)->size() + n > kMaxLabelPartBytes) {
-              params_over_limit = true;
+              label_over_limit = true;
               return false;
             }
             (*label)->append(data, n);
@@ -111,6 +111,12 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
     if (read_ok && !has_mesh)
       throw ProblemError(make_problem(400, "missing-mesh", "No mesh uploaded",
                                       "the multipart body has no part named \"mesh\"; send the mesh file in it"));
+    if (label_over_limit) {
+      set_body_consumed(false);
+      throw ProblemError(make_problem(413, "params-too-large", "Job label too large",
+                                      "a name, tags or callback part is over " + std::to_string(kMaxLabelPartBytes) +
+                                          " bytes; a name takes at most 256, each tag 256"));
+    }
     if (params_over_limit) {
       set_body_consumed(false);
       throw params_too_large(params_limits.max_bytes);

@@ -74,7 +74,7 @@ TenantTable parse_tenant_table(std::string_view text) {
   json doc;
   try {
     doc = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e400
     throw std::invalid_argument(std::string("not JSON: ") + e.what());
   }
   if (!doc.is_object() || !doc.contains("tenants") || !doc.at("tenants").is_array())

@@ -57,7 +57,12 @@ void WebhookDispatcher::run() {
     try {
       busy = deliver_one();
     } catch (const std::exception& e) {
-      spdlog::warn("webhooks: {}", log_safe(e.what()));  // the outbox (Redis) is away: try again soon
+      // The outbox (Redis) is away: tried again every poll, said once a minute.
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_warning_ >= std::chrono::minutes(1)) {
+        last_warning_ = now;
+        spdlog::warn("webhooks: cannot reach the outbox: {}", log_safe(e.what()));
+      }
     }
     if (busy) continue;
     std::unique_lock lock(mutex_);

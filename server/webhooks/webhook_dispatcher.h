@@ -55,6 +55,7 @@ class WebhookDispatcher {
   std::mutex mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;
+  std::chrono::steady_clock::time_point last_warning_{};  // the dispatcher thread's
   std::thread thread_;
 };
 

@@ -18,8 +18,10 @@ std::optional<WebhookUrl> parse_webhook_url(std::string_view text, std::string* 
     return std::nullopt;
   };
   if (text.size() > 2048) return fail("the URL is over 2048 characters");
-  for (const char c : text)
+  for (const char c : text) {
     if (static_cast<unsigned char>(c) <= 0x20 || c == 0x7f) return fail("the URL has spaces or control characters");
+    if (static_cast<unsigned char>(c) >= 0x80) return fail("the URL must be ASCII: percent-encode other characters");
+  }
   WebhookUrl url;
   const std::size_t colon = text.find("://");
   if (colon == std::string_view::npos) return fail("it is not an absolute http:// or https:// URL");

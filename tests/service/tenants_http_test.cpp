@@ -266,7 +266,7 @@ TEST_F(TenantsTest, QuotasAnswer429AndRecoverAcrossTwoReplicasOfOneRedis) {
 
 TEST_F(TenantsTest, KeysAreCheckedReloadedWithoutARestartAndNeverLogged) {
   const std::string file = write_tenants(tenant_table());
-  start({"--tenants", file});
+  start({"--tenants", file, "--log-format", "json"});
   expect_problem(http().Get("/v1/jobs"), 401, "unauthorized");
   expect_problem(as(server_->port(), "not-a-key")->Get("/v1/jobs"), 401, "unauthorized");
   // The scheme is case-insensitive; the key is not.
@@ -306,6 +306,12 @@ TEST_F(TenantsTest, KeysAreCheckedReloadedWithoutARestartAndNeverLogged) {
 
   const std::string log = server_->log();
   EXPECT_NE(log.find("kept the last good table"), std::string::npos) << log;
+  // Every line is JSON, the warnings from the tenants' reload too.
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty()) {
+      EXPECT_TRUE(json::accept(line)) << line;
+    }
   for (const char* key : {kAcmeKey, kGlobexKey, kLateKey, "not-a-key"}) EXPECT_EQ(log.find(key), std::string::npos) << key;
   const std::string metrics = http().Get("/metrics")->body;
   EXPECT_NE(metrics.find(R"(voxd_tenant_requests_total{tenant="late"})"), std::string::npos);
@@ -336,6 +342,12 @@ TEST_F(TenantsTest, WithoutATenantsFileEveryKeyHolderSeesEveryJobAsBefore) {
   EXPECT_EQ(list(*two).at("total"), 1);
   const json again = ok_json(post_multipart(*two, "/v1/jobs", part(), "part.stl", "{}"), 202);
   EXPECT_TRUE(again.at("cached").get<bool>());
+  // Labels are short: a long name is refused naming its field; a huge part as it arrives.
+  const json p = expect_problem(submit_labelled(*one, part(), "{}", std::string(300, 'n'), ""), 422, "invalid-params");
+  EXPECT_EQ(p.at("errors").at(0).at("path"), "/name");
+  expect_problem(submit_labelled(*one, part(), "{}", std::string(70000, 'n'), ""), 413, "params-too-large");
+  expect_problem(submit_labelled(*one, part(), "{}", "", R"({"bad key": "x"})"), 422, "invalid-params");
+  EXPECT_EQ(http().Get("/healthz")->status, 200);
 }
 
 }  // namespace
