@@ -27,6 +27,7 @@ constexpr const char* kSmallKey = "small-quota-key-0004";
 constexpr const char* kChattyKey = "chatty-rate-key-0005";
 constexpr const char* kDiskKey = "disk-quota-key-0006";
 constexpr const char* kLateKey = "late-tenant-key-0007";
+constexpr const char* kQueueKey = "queue-quota-key-0008";
 
 
 json tenant(const std::string& name, const std::string& key, json quotas = json::object(), bool admin = false) {
@@ -38,7 +39,7 @@ json tenant_table() {
            {tenant("acme", kAcmeKey), tenant("globex", kGlobexKey), tenant("ops", kOpsKey, json::object(), true),
             tenant("small", kSmallKey, {{"concurrent_jobs", 1}}),
             tenant("chatty", kChattyKey, {{"requests_per_minute", 60}}),
-            tenant("disk", kDiskKey, {{"stored_bytes", 1}})}}};
+            tenant("disk", kDiskKey, {{"stored_bytes", 1}}), tenant("queue", kQueueKey, {{"queued_jobs", 1}})}}};
 }
 
 std::unique_ptr<httplib::Client> as(int port, const std::string& key) {
@@ -252,6 +253,23 @@ TEST_F(TenantsTest, QuotasAnswer429WithRetryAfterAndRecoverOnOneServer) {
   EXPECT_NE(metrics.find(R"(voxd_tenant_quota_rejections_total{tenant="chatty",quota="requests_per_minute"} 1)"), std::string::npos);
   EXPECT_NE(metrics.find(R"(voxd_tenant_jobs_submitted_total{tenant="small"} 2)"), std::string::npos);
   EXPECT_NE(metrics.find(R"(voxd_tenant_requests_total{tenant="chatty"})"), std::string::npos);
+}
+
+// queued_jobs: with one worker kept busy by another tenant, one job of this
+// tenant may wait; a second is refused until the first has started.
+TEST_F(TenantsTest, TheQueuedJobsQuotaCountsOnlyJobsWaitingForAWorker) {
+  start({"--tenants", write_tenants(tenant_table()), "--workers", "1"});
+  auto acme = as(server_->port(), kAcmeKey), queue = as(server_->port(), kQueueKey);
+  const std::string busy = ok_json(post_multipart(*acme, "/v1/jobs", hollow_box(), "box.stl", kSlowParams), 202).at("id");
+  wait_for_state(*acme, busy, "running");
+  const std::string waiting = ok_json(post_multipart(*queue, "/v1/jobs", part(), "part.stl", "{}"), 202).at("id");
+  const auto refused = post_multipart(*queue, "/v1/jobs", part(), "part.stl", R"({"grid": {"resolution": 20}})");
+  const json p = expect_problem(refused, 429, "quota-exceeded");
+  EXPECT_NE(p.at("detail").get<std::string>().find("waiting"), std::string::npos) << p.dump();
+  EXPECT_EQ(refused->get_header_value("Retry-After"), "5");
+  ASSERT_EQ(acme->Delete(("/v1/jobs/" + busy).c_str())->status, 202);
+  EXPECT_EQ(wait_for_job(*queue, waiting).at("state"), "succeeded");
+  ok_json(post_multipart(*queue, "/v1/jobs", part(), "part.stl", R"({"grid": {"resolution": 20}})"), 202);
 }
 
 TEST_F(TenantsTest, QuotasAnswer429AndRecoverAcrossTwoReplicasOfOneRedis) {
