@@ -414,14 +414,21 @@ std::uint64_t RedisJobStore::stored_bytes(const std::string& id) const {
   return parse_number<std::uint64_t>(r.text()).value_or(0);
 }
 
+std::optional<RedisJobStore::BlobManifest> RedisJobStore::manifest(const std::string& id, const std::string& name) const {
+  const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
+  if (m.at(0).is_nil()) return std::nullopt;
+  return BlobManifest{key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":",
+                      parse_number<std::size_t>(m.at(1).text()).value_or(0), parse_number<std::uint64_t>(m.at(2).text()).value_or(0)};
+}
+
 bool RedisJobStore::read_chunks(const std::string& id, const std::string& name,
                                 const std::function<void(std::string_view)>& chunk) const {
-  const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
-  if (m.at(0).is_nil()) return false;
-  const std::string prefix = key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":";
-  const std::size_t chunks = parse_number<std::size_t>(m.at(1).text()).value_or(0);
-  const std::size_t size = parse_number<std::size_t>(m.at(2).text()).value_or(0);
-  std::size_t read = 0;
+  const std::optional<BlobManifest> m = manifest(id, name);
+  if (!m) return false;
+  const std::string& prefix = m->chunk_prefix;
+  const std::size_t chunks = m->chunks;
+  const std::uint64_t size = m->size;
+  std::uint64_t read = 0;
   // A few chunks a round trip: fewer round trips, bounded replies.
   constexpr std::size_t kBatch = 4;
   for (std::size_t first = 0; first < chunks; first += kBatch) {
@@ -540,11 +547,9 @@ class ChunkedBlob final : public StoredBlob {
 }  // namespace
 
 std::shared_ptr<const StoredBlob> RedisJobStore::stored_blob(const std::string& id, const std::string& name) const {
-  const RedisReply m = pool_->command({"HMGET", blob_key(id, name), "gen", "chunks", "size"});
-  if (m.at(0).is_nil()) return nullptr;
-  const std::string prefix = key("chunk", id) + ":" + name + ":" + std::string(m.at(0).text()) + ":";
-  return std::make_shared<const ChunkedBlob>(ChunkList{pool_, prefix, parse_number<std::size_t>(m.at(1).text()).value_or(0),
-                                                       parse_number<std::uint64_t>(m.at(2).text()).value_or(0)});
+  const std::optional<BlobManifest> m = manifest(id, name);
+  if (!m) return nullptr;
+  return std::make_shared<const ChunkedBlob>(ChunkList{pool_, m->chunk_prefix, m->chunks, m->size});
 }
 
 std::optional<std::string> RedisJobStore::load_artifact(const std::string& id, const std::string& key_name) const {

@@ -28,6 +28,7 @@
 #include <chrono>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <functional>
 #include <string>
 #include <string_view>
@@ -126,6 +127,13 @@ class RedisJobStore final : public JobStore, public SharedJobRecords, public Sha
                    const std::function<void(std::string_view)>& chunk) const;
   // A blob read as it is needed (nullptr when there is none).
   std::shared_ptr<const StoredBlob> stored_blob(const std::string& id, const std::string& name) const;
+  // A committed blob's manifest: where its chunks are, how many, its size.
+  struct BlobManifest {
+    std::string chunk_prefix;  // chunk I is chunk_prefix + I
+    std::size_t chunks = 0;
+    std::uint64_t size = 0;
+  };
+  std::optional<BlobManifest> manifest(const std::string& id, const std::string& name) const;
   bool write_record(const JobSnapshot& job, const std::string& from) const;
 
   std::shared_ptr<RedisPool> pool_;
