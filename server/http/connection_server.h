@@ -72,8 +72,6 @@ class ConnectionServer : public httplib::Server {
 // whose length is ambiguous (two Content-Lengths, or one with a
 // Transfer-Encoding: RFC 9112 6.3) in any case.
 void begin_request_body(const httplib::Request& req);
-// Whether the head's body length is ambiguous, as above.
-bool ambiguous_body_length(const httplib::Request& req);
 // Whether this thread is one of the stream threads (a long-lived request).
 bool on_stream_thread();
 // The body was left unread: close the connection after the response.
