@@ -177,6 +177,28 @@ try {
   assert.ok(sdfPixels.drawn > sdfPixels.total * 0.02, `zero level set nearly blank: ${sdfPixels.drawn} drawn`);
   await shot(page, 'sdf-zero-level-set');
 
+  // 8b. Every mode the form offers submits as the form fills it in and
+  // succeeds (palette and coverage take no inside test; slice's options
+  // offer no function the form cannot give).
+  await page.uncheck('#want-report');
+  await page.uncheck('#want-radiography');
+  await page.fill('#resolution', '16');
+  for (const mode of modes) {
+    await page.selectOption('#mode', mode);
+    assert.equal(await page.$eval('#inside', (e) => e.disabled), mode === 'coverage' || mode === 'palette', mode);
+    if (mode === 'slice')
+      assert.ok(!(await page.$$eval('#mode-options select option', (o) => o.map((x) => x.value))).includes('custom'));
+    await page.setInputFiles('#mesh-file', meshPath);
+    const before = await page.$eval('#job-id', (e) => e.textContent);
+    await page.click('#submit');
+    await page.waitForFunction((b) => document.getElementById('job-id').textContent !== b ||
+                                      !document.getElementById('problem').hidden, before);
+    assert.ok(await page.$eval('#problem', (e) => e.hidden),
+              `${mode}: ${await page.$eval('#problem-detail', (e) => e.textContent)}`);
+    await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
+  }
+  await shot(page, 'every-mode');
+
   // 9. An open mesh written inside out: the warnings and the inside test
   // chosen from the mesh, from the job's status; the report's verdict with
   // a wall 0.1 over the limit (under a voxel of 0.25): inconclusive.

@@ -37,6 +37,26 @@ function fillSelect(select, values, chosen) {
   select.replaceChildren(...values.map((v) => new Option(v, v, false, v === chosen)));
 }
 
+// Whether the form renders an input for this option (enums, numbers,
+// booleans; colours, ramps and lookup images the API takes as JSON).
+function plainOption(spec) {
+  const s = spec.$ref ? resolve(spec.$ref) : spec;
+  return (s.enum && s.enum.every((v) => typeof v === 'string')) || ['boolean', 'integer', 'number'].includes(s.type);
+}
+
+// The values of enum option `name` the form cannot submit: those the
+// options' allOf rules say need an option the form has no input for
+// ("function is custom" -> "lookup required").
+function unofferable(options, name) {
+  const out = new Set();
+  for (const rule of options.allOf || []) {
+    const value = rule.if?.properties?.[name]?.const;
+    const needs = rule.then?.required || [];
+    if (value !== undefined && needs.some((n) => !options.properties[n] || !plainOption(options.properties[n]))) out.add(value);
+  }
+  return out;
+}
+
 // One input per plain option of a mode (enums, numbers, booleans).
 function optionInputs(modeName) {
   const box = $('mode-options');
@@ -48,7 +68,8 @@ function optionInputs(modeName) {
     let input;
     if (s.enum && s.enum.every((v) => typeof v === 'string')) {
       input = document.createElement('select');
-      fillSelect(input, s.enum, s.default);
+      const skip = unofferable(options, name);
+      fillSelect(input, s.enum.filter((v) => !skip.has(v)), s.default);
     } else if (s.type === 'boolean') {
       input = Object.assign(document.createElement('input'), { type: 'checkbox', checked: !!s.default });
     } else if (s.type === 'integer' || s.type === 'number') {
@@ -68,6 +89,24 @@ function optionInputs(modeName) {
   }
 }
 
+// The modes the schema says take no inside test (coverage, palette: they
+// count crossings themselves), read from its allOf rules
+// ("mode is M" -> "not required inside"), so the form never offers one.
+function modesWithoutInside() {
+  const out = new Set();
+  for (const rule of schema.allOf || []) {
+    const mode = rule.if?.properties?.mode?.const;
+    if (mode && rule.then?.not?.required?.includes('inside')) out.add(mode);
+  }
+  return out;
+}
+
+function showInside(modeName) {
+  const takes = !modesWithoutInside().has(modeName);
+  $('inside').disabled = !takes;
+  $('inside').closest('label').hidden = !takes;
+}
+
 function resolve(ref) {
   return ref.replace(/^#\//, '').split('/').reduce((o, k) => o[k], schema);
 }
@@ -80,12 +119,17 @@ async function loadSchema() {
   fillSelect($('units'), p.units.enum, p.units.default);
   const byResolution = p.grid.oneOf.find((g) => g.required.includes('resolution')).properties.resolution;
   Object.assign($('resolution'), { min: byResolution.minimum, max: Math.min(byResolution.maximum, 4096), value: 128 });
-  $('mode').onchange = () => optionInputs($('mode').value);
+  $('mode').onchange = () => {
+    optionInputs($('mode').value);
+    showInside($('mode').value);
+  };
   optionInputs($('mode').value);
+  showInside($('mode').value);
 }
 
 function jobParams() {
-  const params = { mode: $('mode').value, inside: $('inside').value, units: $('units').value };
+  const params = { mode: $('mode').value, units: $('units').value };
+  if (!modesWithoutInside().has(params.mode)) params.inside = $('inside').value;
   const kind = document.querySelector('input[name=grid-kind]:checked').value;
   params.grid = kind === 'resolution' ? { resolution: Number($('resolution').value) }
                                       : { voxel_size: Number($('voxel-size').value) };
