@@ -80,6 +80,21 @@ try {
   const modes = await page.$$eval('#mode option', (o) => o.map((x) => x.value));
   assert.deepEqual(modes, JSON.parse(readFileSync(join(repo, 'proto-schemas/job-params.schema.json'))).properties.mode.enum);
   await shot(page, 'loaded');
+  // What the page moved over the wire, by the browser's own timings: the
+  // first load compressed, a second load only revalidations (304s).
+  const transferred = () => page.evaluate(() => [...performance.getEntriesByType('navigation'),
+    ...performance.getEntriesByType('resource')].reduce((sum, e) => sum + e.transferSize, 0));
+  const firstLoad = await transferred();
+  const failedRequests = [];
+  page.on('requestfailed', (r) => failedRequests.push(r.url()));
+  page.on('response', (r) => { if (r.status() >= 400) failedRequests.push(`${r.status()} ${r.url()}`); });
+  await page.reload();
+  await page.waitForFunction(() => document.querySelectorAll('#mode option').length > 0);
+  await page.waitForLoadState('networkidle');
+  const secondLoad = await transferred();
+  assert.ok(secondLoad < 50 * 1024, `the second load moved ${secondLoad} bytes (the first ${firstLoad})`);
+  assert.ok(firstLoad < 1024 * 1024, `the first load moved ${firstLoad} bytes: are the files compressed?`);
+  console.log(`page loads: the first moved ${firstLoad} bytes, the second ${secondLoad}`);
 
   // 2. Upload the mesh with a job, and follow its progress bar to done.
   await page.setInputFiles('#mesh-file', meshPath);
@@ -242,6 +257,8 @@ try {
   await shot(page, 'malformed-stl');
 
   assert.deepEqual(consoleErrors, []);
+  assert.deepEqual(failedRequests.filter((u) => !u.includes('broken') && !/\/v1\//.test(u)), [],
+                   'no file of the page failed to load');
   console.log(`browser test passed; screenshots in ${artifacts}`);
 } catch (e) {
   failed = true;
