@@ -63,7 +63,7 @@ bool answer_cors(const Request& req, Response& res, const ServeConfig& config) {
   if (!cors) return false;
   res.set_header("Access-Control-Allow-Origin", origin);
   res.set_header("Vary", "Origin");
-  res.set_header("Access-Control-Expose-Headers", "Location, Retry-After, X-Request-Id, X-Voxd-Job-Id, X-Voxd-Dims, X-Voxd-Filled-Voxels, X-Voxd-Value-Type, X-Voxd-Scale, X-Voxd-Cache");
+  res.set_header("Access-Control-Expose-Headers", "Location, Retry-After, X-Request-Id, X-Voxd-Job-Id, X-Voxd-Dims, X-Voxd-Filled-Voxels, X-Voxd-Value-Type, X-Voxd-Scale, X-Voxd-Cache, Content-Disposition");
   if (req.method != "OPTIONS" || !req.has_header("Access-Control-Request-Method")) return false;
   res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
   res.set_header("Access-Control-Allow-Headers", "Authorization, Content-Type, X-Request-Id");

@@ -458,6 +458,8 @@ TEST_F(HttpApiTest, CorsAllowsOnlyTheConfiguredOrigins) {
   auto get = http().Get("/v1/jobs", httplib::Headers{{"Origin", "https://app.example.com"}});
   EXPECT_EQ(get->get_header_value("Access-Control-Allow-Origin"), "https://app.example.com");
   EXPECT_NE(get->get_header_value("Access-Control-Expose-Headers").find("Location"), std::string::npos);
+  // A front end on another origin reads a download's file name.
+  EXPECT_NE(get->get_header_value("Access-Control-Expose-Headers").find("Content-Disposition"), std::string::npos);
   auto other = http().Get("/v1/jobs", httplib::Headers{{"Origin", "https://evil.example.com"}});
   EXPECT_FALSE(other->has_header("Access-Control-Allow-Origin"));
 }

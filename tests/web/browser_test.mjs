@@ -10,7 +10,7 @@
 import assert from 'node:assert/strict';
 import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join } from 'node:path';
+import { basename, join } from 'node:path';
 
 import { repo, requireWebModule, startVoxd } from './voxd_server.mjs';
 
@@ -213,6 +213,17 @@ try {
     await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
   }
   await shot(page, 'every-mode');
+  // Recent jobs: each by its file's name and its mode (a job submitted
+  // without one is solid, never "undefined").
+  const noMode = new FormData();
+  noMode.append('mesh', new Blob([readFileSync(meshPath)]), 'no-mode.stl');
+  assert.equal((await fetch(`${base}/v1/jobs`, { method: 'POST', body: noMode })).status, 202);
+  await page.waitForFunction(() => [...document.querySelectorAll('#jobs li')].some((li) => li.textContent.includes('no-mode.stl')),
+                             null, { timeout: 15000 });
+  const listed = await page.$$eval('#jobs li', (l) => l.map((x) => x.textContent));
+  assert.ok(listed.every((t) => !t.includes('undefined')), listed.join(' | '));
+  assert.ok(listed.some((t) => t.includes('no-mode.stl') && t.includes(' solid ')), listed.join(' | '));
+  assert.ok(listed.some((t) => t.includes(basename(meshPath)) && t.includes(' palette ')), listed.join(' | '));
 
   // 9. An open mesh written inside out: the warnings and the inside test
   // chosen from the mesh, from the job's status; the report's verdict with

@@ -181,18 +181,29 @@ $('job-form').onsubmit = guarded(async (e) => {
 
 // ---- recent jobs ------------------------------------------------------------
 
+// The list is drawn again only when a job in it changed, and keeps its
+// scroll position (a refresh every 5 s used to jump it back to the top).
+let shownJobs = '';
 const refreshJobs = guarded(async () => {
   const { jobs } = await listJobs();
-  $('jobs').replaceChildren(...jobs.map((j) => {
+  const key = JSON.stringify(jobs.map((j) => [j.id, j.state, j.name]));
+  if (key === shownJobs) return;
+  shownJobs = key;
+  const list = $('jobs');
+  const top = list.scrollTop;
+  const defaultMode = schema?.properties?.mode?.default ?? 'solid';
+  list.replaceChildren(...jobs.map((j) => {
     const li = document.createElement('li');
     li.dataset.id = j.id;
+    li.title = j.id;
     li.append(Object.assign(document.createElement('span'), { className: `state ${j.state}`, textContent: j.state }),
-              Object.assign(document.createElement('code'), { textContent: j.id.slice(0, 8) }),
-              ` ${j.params.mode} ${j.grid.dims.join('×')} `,
+              Object.assign(document.createElement('span'), { className: 'job-name', textContent: j.name || j.id.slice(0, 8) }),
+              ` ${j.params.mode ?? defaultMode} ${j.grid.dims.join('×')} `,
               Object.assign(document.createElement('span'), { className: 'muted', textContent: j.created_at.slice(11, 19) }));
     li.onclick = () => openJob(j.id);
     return li;
   }));
+  list.scrollTop = top;
 });
 
 // ---- one job: progress over its event stream --------------------------------
