@@ -335,6 +335,8 @@ TEST(PaletteGlb, InstancesEveryVoxelOfAPartialElementAndExposedFullOnes) {
   ASSERT_TRUE(g.contains("extensionsUsed"));
   EXPECT_NE(std::find(g["extensionsUsed"].begin(), g["extensionsUsed"].end(), "EXT_mesh_gpu_instancing"),
             g["extensionsUsed"].end());
+  // Required: a viewer without instancing must not draw it wrong.
+  EXPECT_EQ(g["extensionsRequired"], json::array({"EXT_mesh_gpu_instancing"}));
   for (const json& view : g["bufferViews"]) {
     EXPECT_EQ(view["byteOffset"].get<std::size_t>() % 4, 0u);
     EXPECT_EQ(view["byteLength"].get<std::size_t>() % 4, 0u);

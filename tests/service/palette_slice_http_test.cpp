@@ -133,6 +133,7 @@ TEST_F(PaletteSliceTest, PaletteChoosesWedgesOnDiagonalsAndExportsTheExactVolume
   std::memcpy(&json_length, res->body.data() + 12, 4);
   const json gltf = json::parse(res->body.substr(20, json_length));
   EXPECT_EQ(gltf.at("extensionsUsed"), json({"EXT_mesh_gpu_instancing"}));
+  EXPECT_EQ(gltf.at("extensionsRequired"), json({"EXT_mesh_gpu_instancing"}));
   EXPECT_EQ(gltf.at("meshes").size(), 2u);  // full and the wedge
 
   // Refusals: colour formats, a layer of another kind, palette routes of other modes.

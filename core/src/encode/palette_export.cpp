@@ -384,7 +384,10 @@ void write_palette_glb(const Palette& palette, const DenseVolume<std::uint8_t>& 
     nodes.push_back({{"name", "voxd model (Z-up model axes turned to glTF's Y-up)"},
                      {"rotation", {-half, 0.0, 0.0, half}},
                      {"children", children}});
+    // Required, not only used: a viewer without instancing must refuse the
+    // file rather than draw one element per node at the origin.
     gltf["extensionsUsed"] = nlohmann::json::array({kInstancing});
+    gltf["extensionsRequired"] = nlohmann::json::array({kInstancing});
     gltf["scenes"] = nlohmann::json::array({{{"nodes", {nodes.size() - 1}}}});
     gltf["nodes"] = nodes;
     gltf["meshes"] = meshes;

@@ -57,8 +57,10 @@ inline void write_palette_stl(const Palette& palette, const DenseVolume<std::uin
 // the mesh origin) and one node named after the element, drawing it once per
 // voxel through EXT_mesh_gpu_instancing: its TRANSLATION accessor holds
 // each voxel's minimum corner, O + (i, j, k) * size, in x-fastest
-// order. The extension is listed in extensionsUsed only: a viewer without
-// it shows one copy of each element at the origin. No material (viewers
+// order. The extension is listed in extensionsUsed and extensionsRequired:
+// a viewer without it refuses the file instead of drawing one copy of each
+// element at the origin (three.js's GLTFLoader has it; for a viewer that
+// does not, the palette's STL is plain geometry). No material (viewers
 // use their default). Every accessor carries min/max; buffer views are
 // 4-byte aligned; the JSON chunk is padded with spaces, the BIN chunk with
 // zeros. An all-empty volume gives a valid file with an empty scene and no
