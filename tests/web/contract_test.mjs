@@ -68,6 +68,16 @@ async function finishedJob(mesh, filename, params) {
 const operations = (doc) => Object.entries(doc.paths).flatMap(([path, item]) =>
   Object.entries(item).filter(([method]) => method !== 'parameters').map(([method, op]) => ({ method, path, op })));
 
+test('every operation has one tag of the document\'s list, so /docs groups them', () => {
+  const names = served.tags.map((t) => t.name);
+  assert.ok(names.length >= 4);
+  for (const { method, path, op } of operations(served)) {
+    assert.equal(op.tags?.length, 1, `${method} ${path}`);
+    assert.ok(names.includes(op.tags[0]), `${method} ${path}: ${op.tags[0]}`);
+  }
+  for (const name of names) assert.ok(operations(served).some(({ op }) => op.tags[0] === name), `tag ${name} is unused`);
+});
+
 test('the served document has no $ref outside itself', () => {
   const refs = JSON.stringify(served).match(/"\$ref":"[^"]*"/g);
   assert.ok(refs.length > 100);
