@@ -267,6 +267,13 @@ try {
   assert.equal(await page.$eval('#problem-detail', (e) => e.textContent), problem.detail);
   await shot(page, 'malformed-stl');
 
+  // 11. A phone's width: the page, a job open in it, scrolls only down.
+  await page.setViewportSize({ width: 390, height: 844 });
+  await page.click('button[data-tab=report]');
+  const width = await page.evaluate(() => document.documentElement.scrollWidth);
+  assert.ok(width <= 390, `the page is ${width} px wide at a 390 px viewport`);
+  await shot(page, 'phone-width');
+
   assert.deepEqual(consoleErrors, []);
   assert.deepEqual(failedRequests.filter((u) => !u.includes('broken') && !/\/v1\//.test(u)), [],
                    'no file of the page failed to load');
