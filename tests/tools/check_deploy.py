@@ -124,7 +124,14 @@ if redis_url:
     check("ports" not in svc, "compose: replicas are reached through the endpoint, not published one by one")
     endpoint = compose["services"].get("endpoint", {})
     check(endpoint.get("ports") and "nginx.conf" in " ".join(endpoint.get("volumes", [])), "compose: an endpoint in front")
-    check("server voxd:8080" in read("deploy/nginx.conf"), "compose: the endpoint must proxy to the voxd service")
+    nginx = read("deploy/nginx.conf")
+    check("server voxd:8080" in nginx, "compose: the endpoint must proxy to the voxd service")
+    # Replicas come and go: the endpoint looks their name up again, with a
+    # resolver and a shared zone (nginx 1.27.3+), not once at start.
+    check(re.search(r"server voxd:8080 [^;]*\bresolve\b", nginx) and re.search(r"^\s*resolver \S+", nginx, re.M)
+          and re.search(r"^\s*zone \S+", nginx, re.M), "compose: the endpoint must re-resolve the replicas (resolver, zone, resolve)")
+    version = re.match(r"nginx:(\d+)\.(\d+)", endpoint.get("image", ""))
+    check(version and (int(version.group(1)), int(version.group(2))) >= (1, 27), "compose: `resolve` in an upstream needs nginx 1.27.3+")
 else:
     check(any(str(v).endswith(":/var/lib/voxd") for v in svc["volumes"]), "compose: the data dir must be a volume")
 
@@ -181,6 +188,20 @@ def check_kubernetes(path, shared):
 check_kubernetes("deploy/kubernetes/voxd.yaml", shared=False)
 check_kubernetes("deploy/kubernetes/voxd-redis.yaml", shared=True)
 docs = [d for f in ("voxd.yaml", "voxd-redis.yaml") for d in yaml.safe_load_all(read("deploy/kubernetes/" + f)) if d]
+# The two variants can live in one namespace: no object name or pod label in common.
+names = [(d["kind"], d["metadata"]["name"]) for d in docs]
+check(len(names) == len(set(names)), f"kubernetes: both variants define {sorted(n for n in names if names.count(n) > 1)}")
+apps = [frozenset(d["spec"]["selector"]["matchLabels"].items()) for d in docs if d["kind"] == "Deployment"]
+check(len(apps) == len(set(apps)), "kubernetes: the two Deployments select the same pods")
+for d in docs:
+    for c in d.get("spec", {}).get("template", {}).get("spec", {}).get("containers", []):
+        if c["image"].endswith(":latest") or ":" not in c["image"]:
+            check(c.get("imagePullPolicy") == "IfNotPresent" or "/" in c["image"].split(":")[0],
+                  f"kubernetes: {c['image']} is a locally built image: imagePullPolicy IfNotPresent (\":latest\" is pulled)")
+
+# --- the Docker build context ----------------------------------------------------
+ignored = [l.strip() for l in read(".dockerignore").splitlines() if l.strip() and not l.startswith("#")]
+check("web/node_modules" in ignored, ".dockerignore: web/node_modules (hundreds of MB; the build runs npm ci itself)")
 
 # --- systemd -----------------------------------------------------------------
 unit = read("deploy/systemd/voxd.service")
