@@ -19,11 +19,13 @@ packages=(
   build-essential cmake pkg-config git ca-certificates curl
   libembree-dev libglm-dev libcpp-httplib-dev nlohmann-json3-dev
   libdraco-dev draco libspdlog-dev libfmt-dev libpng-dev zlib1g-dev libssl-dev
+  libbrotli-dev  # the web page's files are brotli-compressed at build time (server/web_build/)
   libgtest-dev libgmock-dev libbenchmark-dev
   libhiredis-dev redis-server
   assimp-testmodels  # real STL/OBJ/PLY files the decoder and open-mesh tests read
   python3 python3-numpy python3-jsonschema python3-yaml python3-venv python3-pip python3-setuptools
   clang libclang-rt-14-dev util-linux
+  systemd  # systemd-analyze verifies deploy/systemd/voxd.service (tests/tools/check_deploy.py)
   chromium
 )
 if [[ "${1:-}" == --runtime ]]; then

@@ -11,6 +11,7 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 
 import yaml
 
@@ -216,6 +217,15 @@ stop = int(re.search(r"^TimeoutStopSec=(\d+)$", unit, re.M).group(1))
 unit_grace = int(re.search(r"VOXD_SHUTDOWN_GRACE=(\d+)", unit).group(1))
 check(stop > unit_grace, "systemd: TimeoutStopSec must exceed VOXD_SHUTDOWN_GRACE")
 check("DynamicUser=yes" in unit or re.search(r"^User=(?!root)", unit, re.M), "systemd: must not run as root")
+# systemd's own check of the unit (with ExecStart pointed at this build's
+# binary, which is not installed here): unknown keys and bad values are errors.
+with tempfile.TemporaryDirectory() as tmp:
+    verify_path = os.path.join(tmp, "voxd.service")
+    with open(verify_path, "w") as f:
+        f.write(unit.replace("/usr/local/bin/voxd", os.path.abspath(binary)))
+    verify = subprocess.run(["systemd-analyze", "verify", verify_path], capture_output=True, text=True)
+    check(verify.returncode == 0 and not verify.stderr.strip() and not verify.stdout.strip(),
+          "systemd-analyze verify: " + (verify.stderr + verify.stdout).strip())
 
 if problems:
     print("deploy files:\n  " + "\n  ".join(problems))
