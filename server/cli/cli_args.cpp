@@ -28,6 +28,7 @@ Args::Args(int argc, char** argv, int first, const std::set<std::string>& valued
           val = argv[++i];
         }
         flags_[name] = val;
+        all_[name].push_back(val);
       } else if (booleans.count(name) && !inline_value) {
         flags_[name] = "";
       } else {
@@ -40,6 +41,11 @@ Args::Args(int argc, char** argv, int first, const std::set<std::string>& valued
       positional_.push_back(a);
     }
   }
+}
+
+std::vector<std::string> Args::values(const std::string& flag) const {
+  auto it = all_.find(flag);
+  return it == all_.end() ? std::vector<std::string>{} : it->second;
 }
 
 std::optional<std::string> Args::value(const std::string& flag) const {

@@ -21,12 +21,15 @@ class Args {
   Args(int argc, char** argv, int first, const std::set<std::string>& valued, const std::set<std::string>& booleans);
 
   const std::vector<std::string>& positional() const { return positional_; }
-  std::optional<std::string> value(const std::string& flag) const;
+  std::optional<std::string> value(const std::string& flag) const;  // the last one given
+  // Every value of a flag given more than once, in order.
+  std::vector<std::string> values(const std::string& flag) const;
   bool has(const std::string& flag) const { return flags_.count(flag) > 0; }
 
  private:
   std::vector<std::string> positional_;
   std::map<std::string, std::string> flags_;
+  std::map<std::string, std::vector<std::string>> all_;
 };
 
 // Parses "a,b,c" into three numbers; throws UsageError naming the flag.

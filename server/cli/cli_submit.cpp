@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -16,6 +17,7 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include "api/analysis_request.h"
 #include "api/error_table.h"
 #include "api/job_params.h"
 #include "server/cli/cli.h"
@@ -45,6 +47,13 @@ The job runs on the service, with its limits; the flags are voxd voxelize's.
   --tags JSON            tags, a JSON object of strings: {"project": "pump"}
   --callback URL         a URL the service calls (signed) when the job ends;
                          its host must be in the service's allow-list
+  --analysis KIND[?QUERY]  an analysis the service makes with the job, as
+                         its route takes it: analysis?min_wall=1.5,
+                         radiography?axis=z, section?axis=x&index=40,
+                         preview, thickness?format=ply; repeat for several.
+                         Each is written beside OUT as OUT's name, the kind
+                         and its format's extension (OUT.analysis.json), or
+                         into --analyses-dir DIR
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ,
   --padding P, --mode M, --inside T, --units U, --streaming S
                          as for voxd voxelize (they override --params)
@@ -116,6 +125,45 @@ ServiceProblem problem_of(const httplib::Result& res, const std::string& what) {
     return ServiceProblem("http-" + std::to_string(res->status), what + ": HTTP " + std::to_string(res->status),
                           api::kExitFailure);
   }
+}
+
+// --analysis KIND[?QUERY]: the job JSON's analyses entry, its fields as the
+// route's query has them (the service reads strings as the route does).
+json analysis_entry(const std::string& spec) {
+  const std::size_t q = spec.find('?');
+  const std::string kind = spec.substr(0, q);
+  if (!value_named(api::kAnalysisKindNames, kind))
+    throw UsageError("--analysis " + spec + ": the kind must be one of " + names_joined(api::kAnalysisKindNames, ", ", " or "));
+  json entry = {{"kind", kind}};
+  if (q == std::string::npos) return entry;
+  std::stringstream query(spec.substr(q + 1));
+  for (std::string pair; std::getline(query, pair, '&');) {
+    if (pair.empty()) continue;
+    const std::size_t eq = pair.find('=');
+    if (eq == std::string::npos || eq == 0) throw UsageError("--analysis " + spec + ": each query part must be name=value");
+    entry[pair.substr(0, eq)] = pair.substr(eq + 1);
+  }
+  return entry;
+}
+
+// Where the analyses go: DIR/STEM or OUT without its extension ("part" for
+// part.rle); "voxd-JOB" in the working directory for OUT "-".
+std::string analyses_stem(const std::string& out, const std::optional<std::string>& dir) {
+  std::string name = out == "-" ? std::string("voxd") : out.substr(out.find_last_of('/') == std::string::npos ? 0 : out.find_last_of('/') + 1);
+  if (const std::size_t dot = name.rfind('.'); dot != std::string::npos && dot > 0) name.resize(dot);
+  if (dir) return *dir + "/" + name;
+  const std::size_t slash = out.find_last_of('/');
+  return out == "-" || slash == std::string::npos ? name : out.substr(0, slash + 1) + name;
+}
+
+std::string extension_of(const std::string& content_type) {
+  if (content_type.rfind("application/json", 0) == 0) return "json";
+  if (content_type.rfind("image/png", 0) == 0) return "png";
+  if (content_type.rfind("model/gltf-binary", 0) == 0) return "glb";
+  if (content_type.rfind("application/x-nrrd", 0) == 0) return "nrrd";
+  if (content_type.rfind("model/stl", 0) == 0) return "stl";
+  if (content_type.find("ply") != std::string::npos) return "ply";
+  return "bin";
 }
 
 class ServiceClient {
@@ -243,6 +291,27 @@ class ServiceClient {
     });
   }
 
+  // Each of the job's analyses, fetched from its URL into STEM.KIND.EXT
+  // (STEM.KIND-N.EXT when a kind comes twice); what was written.
+  json download_analyses(const json& job, const std::string& stem) {
+    json written = json::array();
+    if (!job.contains("analyses") || !job["analyses"].is_array()) return written;
+    std::map<std::string, int> seen;
+    for (const json& entry : job["analyses"]) {
+      const std::string url = entry.value("url", "");
+      const std::string kind = entry.contains("request") ? entry["request"].value("kind", "analysis") : "analysis";
+      if (entry.value("state", "") == "failed")
+        throw ServiceProblem("analysis-failed", "the job's " + kind + " failed: " + entry.value("error", std::string()), api::kExitFailure);
+      auto res = with_retries([&] { return client_->Get(url, headers()); });
+      if (!res || res->status != 200) throw problem_of(res, "GET " + url_ + url);
+      const int n = ++seen[kind];
+      const std::string path = stem + "." + kind + (n > 1 ? "-" + std::to_string(n) : "") + "." + extension_of(res->get_header_value("Content-Type"));
+      write_output(path, [&](ByteSink& sink) { sink.write(reinterpret_cast<const std::uint8_t*>(res->body.data()), res->body.size()); });
+      written.push_back({{"kind", kind}, {"url", url}, {"path", path}, {"bytes", res->body.size()}});
+    }
+    return written;
+  }
+
  private:
   std::string url_;
   std::string api_key_;
@@ -280,7 +349,7 @@ class ProgressBar {
 int submit(int argc, char** argv) {
   std::set<std::string> valued(std::begin(kParamFlags), std::end(kParamFlags));
   valued.insert(std::begin(kOutputFlags), std::end(kOutputFlags));
-  valued.insert({"server", "api-key", "streaming", "name", "tags", "callback"});
+  valued.insert({"server", "api-key", "streaming", "name", "tags", "callback", "analysis", "analyses-dir"});
   Args args(argc, argv, 2, valued, {"json", "report", "no-progress", "help"});
   if (args.has("help")) {
     std::cout << with_format_list(kUsage);
@@ -290,6 +359,10 @@ int submit(int argc, char** argv) {
   const OutputChoice output = read_output_choice(args, "submit");
   json params = load_params(args);
   apply_param_flags(args, params);
+  for (const std::string& spec : args.values("analysis")) {
+    if (!params.contains("analyses")) params["analyses"] = json::array();
+    params["analyses"].push_back(analysis_entry(spec));
+  }
   if (auto s = args.value("streaming")) params["streaming"] = *s;
   // The service checks both again; this says what is wrong before any upload.
   const api::JobParams parsed = api::parse_job_params(params);
@@ -334,6 +407,7 @@ int submit(int argc, char** argv) {
   if (job.value("state", "") == "cancelled") throw ServiceProblem("cancelled", "job " + id + " was cancelled", api::kExitFailure);
 
   const std::uint64_t written = client.download(id, output);
+  const json analyses = client.download_analyses(job, analyses_stem(output.path, args.value("analyses-dir")));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   json summary = {{"server", server},
                   {"job", id},
@@ -352,6 +426,7 @@ int submit(int argc, char** argv) {
                   {"output", {{"path", output.path}, {"format", to_string(output.format)}, {"bytes", written}}},
                   {"seconds", seconds}};
   if (args.has("report")) summary["report"] = job.value("mesh", json());
+  if (!analyses.empty()) summary["analyses"] = analyses;
   std::ostream& out = output.path == "-" ? std::cerr : std::cout;
   if (args.has("json")) {
     out << summary.dump(2) << '\n';
@@ -364,6 +439,7 @@ int submit(int argc, char** argv) {
     s << "filled:  " << summary["filled_voxels"] << " voxels, volume " << summary["filled_volume"] << '\n';
     if (args.has("report")) s << "mesh report: " << summary["report"].dump() << '\n';
     s << "output:  " << output.path << " (" << to_string(output.format) << ", " << written << " bytes), " << seconds << " s\n";
+    for (const json& a : analyses) s << "analysis: " << a.value("path", "") << " (" << a.value("bytes", 0) << " bytes)\n";
     for (const json& w : summary["warnings"])
       s << "warning: " << w.value("message", "") << " [" << w.value("code", "") << "]\n";
     std::cerr << s.str();

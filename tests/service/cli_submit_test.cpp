@@ -90,6 +90,37 @@ TEST_F(SubmitCli, TheJobsNameAndTagsAreTheFlagsOrTheFilesName) {
   EXPECT_NE(refused.err.find("allow-list"), std::string::npos) << refused.err;
 }
 
+TEST_F(SubmitCli, AnalysesAskedForAreWrittenBesideTheVolumeAsTheServiceServesThem) {
+  start();
+  // A hollow box 20 x 16 x 12, walls 2 thick: its void is 16 x 12 x 8.
+  const auto mesh = to_binary_stl(concat({make_box({0, 0, 0}, {20, 16, 12}), flipped(make_box({2, 2, 2}, {18, 14, 10}))}));
+  const std::string path = mesh_file("hollow.stl", mesh);
+  const auto r = submit_cli(path + " -o " + dir_ + "/hollow.rle --resolution 40 --json --server " + server_url() +
+                            " --analysis 'analysis?min_wall=1.5' --analysis 'radiography?axis=z&format=png16' --analysis 'section?axis=z&index=20'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json summary = json::parse(r.out);
+  ASSERT_EQ(summary.at("analyses").size(), 3u) << summary.dump();
+  EXPECT_EQ(summary.at("analyses").at(0).at("path"), dir_ + "/hollow.analysis.json");
+  EXPECT_EQ(summary.at("analyses").at(1).at("path"), dir_ + "/hollow.radiography.png");
+  EXPECT_EQ(summary.at("analyses").at(2).at("path"), dir_ + "/hollow.section.png");
+  // Each file is what the service serves at the analysis's URL.
+  for (const json& a : summary.at("analyses")) {
+    auto res = http().Get(a.at("url").get<std::string>().c_str());
+    ASSERT_TRUE(res);
+    EXPECT_EQ(text_of(read_file(a.at("path"))), res->body) << a.dump();
+  }
+  // The analysis finds the box's one void, of the inner box's volume.
+  const json analysis = json::parse(text_of(read_file(dir_ + "/hollow.analysis.json")));
+  ASSERT_EQ(analysis.at("voids").at("count"), 1) << analysis.at("voids").dump();
+  // A wrong kind is a usage error before anything is sent.
+  const auto bad = submit_cli(path + " -o " + dir_ + "/x.rle --analysis thikness --server " + server_url());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("radiography"), std::string::npos) << bad.err;
+  const auto bad_query = submit_cli(path + " -o " + dir_ + "/x.rle --analysis 'analysis?min_wall=-1' --server " + server_url());
+  EXPECT_EQ(bad_query.exit_code, 2) << bad_query.err;
+  EXPECT_NE(bad_query.err.find("min_wall"), std::string::npos) << bad_query.err;
+}
+
 TEST_F(SubmitCli, ErrorsExitAsVoxelizeWithTheProblemType) {
   start({"--max-voxels", "1000"});
   const std::string box = mesh_file("box.stl", to_binary_stl(make_box({0, 0, 0}, {2, 3, 4})));
