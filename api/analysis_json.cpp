@@ -146,6 +146,8 @@ json analysis_to_json(const AnalysisReport& report, const Grid& grid, const std:
                    "Manocha 2003; faces at least 150 degrees apart); each voxel takes the wall's section through its "
                    "nearest medial point, so edges and corners take the wall they end"},
         {"error_bound", wall_thickness_error_statement(h)},
+        {"reading_bound",
+         {{"below", b.below_voxels * h}, {"above", b.above_voxels * h}, {"tolerance", kWallReportTolerance * h}}},
         {"voxels", t.stats.voxel_count},
         {"mean", t.stats.mean * h},
         {"std", t.stats.std_dev * h},

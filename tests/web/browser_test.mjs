@@ -12,6 +12,7 @@ import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'nod
 import { tmpdir } from 'node:os';
 import { basename, join } from 'node:path';
 
+import { binaryStl, boxTriangles } from './test_meshes.mjs';
 import { repo, requireWebModule, startVoxd } from './voxd_server.mjs';
 
 const { chromium } = requireWebModule('playwright-core');
@@ -22,17 +23,6 @@ mkdirSync(artifacts, { recursive: true });
 const work = mkdtempSync(join(tmpdir(), 'voxd-browser-'));
 
 // A hollow box, 20 x 16 x 12 with walls 2 thick: volume 3840 - 1536 = 2304.
-function boxTriangles([x0, y0, z0], [x1, y1, z1], inward) {
-  const v = [[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0], [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]];
-  const f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [3, 0, 4], [3, 4, 7]];
-  return f.map(([a, b, c]) => (inward ? [v[a], v[c], v[b]] : [v[a], v[b], v[c]]));
-}
-function binaryStl(triangles) {
-  const buffer = Buffer.alloc(84 + 50 * triangles.length);
-  buffer.writeUInt32LE(triangles.length, 80);
-  triangles.forEach((t, i) => t.forEach((p, k) => p.forEach((x, a) => buffer.writeFloatLE(x, 84 + 50 * i + 12 + 12 * k + 4 * a))));
-  return buffer;
-}
 const meshPath = join(work, 'hollow-box.stl');
 writeFileSync(meshPath, binaryStl([...boxTriangles([0, 0, 0], [20, 16, 12], false), ...boxTriangles([2, 2, 2], [18, 14, 10], true)]));
 // The same hollow box written inside out, with a hole in its top: the page
@@ -117,7 +107,15 @@ try {
   assert.match(jobId, /^[0-9a-f]{32}$/);
   await shot(page, 'done');
 
-  // 3. The 3D view draws the voxels (a real picture, not a blank canvas).
+  // 3. The 3D view shows the part painted by wall thickness (the job asked
+  // for the report; wall_view_test.mjs checks the colours), and the voxels
+  // on request (a real picture, not a blank canvas).
+  await page.waitForFunction(() => /^wall thickness on the part/.test(document.getElementById('view-info').textContent),
+                             null, { timeout: 60000 });
+  const paintedPixels = await drawnPixels(page);
+  assert.ok(paintedPixels.drawn > paintedPixels.total * 0.02, `painted part nearly blank: ${paintedPixels.drawn} drawn`);
+  await shot(page, 'view3d-wall-thickness');
+  await page.selectOption('#view-source', 'voxels');
   await page.waitForFunction(() => /filled voxels/.test(document.getElementById('view-info').textContent), null, { timeout: 60000 });
   const pixels = await drawnPixels(page);
   assert.ok(pixels.drawn > pixels.total * 0.02, `3D view nearly blank: ${pixels.drawn} of ${pixels.total} pixels drawn`);

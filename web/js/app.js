@@ -5,7 +5,8 @@ import { ApiError, apiKey, call, getJson, listJobs, removeJob, submitJob, watchJ
 import { RadiographyView } from './radiography.js';
 import { renderReport } from './report.js';
 import { enclosedVolume, surfaceNets } from './surface_nets.js';
-import { MAX_VIEW_VOXELS, Viewer, filledTest, voxelSurface } from './viewer.js';
+import { MAX_VIEW_VOXELS, Viewer, filledTest, readGlb, voxelSurface } from './viewer.js';
+import { bandOf, fmt, lookupTexels, renderLegend, wallBands } from './wall_colours.js';
 
 const $ = (id) => document.getElementById(id);
 let schema = null;       // proto-schemas/job-params.schema.json
@@ -295,10 +296,24 @@ function selectTab(name) {
 }
 for (const b of $('tabs').querySelectorAll('button')) b.onclick = () => selectTab(b.dataset.tab);
 
+// The analysis the job asked for (its min and max wall), else one with none.
+function reportRequest(job) {
+  return (job.analyses || []).find((a) => a.request && a.request.kind === 'analysis');
+}
+// The job's report, fetched once for the report tab and the painted part.
+function reportOf(job) {
+  if (current?.job !== job) return getJson(reportRequest(job)?.url ?? `/v1/jobs/${job.id}/analysis`);
+  current.report ??= getJson(reportRequest(job)?.url ?? `/v1/jobs/${job.id}/analysis`);
+  return current.report;
+}
+
 async function showResults(job) {
   $('results').hidden = false;
-  const mode = job.params.mode;
-  const sources = { palette: ['voxels', 'reconstruction'], sdf: ['zero level set', 'voxels'] }[mode] || ['voxels'];
+  const mode = job.params.mode ?? schema?.properties?.mode?.default ?? 'solid';
+  // A solid job's part painted by wall thickness: first when the job asked
+  // for the report (its thickness is made already), else on request.
+  const solid = reportRequest(job) ? ['wall thickness', 'voxels'] : ['voxels', 'wall thickness'];
+  const sources = { palette: ['voxels', 'reconstruction'], sdf: ['zero level set', 'voxels'], solid }[mode] || ['voxels'];
   fillSelect($('view-source'), sources, sources[0]);
   $('view-source').onchange = guarded(() => show3d(job));
   await Promise.all([show3d(job), showRadiography(job), showSection(job, true), showPreviews(job), showReport(job)]
@@ -306,9 +321,48 @@ async function showResults(job) {
   showDownloads(job);
 }
 
+// The part's own mesh painted by its wall thickness, a legend in the
+// report's unit with the job's limits, the reading under the cursor.
+async function showPainted(job) {
+  const asked = reportRequest(job)?.request || {};
+  const query = new URLSearchParams({ format: 'glb', unit: 'model' });
+  if (asked.min_wall) query.set('min_wall', asked.min_wall);
+  if (asked.max_wall) query.set('max_wall', asked.max_wall);
+  const [report, res] = await Promise.all([reportOf(job), call(`/v1/jobs/${job.id}/thickness?${query}`)]);
+  const part = readGlb(await res.arrayBuffer());
+  const t = report.thickness;
+  if (!part || !t) {
+    viewer.clear();
+    $('view-info').textContent = 'no wall to paint: the part has no filled voxel';
+    return;
+  }
+  const bands = wallBands(t);
+  // Lines where a band of note begins or ends: the thin, marginal and thick edges.
+  const marks = [];
+  for (let i = 1; i < bands.length; ++i) if (bands[i].kind !== bands[i - 1].kind) marks.push(bands[i].lo);
+  viewer.showPainted(part, lookupTexels(bands), marks);
+  renderLegend($('wall-legend'), bands, report.unit);
+  $('wall-legend').hidden = false;
+  const limits = [t.min_wall && `min wall ${fmt(t.min_wall)}`, t.max_wall && `max wall ${fmt(t.max_wall)}`].filter(Boolean);
+  $('view-info').textContent = `wall thickness on the part (${part.indices.length / 3} triangles), ${report.unit}` +
+    (limits.length ? `; ${limits.join(', ')} ± the error bound` : '; no limits given');
+  const canvas = $('viewer').querySelector('canvas');
+  canvas.onpointermove = (e) => {
+    const r = viewer.readingAt(e.clientX, e.clientY);
+    const band = r && bandOf(bands, r.value);
+    $('view-readout').textContent = !r ? '' : !band ? 'no reading here'
+      : `wall ${fmt(r.value)} ${report.unit}` + (band.kind === 'within' ? '' : ` · ${band.kind}`);
+    $('view-readout').dataset.value = r ? r.value : '';
+  };
+}
+
 async function show3d(job) {
   if (!viewer) viewer = new Viewer($('viewer'));
   const grid = job.grid;
+  $('wall-legend').hidden = true;
+  $('view-readout').textContent = '';
+  $('viewer').querySelector('canvas').onpointermove = null;
+  if ($('view-source').value === 'wall thickness') return showPainted(job);
   if (grid.voxel_count > MAX_VIEW_VOXELS) {
     viewer.clear();
     $('view-info').textContent = `${grid.voxel_count} voxels: too many to draw here; see the previews`;
@@ -382,9 +436,7 @@ async function showPreviews(job) {
 $('prev-colour').onchange = guarded(() => current?.job && showPreviews(current.job));
 
 async function showReport(job) {
-  // The report the job asked for (its min and max wall), else one with none.
-  const asked = (job.analyses || []).find((a) => a.request && a.request.kind === 'analysis');
-  const report = await getJson(asked ? asked.url : `/v1/jobs/${job.id}/analysis`);
+  const report = await reportOf(job);
   // A region's row shows where it is: its box in the 3D view.
   renderReport($('report'), report, (min, max) => {
     if (!viewer) return;
