@@ -11,6 +11,7 @@
 #include "server/http/route_table.h"
 #include "server/http/server_config.h"
 #include "server/http/submission.h"
+#include "server/http/surface_mesh_answer.h"
 #include "server/http/volume_request.h"
 #include "server/http/job_status.h"
 #include "server/jobs/job_record.h"
@@ -112,6 +113,7 @@ void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, 
     v.options.content = volume_content(job, req.has_param("layer") ? req.get_param_value("layer") : "");
     const std::string filename = id + file_extension(v.format);
     if (job.job->mode->writes(v.format)) return answer_mode_written(res, job.job, volumes_of(jobs, job), v, filename, metrics);
+    if (is_mesh_format(v.format)) return answer_surface_mesh(res, jobs, job, v, filename, metrics);
     if (req.has_param("layer")) return answer_values(res, job_layer(jobs, job, req.get_param_value("layer")), v, filename, metrics);
     if (job.has_value_volume() && job.streamed) {
       // Made slab by slab: served slab by slab from the stored values in

@@ -1,5 +1,6 @@
 #include "server/http/job_status.h"
 
+#include "server/http/surface_mesh_answer.h"
 #include "server/jobs/job_record.h"
 #include "voxd/encode/volume_format.h"
 
@@ -12,13 +13,14 @@ namespace {
 std::string job_url(const std::string& id) { return "/v1/jobs/" + id; }
 
 // The formats a succeeded job's volume is offered in (those
-// GET /v1/jobs/{id}/volume does not refuse for its mode and value type), by
-// name, each with its URL.
+// GET /v1/jobs/{id}/volume does not refuse for its mode and value type, the
+// meshes of its surface included), by name, each with its URL.
 json downloads(const JobSnapshot& job) {
   json out = json::object();
   if (job.state != JobState::succeeded || !job.job) return out;
   for (const auto& [format, name] : kVolumeFormatNames)
-    if (!job.job->format_refusal(format)) out[name] = job_url(job.id) + "/volume?format=" + name;
+    if (!job.job->format_refusal(format) || (is_mesh_format(format) && offers_surface_mesh(*job.job)))
+      out[name] = job_url(job.id) + "/volume?format=" + name;
   return out;
 }
 

@@ -163,6 +163,28 @@ test('a palette job\'s glb passes the Khronos glTF validator, its model turned Y
   assert.deepEqual(extent, [2, 5, 3]);
 });
 
+test('a solid\'s voxel surface and an sdf\'s zero level set as glb pass the Khronos glTF validator', async () => {
+  const validator = requireWebModule('gltf-validator');
+  // A hollow box (walls 1 thick): a closed outer and inner sheet.
+  const box = (lo, hi, flip) => {
+    const v = [[lo, lo, lo], [hi, lo, lo], [hi, hi, lo], [lo, hi, lo], [lo, lo, hi], [hi, lo, hi], [hi, hi, hi], [lo, hi, hi]];
+    const f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [3, 0, 4], [3, 4, 7]];
+    return { v, f: flip ? f.map(([a, b, c]) => [a, c, b]) : f };
+  };
+  const outer = box(0, 6, false), inner = box(1, 5, true);
+  const mesh = binaryStl([...outer.v, ...inner.v], [...outer.f, ...inner.f.map((t) => t.map((i) => i + 8))]);
+  for (const mode of ['solid', 'sdf']) {
+    const job = await finishedJob(mesh, 'hollow.stl', { mode, grid: { resolution: 24 } });
+    const res = await fetch(`${server.base}/v1/jobs/${job.id}/volume?format=glb`);
+    assert.equal(res.status, 200, await res.clone().text());
+    assert.equal(res.headers.get('content-type'), 'model/gltf-binary');
+    const report = await validator.validateBytes(new Uint8Array(await res.arrayBuffer()));
+    assert.equal(report.issues.numErrors, 0, `${mode}: ${JSON.stringify(report.issues.messages.slice(0, 5))}`);
+    assert.equal(report.issues.numWarnings, 0, `${mode}: ${JSON.stringify(report.issues.messages.slice(0, 5))}`);
+    assert.ok(Number(res.headers.get('x-voxd-mesh-triangles')) > 0);
+  }
+});
+
 test('the thickness on the part passes the glTF validator and opens in three.js with the PLY\'s values and colours', async () => {
   const validator = requireWebModule('gltf-validator');
   // A plate 10 x 8 x 1 in z: every vertex bounds the 1-thick wall.

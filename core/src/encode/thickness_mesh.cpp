@@ -10,12 +10,14 @@
 #include <nlohmann/json.hpp>
 
 #include "encode/byte_buffer.h"
+#include "encode/mesh_file.h"
 #include "voxd/analysis/surface_thickness.h"
 #include "voxd/error.h"
 
 namespace voxd {
 
 using encode::ByteBuffer;
+using encode::flush_if_large;
 
 Rgb ThicknessColours::colour(float thickness) const {
   if (!(thickness > 0)) return kNoMaterialColour;
@@ -35,14 +37,7 @@ void check_values(const Mesh& mesh, std::span<const float> thickness, const char
 
 template <class T>
 void put(ByteBuffer& out, const T& v) {
-  out.put_bytes(&v, sizeof v);
-}
-
-// Flushes `out` into `sink` once it is large: the file is never held twice.
-void flush_if_large(ByteBuffer& out, ByteSink& sink) {
-  if (out.size() < (std::size_t{4} << 20)) return;
-  sink.write(out.bytes());
-  out.reset();
+  encode::put_value(out, v);
 }
 
 // sRGB 8-bit to linear, as glTF's COLOR_0 is.
@@ -72,11 +67,7 @@ void write_thickness_ply(const Mesh& mesh, std::span<const float> thickness, con
     put(out, c);
     flush_if_large(out, sink);
   }
-  for (const auto& t : mesh.triangles) {
-    out.put_byte(3);
-    for (const std::uint32_t v : t) put(out, static_cast<std::int32_t>(v));
-    flush_if_large(out, sink);
-  }
+  encode::put_ply_faces(mesh.triangles, out, sink);
   sink.write(out.bytes());
 }
 
@@ -131,15 +122,8 @@ void write_thickness_glb(const Mesh& mesh, std::span<const float> thickness, con
                        {"componentType", kUnsignedInt},
                        {"count", 3 * triangles.size()},
                        {"type", "SCALAR"}});
-  const double half = std::sqrt(0.5);
-  nlohmann::json gltf = {
-      {"asset", {{"version", "2.0"}, {"generator", "voxd"}}},
-      {"scene", 0},
-      {"scenes", nlohmann::json::array({{{"nodes", nlohmann::json::array({1})}}})},
-      {"nodes", nlohmann::json::array({{{"name", "part"}, {"mesh", 0}},
-                                       {{"name", "voxd model (Z-up model axes turned to glTF's Y-up)"},
-                                        {"rotation", {-half, 0.0, 0.0, half}},
-                                        {"children", nlohmann::json::array({0})}}})},
+  nlohmann::json gltf = encode::gltf_z_up_scene();
+  gltf.update({
       {"materials", nlohmann::json::array({{{"name", "wall thickness (vertex colours)"},
                                             {"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}},
                                             {"doubleSided", true}}})},
@@ -154,43 +138,21 @@ void write_thickness_glb(const Mesh& mesh, std::span<const float> thickness, con
                                                                                 {"mode", 4}}})}}})},
       {"accessors", accessors},
       {"bufferViews", views},
-      {"buffers", nlohmann::json::array({{{"byteLength", bin_size}}})}};
-  if (n == 0 || triangles.empty()) {
-    // glTF forbids empty accessors and buffers: an empty part is an empty scene.
-    gltf = {{"asset", {{"version", "2.0"}, {"generator", "voxd"}}}, {"scene", 0},
-            {"scenes", nlohmann::json::array({nlohmann::json::object()})}};
-  }
-  std::string json = gltf.dump();
-  json.resize((json.size() + 3) & ~std::size_t{3}, ' ');
-  const bool with_bin = gltf.contains("buffers");
-  const std::uint64_t total = 12 + 8 + json.size() + (with_bin ? 8 + bin_size : 0);
-  if (total > std::numeric_limits<std::uint32_t>::max())
-    throw Error(ErrorCode::limit_exceeded,
-                "GLB writer: the file would take " + std::to_string(total) + " bytes, more than GLB's 4 GiB");
-  ByteBuffer out;
-  out.reset();
-  put(out, std::uint32_t{0x46546C67});  // "glTF"
-  put(out, std::uint32_t{2});
-  put(out, static_cast<std::uint32_t>(total));
-  put(out, static_cast<std::uint32_t>(json.size()));
-  put(out, std::uint32_t{0x4E4F534A});  // "JSON"
-  out.put_bytes(json.data(), json.size());
-  if (with_bin) {
-    put(out, static_cast<std::uint32_t>(bin_size));
-    put(out, std::uint32_t{0x004E4942});  // "BIN\0"
+      {"buffers", nlohmann::json::array({{{"byteLength", bin_size}}})}});
+  if (n == 0 || triangles.empty()) gltf = encode::gltf_empty_scene();
+  encode::write_glb(gltf, bin_size, [&](ByteBuffer& out, ByteSink& to) {
     for (const glm::vec3& p : mesh.vertices) put(out, p);
-    flush_if_large(out, sink);
+    flush_if_large(out, to);
     for (const glm::vec3& v : normals) put(out, v);
-    flush_if_large(out, sink);
+    flush_if_large(out, to);
     for (const glm::vec3& c : linear_colours) put(out, c);
-    flush_if_large(out, sink);
+    flush_if_large(out, to);
     out.put_bytes(thickness.data(), 4 * n);
     for (const auto& t : triangles) {
       put(out, t);
-      flush_if_large(out, sink);
+      flush_if_large(out, to);
     }
-  }
-  sink.write(out.bytes());
+  }, sink);
 }
 
 }  // namespace voxd

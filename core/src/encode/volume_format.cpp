@@ -13,8 +13,10 @@
 namespace voxd {
 namespace {
 
-// Formats that only a palette job's reconstruction has.
-bool palette_mesh(VolumeFormat f) { return f == VolumeFormat::stl || f == VolumeFormat::glb; }
+// Formats that hold a mesh of the result, not its voxels: a palette job's
+// reconstruction, a solid's voxel surface, an sdf's zero level set (each
+// made by its own writer: voxd/encode/palette_export.h, volume_surface.h).
+bool mesh_format(VolumeFormat f) { return f == VolumeFormat::stl || f == VolumeFormat::glb || f == VolumeFormat::ply; }
 bool colour_only(VolumeFormat f) { return f == VolumeFormat::vox || f == VolumeFormat::png_stack; }
 
 bool equals_ignoring_case(std::string_view a, std::string_view b) {
@@ -35,6 +37,7 @@ const char* file_extension(VolumeFormat format) noexcept {
     case VolumeFormat::png_stack: return ".zip";
     case VolumeFormat::stl: return ".stl";
     case VolumeFormat::glb: return ".glb";
+    case VolumeFormat::ply: return ".ply";
   }
   return "";
 }
@@ -58,6 +61,7 @@ const char* media_type(VolumeFormat format) noexcept {
     case VolumeFormat::png_stack: return "application/zip";
     case VolumeFormat::stl: return "model/stl";
     case VolumeFormat::glb: return "model/gltf-binary";
+    case VolumeFormat::ply: return "application/x-ply";
   }
   return "application/octet-stream";
 }
@@ -65,9 +69,10 @@ const char* media_type(VolumeFormat format) noexcept {
 std::optional<std::string> format_refusal(const BitVolume&, VolumeFormat format) {
   if (colour_only(format))
     return std::string(to_string(format)) + " holds colours (a slice job's result), not bits; ask for rle, binvox, raw or nrrd";
-  if (palette_mesh(format))
+  if (mesh_format(format))
     return std::string(to_string(format)) +
-           " exports a palette job's reconstruction (\"mode\": \"palette\"); ask for rle, binvox, raw or nrrd";
+           " is a mesh of the result (a solid's voxel surface, made from the volume by its own writer), not a volume "
+           "format; ask for rle, binvox, raw or nrrd";
   return std::nullopt;
 }
 
@@ -105,10 +110,10 @@ std::optional<std::string> format_refusal(const ValueVolume& volume, VolumeForma
   if (!colours && colour_only(format))
     return std::string(to_string(format)) + " holds colours (a slice job's result), not the " + value_type_name(volume) +
            " values of this volume; ask for rle, raw or nrrd";
-  if (palette_mesh(format))
+  if (mesh_format(format))
     return std::string(to_string(format)) +
-           " exports a palette job's reconstruction (\"mode\": \"palette\"), written from the palette; "
-           "this volume alone cannot be";
+           " is a mesh of the result (a palette job's reconstruction or an sdf's zero level set, each made by its own "
+           "writer), not a volume format; ask for rle, raw or nrrd";
   if (format == VolumeFormat::binvox && floats)
     return "binvox holds bits or bytes, not the float32 values of this volume; ask for rle, raw or nrrd";
   if (options.quantize != Quantize::none && (format != VolumeFormat::rle || !floats))
@@ -144,7 +149,8 @@ void encode_volume(const ValueVolume& volume, VolumeFormat format, ByteSink& sin
             if constexpr (std::is_same_v<V, DenseVolume<Rgba8>>) return write_png_stack_zip(v, sink);
             break;
           case VolumeFormat::stl:
-          case VolumeFormat::glb: break;
+          case VolumeFormat::glb:
+          case VolumeFormat::ply: break;
         }
         throw Error(ErrorCode::invalid_argument, "unknown volume format");
       },

@@ -32,11 +32,11 @@
 
 namespace voxd {
 
-enum class VolumeFormat { rle, binvox, raw, nrrd, vox, png_stack, stl, glb };
-inline constexpr EnumNames<VolumeFormat, 8> kVolumeFormatNames{{
+enum class VolumeFormat { rle, binvox, raw, nrrd, vox, png_stack, stl, glb, ply };
+inline constexpr EnumNames<VolumeFormat, 9> kVolumeFormatNames{{
     {VolumeFormat::rle, "rle"}, {VolumeFormat::binvox, "binvox"}, {VolumeFormat::raw, "raw"},
     {VolumeFormat::nrrd, "nrrd"}, {VolumeFormat::vox, "vox"}, {VolumeFormat::png_stack, "png-stack"},
-    {VolumeFormat::stl, "stl"}, {VolumeFormat::glb, "glb"}}};
+    {VolumeFormat::stl, "stl"}, {VolumeFormat::glb, "glb"}, {VolumeFormat::ply, "ply"}}};
 enum class RawPacking { bytes, bits };
 enum class NrrdEncoding { raw, gzip };
 
@@ -51,7 +51,7 @@ std::optional<VolumeFormat> volume_format_from_path(std::string_view path);
 // MIME type used when serving the format.
 const char* media_type(VolumeFormat format) noexcept;
 // File extension with the dot (".rle", ".binvox", ".raw", ".nrrd", ".vox",
-// ".zip" for png-stack, ".stl", ".glb").
+// ".zip" for png-stack, ".stl", ".glb", ".ply").
 const char* file_extension(VolumeFormat format) noexcept;
 
 // Float values in RLE as integer levels (far smaller than f32 runs inside a
