@@ -27,6 +27,7 @@ packages=(
   clang libclang-rt-14-dev util-linux
   systemd  # systemd-analyze verifies deploy/systemd/voxd.service (tests/tools/check_deploy.py)
   chromium
+  poppler-utils  # pdfinfo and pdftotext read the report Chromium prints to PDF (tests/web/browser_test.mjs)
 )
 if [[ "${1:-}" == --runtime ]]; then
   packages=("${runtime_packages[@]}")

@@ -8,6 +8,7 @@
 
 #include "api/analysis_request.h"
 #include "api/param_error.h"
+#include "server/http/job_analysis_answer.h"
 #include "server/http/job_lookup.h"
 #include "server/http/problem.h"
 #include "server/http/route_table.h"
@@ -22,23 +23,6 @@ namespace {
 
 using httplib::Request;
 using httplib::Response;
-
-// A streamed job's request that streams reads the stored RLE slab by slab;
-// every other request reads the volumes whole, and on a streamed job only
-// while they fit the per-job memory (else the 422 says what does stream).
-JobOutput output_for(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request) {
-  JobOutput output;
-  if (job.streamed && streams_over_slabs(request, *job.job)) {
-    output.rle = jobs.volume_rle(job.id);
-    if (job.has_value_volume()) output.values_rle = jobs.values_rle(job.id);
-    if (!output.rle || (job.has_value_volume() && !output.values_rle)) throw unknown_job(job.id);
-    return output;
-  }
-  output.solid = jobs.volume(job.id);
-  output.values = jobs.values(job.id);
-  if (!output.solid || (job.has_value_volume() && !output.values)) throw unknown_job(job.id);
-  return output;
-}
 
 ProblemError invalid_query(const std::string& detail) {
   return ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", detail));
@@ -90,19 +74,7 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
         return;
       }
       const JobSnapshot job = succeeded_job(jobs, id, "volume", "its analyses exist");
-      // Computing (or even serving a kept result, read whole) takes memory
-      // beside the job's volumes: held from the budget meanwhile. A streamed
-      // job's volume is loaded only for this request, so it counts too.
-      const MemoryBudget::Reservation memory = jobs.reserve_memory(
-          analysis_memory_on_job(request, *job.job, job.grid, job.streamed, jobs.max_job_memory(), job.triangles),
-          "this analysis");
-      const JobOutput output = output_for(jobs, job, request);
-      AnalysisResult result;
-      try {
-        result = job_analysis(request, job, output, artifacts_of(jobs, id));
-      } catch (const AnalysisRejected& e) {
-        throw invalid_query(e.what());
-      }
+      const AnalysisResult result = analyse_succeeded_job(jobs, job, request);
       for (const auto& [name, value] : analysis_headers(request, job.grid)) res.set_header(name, value);
       res.set_header("X-Voxd-Cache", result.kept ? "hit" : "miss");
       res.set_content(std::move(result.bytes), request.content_type());

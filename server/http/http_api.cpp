@@ -16,6 +16,7 @@ void HttpApi::install(httplib::Server& server) {
   install_service_routes(routes, jobs_, metrics_, config_, draining_);
   install_job_routes(routes, jobs_, metrics_, config_, params_limits_, tenants_);
   install_analysis_routes(routes, jobs_);
+  install_report_route(routes, jobs_);
   install_mode_routes(routes, jobs_);
   install_event_routes(routes, jobs_, metrics_);
   install_web_routes(routes);

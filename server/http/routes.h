@@ -12,6 +12,8 @@
 //    preview,thickness}, computed on first request from the stored volume
 //    unless the worker prepared them (the job JSON's "analyses"), and kept
 //    beside it (server/jobs/job_analyses.h).
+//  - report_route.cpp: /v1/jobs/{id}/report, the job's report as one HTML
+//    file to send (server/reports/job_report_html.h).
 //  - mode_routes.cpp: what a mode serves beyond its volume (mode_routes.h).
 //  - event_routes.cpp: GET /v1/jobs/{id}/events, the job's progress as
 //    server-sent events (job_event_stream.h), on the stream threads.
@@ -37,6 +39,7 @@ void install_service_routes(RouteTable& routes, JobManager& jobs, Metrics& metri
 void install_job_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics, const ServeConfig& config,
                         const api::JsonLimits& params_limits, TenantDirectory& tenants);
 void install_analysis_routes(RouteTable& routes, JobManager& jobs);
+void install_report_route(RouteTable& routes, JobManager& jobs);
 void install_mode_routes(RouteTable& routes, JobManager& jobs);
 void install_event_routes(RouteTable& routes, JobManager& jobs, Metrics& metrics);
 void install_web_routes(RouteTable& routes);

@@ -8,6 +8,7 @@
 // build/test-artifacts/browser).
 //   node tests/web/browser_test.mjs   (VOXD_BINARY=path/to/voxd)
 import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
 import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { basename, join } from 'node:path';
@@ -150,6 +151,29 @@ try {
   assert.ok(Math.abs(Number(volumeText) - 2304) / 2304 < 0.05, `volume ${volumeText}`);
   assert.match(await page.$eval('#report', (e) => e.textContent), /Wall thickness/);
   await shot(page, 'report');
+  // The report to send: one HTML file (the verdict, the inputs, the
+  // pictures inline), printed to PDF by Chromium: pages, and the verdict in
+  // the PDF's text (poppler's pdfinfo and pdftotext read it).
+  const [reportDownload] = await Promise.all([page.waitForEvent('download'), page.click('#download-report')]);
+  assert.equal(reportDownload.suggestedFilename(), 'hollow-box-report.html');
+  const reportHtml = readFileSync(await reportDownload.path(), 'utf8');
+  const apiReport = await (await fetch(`${base}/v1/jobs/${jobId}/analysis?min_wall=1`)).json();
+  const verdictWord = apiReport.thickness.verdict;
+  assert.match(reportHtml, new RegExp(`<span class="verdict ${verdictWord}">${verdictWord}</span>`));
+  assert.ok((reportHtml.match(/src="data:image\/png;base64,/g) || []).length >= 3, 'the report has its pictures inline');
+  assert.ok(!/src="(https?:)?\/\//.test(reportHtml) && !/<script/.test(reportHtml), 'the report needs nothing else');
+  const printed = await context.newPage();
+  await printed.setContent(reportHtml);
+  await printed.screenshot({ path: join(artifacts, `${String(++step).padStart(2, '0')}-report-html.png`), fullPage: true });
+  const pdfPath = join(artifacts, 'report.pdf');
+  await printed.pdf({ path: pdfPath, format: 'A4' });
+  await printed.close();
+  const pdfPages = Number(/Pages:\s+(\d+)/.exec(execFileSync('pdfinfo', [pdfPath], { encoding: 'utf8' }))[1]);
+  assert.ok(pdfPages >= 1, `the PDF has ${pdfPages} pages`);
+  const pdfText = execFileSync('pdftotext', [pdfPath, '-'], { encoding: 'utf8' });
+  assert.match(pdfText, /Wall thickness verdict/);
+  assert.match(pdfText, new RegExp(`\\b${verdictWord}\\b`));
+  assert.match(pdfText, /hollow-box\.stl/);
   // A region's row shows its box in the 3D view.
   const before3d = await page.$eval('#viewer canvas', (c) => c.toDataURL());
   await page.click('#report tr.region >> nth=1');  // the void inside the box

@@ -249,6 +249,10 @@ function openJob(id) {
   $('job-panel').hidden = false;
   $('results').hidden = true;
   $('job-id').textContent = id;
+  // Nothing of the job shown before stays: its 3D view's words and legend.
+  $('view-info').textContent = '';
+  $('view-readout').textContent = '';
+  $('wall-legend').hidden = true;
   analysesDone = new Map();
   $('analyses-ready').textContent = '';
   showJobNotes({});
@@ -445,6 +449,24 @@ async function showReport(job) {
   });
 }
 
+// Fetches `url` (with the API key) and saves its bytes under the name its
+// Content-Disposition gives, else `fallback`.
+async function saveFrom(url, fallback) {
+  const res = await call(url);
+  const name = /filename="?([^";]+)"?/.exec(res.headers.get('Content-Disposition') || '');
+  const save = Object.assign(document.createElement('a'), {
+    href: URL.createObjectURL(await res.blob()), download: name ? name[1] : fallback,
+  });
+  save.click();
+  setTimeout(() => URL.revokeObjectURL(save.href), 10000);
+}
+
+// The job's report as one HTML file to send (GET /v1/jobs/{id}/report):
+// the pictures, tables, verdict, warnings and inputs; it prints to PDF.
+$('download-report').onclick = guarded(async () => {
+  if (current?.job) await saveFrom(`/v1/jobs/${current.job.id}/report`, `${current.job.id}-report.html`);
+});
+
 function showDownloads(job) {
   const downloads = job.links.downloads || {};
   $('downloads').replaceChildren(...Object.entries(downloads).map(([format, url]) => {
@@ -454,13 +476,7 @@ function showDownloads(job) {
     a.onclick = guarded(async (e) => {
       if (!apiKey.get()) return;
       e.preventDefault();
-      const res = await call(url);
-      const name = /filename="?([^";]+)"?/.exec(res.headers.get('Content-Disposition') || '');
-      const save = Object.assign(document.createElement('a'), {
-        href: URL.createObjectURL(await res.blob()), download: name ? name[1] : `${job.id}.${format}`,
-      });
-      save.click();
-      setTimeout(() => URL.revokeObjectURL(save.href), 10000);
+      await saveFrom(url, `${job.id}.${format}`);
     });
     const li = document.createElement('li');
     li.append(a);

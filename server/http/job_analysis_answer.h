@@ -1,0 +1,17 @@
+#pragma once
+// One analysis of a succeeded job, as the analysis routes and the job's
+// report (report_route.cpp) make it: the memory it needs held from the
+// budget meanwhile, the job's volumes read (a streamed job's slab by slab
+// where the analysis streams), the kept result when there is one. A request
+// the analysis cannot take is a 400 invalid-query.
+#include "api/analysis_request.h"
+#include "server/jobs/job.h"
+#include "server/jobs/job_analyses.h"
+
+namespace voxd::server {
+
+class JobManager;
+
+AnalysisResult analyse_succeeded_job(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request);
+
+}  // namespace voxd::server
