@@ -150,6 +150,20 @@ try {
   const volumeText = await page.$eval('#report table tbody tr td:nth-child(2)', (e) => e.textContent);
   assert.ok(Math.abs(Number(volumeText) - 2304) / 2304 < 0.05, `volume ${volumeText}`);
   assert.match(await page.$eval('#report', (e) => e.textContent), /Wall thickness/);
+  // The mesh is watertight, in words; the void (8192 voxels) hides under a
+  // larger size and shows again.
+  assert.match(await page.$eval('#report .mesh-status', (e) => e.textContent), /^the mesh is watertight/);
+  const voidRows = () => page.$$eval('#report tr.region', (rows) => rows.filter((r) => !r.hidden).length);
+  const allRows = await voidRows();
+  await page.fill('#void-min-voxels', '100000');
+  assert.equal(await voidRows(), allRows - 1, 'the void is not hidden by the size filter');
+  assert.match(await page.$eval('#voids-shown', (e) => e.textContent), /^0 of 1 listed shown/);
+  await page.fill('#void-min-voxels', '0');
+  assert.equal(await voidRows(), allRows);
+  // A solid's sections and previews are coloured by thickness, never by
+  // distance (which only an sdf job has).
+  assert.deepEqual(await page.$$eval('#sec-colour option', (o) => o.map((x) => x.value)), ['none', 'thickness']);
+  assert.deepEqual(await page.$$eval('#prev-colour option', (o) => o.map((x) => x.value)), ['none', 'thickness']);
   await shot(page, 'report');
   // The report to send: one HTML file (the verdict, the inputs, the
   // pictures inline), printed to PDF by Chromium: pages, and the verdict in
@@ -213,6 +227,7 @@ try {
   const sdfPixels = await drawnPixels(page);
   assert.ok(sdfPixels.drawn > sdfPixels.total * 0.02, `zero level set nearly blank: ${sdfPixels.drawn} drawn`);
   await shot(page, 'sdf-zero-level-set');
+  assert.deepEqual(await page.$$eval('#sec-colour option', (o) => o.map((x) => x.value)), ['none', 'distance']);
 
   // 8b. Every mode the form offers submits as the form fills it in and
   // succeeds (palette and coverage take no inside test; slice's options
@@ -295,6 +310,26 @@ try {
   const width = await page.evaluate(() => document.documentElement.scrollWidth);
   assert.ok(width <= 390, `the page is ${width} px wide at a 390 px viewport`);
   await shot(page, 'phone-width');
+
+  // 12. A service with API keys, opened without one: the page says where
+  // the key goes, not the API's words; with a wrong key, that it is wrong.
+  const keyed = await startVoxd(join(work, 'keyed'), ['--api-keys', 'right-key']);
+  try {
+    const visitor = await context.newPage();
+    await visitor.goto(`${keyed.base}/`);
+    await visitor.waitForSelector('#problem:not([hidden])');
+    assert.equal(await visitor.$eval('#problem-title', (e) => e.textContent), 'This service needs an API key');
+    assert.match(await visitor.$eval('#problem-detail', (e) => e.textContent), /API key box at the top right/);
+    await visitor.fill('#api-key', 'wrong-key');
+    await visitor.press('#api-key', 'Enter');
+    await visitor.dispatchEvent('#api-key', 'change');
+    await visitor.waitForFunction(() => document.getElementById('problem-title').textContent === 'This API key is not accepted');
+    await visitor.screenshot({ path: join(artifacts, `${String(++step).padStart(2, '0')}-wrong-key.png`) });
+    await visitor.evaluate(() => localStorage.clear());
+    await visitor.close();
+  } finally {
+    keyed.child.kill('SIGTERM');
+  }
 
   assert.deepEqual(consoleErrors, []);
   assert.deepEqual(failedRequests.filter((u) => !u.includes('broken') && !/\/v1\//.test(u)), [],

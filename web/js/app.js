@@ -21,8 +21,15 @@ const radiography = new RadiographyView({
 // ---- problems ---------------------------------------------------------------
 
 function showProblem(e) {
-  const title = e instanceof ApiError ? e.title : 'Something went wrong';
-  const detail = e instanceof ApiError ? e.detail : String(e.message || e);
+  let title = e instanceof ApiError ? e.title : 'Something went wrong';
+  let detail = e instanceof ApiError ? e.detail : String(e.message || e);
+  // The API's words are for programs; a person at the page is told where
+  // the key goes.
+  if (e instanceof ApiError && e.status === 401) {
+    title = apiKey.get() ? 'This API key is not accepted' : 'This service needs an API key';
+    detail = apiKey.get() ? 'check the key in the API key box at the top right, or ask the service\'s operator for one'
+                          : 'enter your key in the API key box at the top right (it stays in this browser); ask the service\'s operator for one';
+  }
   $('problem-title').textContent = title;
   $('problem-detail').textContent = detail;
   $('problem').hidden = false;
@@ -311,9 +318,18 @@ function reportOf(job) {
   return current.report;
 }
 
+// The colourings a job's sections and previews can take: wall thickness
+// for a solid's bits, distance for an sdf's values, else none.
+function offerColours(mode) {
+  const colours = { solid: ['none', 'thickness'], surface: ['none', 'thickness'], 'solid+surface': ['none', 'thickness'],
+                    sdf: ['none', 'distance'] }[mode] || ['none'];
+  for (const id of ['sec-colour', 'prev-colour']) fillSelect($(id), colours, colours.includes($(id).value) ? $(id).value : 'none');
+}
+
 async function showResults(job) {
   $('results').hidden = false;
   const mode = job.params.mode ?? schema?.properties?.mode?.default ?? 'solid';
+  offerColours(mode);
   // A solid job's part painted by wall thickness: first when the job asked
   // for the report (its thickness is made already), else on request.
   const solid = reportRequest(job) ? ['wall thickness', 'voxels'] : ['voxels', 'wall thickness'];
@@ -442,7 +458,7 @@ $('prev-colour').onchange = guarded(() => current?.job && showPreviews(current.j
 async function showReport(job) {
   const report = await reportOf(job);
   // A region's row shows where it is: its box in the 3D view.
-  renderReport($('report'), report, (min, max) => {
+  renderReport($('report'), report, job.mesh, (min, max) => {
     if (!viewer) return;
     viewer.showBox(min, max);
     if (min) selectTab('view3d');

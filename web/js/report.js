@@ -21,10 +21,53 @@ function table(headings, rows, rowClass) {
 
 function heading(text) { return Object.assign(document.createElement('h3'), { textContent: text }); }
 
-// `showRegion(min, max)` puts a box in the 3D view (null: none).
-export function renderReport(container, report, showRegion) {
+// Voids under a size hidden (a scan's or a coarse grid's specks of one or
+// two voxels), the count of those shown said in the heading's place.
+function voidFilter(container, voids) {
+  const rows = [...container.querySelectorAll('table')].pop();
+  if (!voids?.items?.length || !rows) return;
+  const input = Object.assign(document.createElement('input'), { type: 'number', min: 0, step: 1, value: 0, id: 'void-min-voxels' });
+  const shown = Object.assign(document.createElement('span'), { className: 'muted', id: 'voids-shown' });
+  const label = Object.assign(document.createElement('label'), { textContent: 'hide voids under ' });
+  label.append(input, ' voxels ');
+  const apply = () => {
+    const min = Number(input.value) || 0;
+    let n = 0;
+    [...rows.tBodies[0].rows].forEach((tr, i) => {
+      tr.hidden = voids.items[i].voxels < min;
+      if (!tr.hidden) ++n;
+    });
+    shown.textContent = `${n} of ${voids.items.length} listed shown; click one to see where it is`;
+  };
+  input.oninput = apply;
+  apply();
+  const p = document.createElement('p');
+  p.append(label, shown);
+  rows.before(p);
+}
+
+// Whether the uploaded mesh is closed, in words, from the job's mesh report.
+function meshStatus(mesh) {
+  if (!mesh) return null;
+  if (mesh.watertight) return 'the mesh is watertight: closed, manifold and consistently oriented, so its exact volume holds';
+  const parts = [];
+  if (mesh.boundary_edges) parts.push(`${mesh.boundary_edges} open (boundary) edges`);
+  if (mesh.nonmanifold_edges) parts.push(`${mesh.nonmanifold_edges} non-manifold edges`);
+  if (mesh.inconsistent_edges) parts.push(`${mesh.inconsistent_edges} edges between triangles facing opposite ways`);
+  return `the mesh is not watertight (${parts.join(', ') || 'no usable triangle'}): the voxels stand, the mesh's exact values may not`;
+}
+
+// `uploaded`: the job status's mesh report; `showRegion(min, max)` puts a
+// box in the 3D view (null: none).
+export function renderReport(container, report, uploaded, showRegion) {
   container.replaceChildren();
   const unit = report.unit || 'mm';
+  const status = meshStatus(uploaded);
+  if (status) {
+    container.append(Object.assign(document.createElement('p'), {
+      className: `mesh-status ${uploaded.watertight ? 'watertight' : 'open'}`, textContent: status,
+    }));
+  }
   const m = report.mass_properties;
   container.append(heading(`Mass properties (${unit})`));
   const mesh = m.mesh && m.mesh.available !== false ? m.mesh : null;
@@ -59,6 +102,7 @@ export function renderReport(container, report, showRegion) {
   };
   regions('Parts', report.parts);
   regions('Voids', report.voids);
+  voidFilter(container, report.voids);
   const t = report.thickness;
   if (t) {
     container.append(heading(`Wall thickness (${unit})`));
