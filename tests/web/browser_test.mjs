@@ -238,8 +238,8 @@ try {
   for (const mode of modes) {
     await page.selectOption('#mode', mode);
     assert.equal(await page.$eval('#inside', (e) => e.disabled), mode === 'coverage' || mode === 'palette', mode);
-    if (mode === 'slice')
-      assert.ok(!(await page.$$eval('#mode-options select option', (o) => o.map((x) => x.value))).includes('custom'));
+    if (mode === 'slice')  // custom takes its lookup from an uploaded image
+      assert.ok((await page.$$eval('#mode-options select option', (o) => o.map((x) => x.value))).includes('custom'));
     await page.setInputFiles('#mesh-file', meshPath);
     const before = await page.$eval('#job-id', (e) => e.textContent);
     await page.click('#submit');
@@ -250,6 +250,51 @@ try {
     await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
   }
   await shot(page, 'every-mode');
+  // 8c. Options beyond enums and numbers: a slice's colour ramp from two
+  // colour inputs, a custom lookup from an uploaded image (its pixels are
+  // the part's only colours), an sdf's band as a word.
+  const submitted = async () => {
+    const before = await page.$eval('#job-id', (e) => e.textContent);
+    await page.click('#submit');
+    await page.waitForFunction((b) => document.getElementById('job-id').textContent !== b ||
+                                      !document.getElementById('problem').hidden, before);
+    assert.ok(await page.$eval('#problem', (e) => e.hidden), await page.$eval('#problem-detail', (e) => e.textContent));
+    await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
+    const id = await page.$eval('#job-id', (e) => e.textContent);
+    return (await fetch(`${base}/v1/jobs/${id}`)).json();
+  };
+  await page.selectOption('#mode', 'slice');
+  await page.selectOption('[data-option=function]', 'color_ramp');
+  assert.equal(await page.isVisible('[data-option=color]'), false, 'single_color\'s colour shown for a ramp');
+  const stops = page.locator('[data-option=ramp] input');
+  await stops.nth(0).fill('#00ff00');
+  await stops.nth(1).fill('#ff00ff');
+  await page.setInputFiles('#mesh-file', meshPath);
+  const ramp = await submitted();
+  assert.deepEqual(ramp.params.slice.ramp.map((r) => r.color), [[0, 255, 0, 255], [255, 0, 255, 255]]);
+  await page.selectOption('[data-option=function]', 'custom');
+  const lookupPng = join(work, 'lookup.png');
+  writeFileSync(lookupPng, Buffer.from(await page.evaluate(() => {
+    const c = Object.assign(document.createElement('canvas'), { width: 2, height: 1 });
+    const ctx = c.getContext('2d');
+    ctx.fillStyle = '#ff0000'; ctx.fillRect(0, 0, 1, 1);
+    ctx.fillStyle = '#0000ff'; ctx.fillRect(1, 0, 1, 1);
+    return c.toDataURL('image/png').split(',')[1];
+  }), 'base64'));
+  await page.setInputFiles('[data-option=lookup]', lookupPng);
+  await page.waitForFunction(() => document.querySelector('[data-option=lookup]').lookup !== undefined);
+  await page.setInputFiles('#mesh-file', meshPath);
+  const custom = await submitted();
+  assert.deepEqual(custom.params.slice.lookup, { dims: [2, 1, 1], colors: [[255, 0, 0, 255], [0, 0, 255, 255]] });
+  const rgba = new Uint8Array(await (await fetch(`${base}/v1/jobs/${custom.id}/volume?format=raw`)).arrayBuffer());
+  const colours = new Set();
+  for (let i = 0; i < rgba.length; i += 4) if (rgba[i + 3]) colours.add(`${rgba[i]},${rgba[i + 1]},${rgba[i + 2]}`);
+  assert.deepEqual([...colours].sort(), ['0,0,255', '255,0,0']);
+  await page.selectOption('#mode', 'sdf');
+  await page.fill('[data-option=band]', 'full');
+  await page.setInputFiles('#mesh-file', meshPath);
+  assert.equal((await submitted()).params.sdf.band, 'full');
+  await shot(page, 'options-beyond-enums');
   // Recent jobs: each by its file's name and its mode (a job submitted
   // without one is solid, never "undefined").
   const noMode = new FormData();

@@ -45,27 +45,118 @@ function fillSelect(select, values, chosen) {
   select.replaceChildren(...values.map((v) => new Option(v, v, false, v === chosen)));
 }
 
-// Whether the form renders an input for this option (enums, numbers,
-// booleans; colours, ramps and lookup images the API takes as JSON).
-function plainOption(spec) {
+// The kind of input the form renders for an option, or null for one it
+// cannot give: enums, numbers, booleans; a number or a word ("band": 3 or
+// "full"); a colour, a list of colours, a ramp of colour stops; a lookup
+// image, uploaded.
+function inputKind(spec) {
   const s = spec.$ref ? resolve(spec.$ref) : spec;
-  return (s.enum && s.enum.every((v) => typeof v === 'string')) || ['boolean', 'integer', 'number'].includes(s.type);
+  if (spec.$ref === '#/$defs/rgba') return 'rgba';
+  if (s.enum && s.enum.every((v) => typeof v === 'string')) return 'enum';
+  if (['boolean', 'integer', 'number'].includes(s.type)) return s.type;
+  if (s.oneOf && s.oneOf.length === 2 && s.oneOf.some((o) => o.type === 'number') && s.oneOf.some((o) => typeof o.const === 'string'))
+    return 'number-or-word';
+  if (s.type === 'array' && s.items?.$ref === '#/$defs/rgba' && Array.isArray(s.default)) return 'rgba-list';
+  if (s.type === 'array' && s.items?.properties?.position && s.items?.properties?.color && Array.isArray(s.default)) return 'ramp';
+  if (s.type === 'object' && s.properties?.dims && s.properties?.colors) return 'lookup-image';
+  return null;
 }
 
 // The values of enum option `name` the form cannot submit: those the
-// options' allOf rules say need an option the form has no input for
-// ("function is custom" -> "lookup required").
+// options' allOf rules say need an option the form has no input for.
 function unofferable(options, name) {
   const out = new Set();
   for (const rule of options.allOf || []) {
     const value = rule.if?.properties?.[name]?.const;
     const needs = rule.then?.required || [];
-    if (value !== undefined && needs.some((n) => !options.properties[n] || !plainOption(options.properties[n]))) out.add(value);
+    if (value !== undefined && needs.some((n) => !options.properties[n] || !inputKind(options.properties[n]))) out.add(value);
   }
   return out;
 }
 
-// One input per plain option of a mode (enums, numbers, booleans).
+// The values of another option (the slice's function) an option applies to,
+// from the allOf rules "if it is given, then function is one of ...": null
+// when it applies whatever they are.
+function appliesTo(options, name) {
+  for (const rule of options.allOf || []) {
+    const given = rule.if?.required || (rule.if?.anyOf || []).flatMap((a) => a.required || []);
+    if (!given.includes(name)) continue;
+    for (const [other, limit] of Object.entries(rule.then?.properties || {})) {
+      const values = limit.const !== undefined ? [limit.const] : limit.enum;
+      if (values) return { option: other, values };
+    }
+  }
+  return null;
+}
+
+const hex = (rgba) => (typeof rgba === 'string' ? rgba.slice(0, 7)
+  : `#${rgba.slice(0, 3).map((c) => c.toString(16).padStart(2, '0')).join('')}`);
+const rgbaOf = (hexColour) => [1, 3, 5].map((i) => parseInt(hexColour.slice(i, i + 2), 16)).concat(255);
+const colourInput = (value) => Object.assign(document.createElement('input'), { type: 'color', value: hex(value) });
+
+// A lookup image as the API takes it: cells along x and y (one layer in z),
+// each pixel's colour, x fastest; alpha dropped (0 would mean empty).
+async function lookupFromImage(file) {
+  const bitmap = await createImageBitmap(file);
+  if (bitmap.width > 64 || bitmap.height > 64)
+    throw new ApiError(0, { title: 'Lookup image too large', detail: `${bitmap.width} × ${bitmap.height} pixels: a lookup is at most 64 cells a side` });
+  const canvas = Object.assign(document.createElement('canvas'), { width: bitmap.width, height: bitmap.height });
+  const ctx = canvas.getContext('2d');
+  ctx.drawImage(bitmap, 0, 0);
+  const px = ctx.getImageData(0, 0, bitmap.width, bitmap.height).data;
+  const colors = [];
+  // Image rows run top down; the lookup's y runs up.
+  for (let y = bitmap.height - 1; y >= 0; --y)
+    for (let x = 0; x < bitmap.width; ++x) colors.push([...px.slice(4 * (y * bitmap.width + x), 4 * (y * bitmap.width + x) + 3), 255]);
+  return { dims: [bitmap.width, bitmap.height, 1], colors };
+}
+
+// One input (or a row of them) for an option, by its kind.
+function optionInput(name, s, kind, options) {
+  let input;
+  switch (kind) {
+    case 'enum': {
+      input = document.createElement('select');
+      const skip = unofferable(options, name);
+      fillSelect(input, s.enum.filter((v) => !skip.has(v)), s.default);
+      return input;
+    }
+    case 'boolean': return Object.assign(document.createElement('input'), { type: 'checkbox', checked: !!s.default });
+    case 'integer':
+    case 'number':
+      input = Object.assign(document.createElement('input'), { type: 'number', step: kind === 'integer' ? 1 : 'any' });
+      if (s.minimum !== undefined) input.min = s.minimum;
+      if (s.maximum !== undefined) input.max = s.maximum;
+      if (s.default !== undefined) input.placeholder = s.default;
+      return input;
+    case 'number-or-word': {
+      const word = s.oneOf.find((o) => typeof o.const === 'string').const;
+      return Object.assign(document.createElement('input'), { type: 'text', placeholder: `${s.default ?? ''} or ${word}`, size: 8 });
+    }
+    case 'rgba': return colourInput(s.default ?? [200, 200, 200]);
+    case 'rgba-list':
+    case 'ramp': {
+      input = Object.assign(document.createElement('span'), { className: 'colours' });
+      for (const item of s.default) {
+        const c = colourInput(kind === 'ramp' ? item.color : item);
+        if (kind === 'ramp') c.dataset.position = item.position;
+        input.append(c);
+      }
+      return input;
+    }
+    case 'lookup-image': {
+      input = Object.assign(document.createElement('input'), { type: 'file', accept: 'image/png,image/gif,image/bmp' });
+      input.onchange = guarded(async () => {
+        input.lookup = input.files[0] ? await lookupFromImage(input.files[0]) : undefined;
+      });
+      return input;
+    }
+    default: return null;
+  }
+}
+
+// One input per option of a mode the form can give, each shown only while
+// the option applies (a slice's colours with their function).
 function optionInputs(modeName) {
   const box = $('mode-options');
   box.replaceChildren();
@@ -73,27 +164,47 @@ function optionInputs(modeName) {
   if (!options || !options.properties) return;
   for (const [name, spec] of Object.entries(options.properties)) {
     const s = spec.$ref ? resolve(spec.$ref) : spec;
-    let input;
-    if (s.enum && s.enum.every((v) => typeof v === 'string')) {
-      input = document.createElement('select');
-      const skip = unofferable(options, name);
-      fillSelect(input, s.enum.filter((v) => !skip.has(v)), s.default);
-    } else if (s.type === 'boolean') {
-      input = Object.assign(document.createElement('input'), { type: 'checkbox', checked: !!s.default });
-    } else if (s.type === 'integer' || s.type === 'number') {
-      input = Object.assign(document.createElement('input'), { type: 'number', step: s.type === 'integer' ? 1 : 'any' });
-      if (s.minimum !== undefined) input.min = s.minimum;
-      if (s.maximum !== undefined) input.max = s.maximum;
-      if (s.default !== undefined) input.placeholder = s.default;
-    } else {
-      continue;  // colours, ramps, lookup images: the API takes them as JSON
-    }
+    const kind = inputKind(spec);
+    const input = kind && optionInput(name, { ...s, default: spec.default ?? s.default }, kind, options);
+    if (!input) continue;
     input.dataset.option = name;
-    input.dataset.kind = s.type || 'enum';
-    input.title = s.description || '';
+    input.dataset.kind = kind;
+    input.title = spec.description || s.description || '';
     const label = Object.assign(document.createElement('label'), { textContent: `${name} ` });
+    const applies = appliesTo(options, name);
+    if (applies) {
+      label.dataset.when = applies.option;
+      label.dataset.values = JSON.stringify(applies.values);
+    }
     label.append(input);
     box.append(label);
+  }
+  const showApplying = () => {
+    for (const label of box.querySelectorAll('label[data-when]')) {
+      const chosen = box.querySelector(`[data-option="${label.dataset.when}"]`)?.value;
+      label.hidden = !JSON.parse(label.dataset.values).includes(chosen);
+    }
+  };
+  box.onchange = showApplying;
+  showApplying();
+}
+
+// An option's value from its input, or undefined to leave it out.
+function optionValue(input) {
+  switch (input.dataset.kind) {
+    case 'boolean': return input.checked;
+    case 'enum': return input.value;
+    case 'integer':
+    case 'number': return input.value === '' ? undefined : Number(input.value);
+    case 'number-or-word': {
+      const v = input.value.trim();
+      return v === '' ? undefined : Number.isFinite(Number(v)) ? Number(v) : v;
+    }
+    case 'rgba': return rgbaOf(input.value);
+    case 'rgba-list': return [...input.querySelectorAll('input')].map((c) => rgbaOf(c.value));
+    case 'ramp': return [...input.querySelectorAll('input')].map((c) => ({ position: Number(c.dataset.position), color: rgbaOf(c.value) }));
+    case 'lookup-image': return input.lookup;
+    default: return undefined;
   }
 }
 
@@ -142,9 +253,9 @@ function jobParams() {
   params.grid = kind === 'resolution' ? { resolution: Number($('resolution').value) }
                                       : { voxel_size: Number($('voxel-size').value) };
   const options = {};
-  for (const input of $('mode-options').querySelectorAll('[data-option]')) {
-    if (input.dataset.kind === 'boolean') options[input.dataset.option] = input.checked;
-    else if (input.value !== '') options[input.dataset.option] = input.tagName === 'SELECT' ? input.value : Number(input.value);
+  for (const input of $('mode-options').querySelectorAll(':scope > label:not([hidden]) > [data-option]')) {
+    const value = optionValue(input);
+    if (value !== undefined) options[input.dataset.option] = value;
   }
   if (schema.properties[params.mode]?.properties) params[params.mode] = options;
   params.analyses = [];
