@@ -431,10 +431,15 @@ function reportOf(job) {
 
 // The colourings a job's sections and previews can take: wall thickness
 // for a solid's bits, distance for an sdf's values, else none.
+// An sdf's sections open coloured by distance, with their legend (its
+// plain section is a grey ramp with none).
 function offerColours(mode) {
   const colours = { solid: ['none', 'thickness'], surface: ['none', 'thickness'], 'solid+surface': ['none', 'thickness'],
                     sdf: ['none', 'distance'] }[mode] || ['none'];
-  for (const id of ['sec-colour', 'prev-colour']) fillSelect($(id), colours, colours.includes($(id).value) ? $(id).value : 'none');
+  for (const id of ['sec-colour', 'prev-colour']) {
+    const keep = colours.includes($(id).value) && $(id).value !== 'none' ? $(id).value : null;
+    fillSelect($(id), colours, keep ?? (id === 'sec-colour' && mode === 'sdf' ? 'distance' : 'none'));
+  }
 }
 
 async function showResults(job) {
