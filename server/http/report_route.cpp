@@ -70,7 +70,7 @@ void install_report_route(RouteTable& routes, JobManager& jobs) {
       if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-' && c != '_') c = '_';
     if (stem.empty()) stem = job.id;
     res.set_header("Content-Disposition", "attachment; filename=\"" + stem + "-report.html\"");
-    res.set_content(job_report_html(job_status_json(job), report, pictures), "text/html; charset=utf-8");
+    res.set_content(job_report_html(job_status_json(job), job.job->mode_name(), report, pictures), "text/html; charset=utf-8");
   });
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // GET /v1/jobs/{id}/volume?format=stl|ply|glb for a job whose mode does not
 // write the format itself (a palette job's stl and glb are its
-// reconstruction, api/modes/palette_mode.cpp): a mesh of the result, made
+// reconstruction, written by its mode in api/modes/): a mesh of the result, made
 // when asked and streamed (voxd/encode/volume_surface.h, mesh_export.h):
 //  - bits (solid, surface, solid+surface): the voxel surface, closed and
 //    facing out, enclosing the filled voxels' volume exactly;

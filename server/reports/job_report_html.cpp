@@ -107,7 +107,8 @@ figcaption { font-size: .9em; color: #6b7385; }
 
 }  // namespace
 
-std::string job_report_html(const json& status, const json& report, const std::vector<ReportPicture>& pictures) {
+std::string job_report_html(const json& status, const std::string& mode, const json& report,
+                            const std::vector<ReportPicture>& pictures) {
   const std::string id = text_of(status, "id");
   const std::string name = text_of(status, "name").empty() ? id : text_of(status, "name");
   const std::string unit = report.value("unit", "mm");
@@ -141,7 +142,7 @@ std::string job_report_html(const json& status, const json& report, const std::v
   h += "<h2>Inputs</h2>\n<table class=\"inputs\"><tbody>\n";
   h += row({"file", text_of(status, "name").empty() ? "–" : text_of(status, "name")});
   h += row({"mesh units", params.value("units", json("mm")).is_string() ? params.value("units", std::string("mm")) : "mm"});
-  h += row({"mode", params.value("mode", std::string("solid"))});
+  h += row({"mode", mode});
   const json& dims = grid.value("dims", json::array());
   h += row({"grid", dims.size() == 3 ? std::to_string(dims[0].get<long long>()) + " × " +
                                             std::to_string(dims[1].get<long long>()) + " × " +

@@ -18,9 +18,10 @@ struct ReportPicture {
   std::string png;  // the image's bytes
 };
 
-// `status`: the job status JSON (job_status.h); `report`: the analysis
+// `status`: the job status JSON (job_status.h); `mode`: the job's mode by
+// name (the status's params leave out a default); `report`: the analysis
 // report JSON (proto-schemas/analysis.schema.json).
-std::string job_report_html(const nlohmann::json& status, const nlohmann::json& report,
+std::string job_report_html(const nlohmann::json& status, const std::string& mode, const nlohmann::json& report,
                             const std::vector<ReportPicture>& pictures);
 
 }  // namespace voxd::server

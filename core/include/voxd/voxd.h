@@ -53,6 +53,7 @@
 
 #include "voxd/encode/colour_map.h"
 #include "voxd/encode/magica_vox.h"
+#include "voxd/encode/mesh_export.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/encode/palette_export.h"
 #include "voxd/encode/png_image.h"
@@ -61,4 +62,5 @@
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/thickness_mesh.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/encode/volume_surface.h"
 #include "voxd/encode/zip_archive.h"
