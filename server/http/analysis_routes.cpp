@@ -2,43 +2,22 @@
 
 #include <optional>
 #include <string>
-#include <vector>
 
 #include <httplib.h>
 
 #include "api/analysis_request.h"
-#include "api/param_error.h"
 #include "server/http/job_analysis_answer.h"
-#include "server/http/job_lookup.h"
-#include "server/http/problem.h"
-#include "server/http/route_table.h"
 #include "server/http/analysis_headers.h"
-#include "server/http/job_status.h"
+#include "server/http/job_lookup.h"
+#include "server/http/route_table.h"
 #include "server/jobs/job_analyses.h"
 #include "server/jobs/job_manager.h"
-#include "voxd/error.h"
 
 namespace voxd::server {
 namespace {
 
 using httplib::Request;
 using httplib::Response;
-
-ProblemError invalid_query(const std::string& detail) {
-  return ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", detail));
-}
-
-// The query as request fields; every problem goes into one 400 answer.
-api::AnalysisRequest request_of(api::AnalysisKind kind, const Request& req) {
-  api::Fields fields(req.params.begin(), req.params.end());
-  try {
-    return api::parse_analysis_request(kind, fields, "");
-  } catch (const api::InvalidParams& e) {
-    std::string detail;
-    for (const auto& f : e.errors()) detail += (detail.empty() ? "" : "; ") + f.path.substr(1) + " " + f.message;
-    throw invalid_query(detail);
-  }
-}
 
 struct KeptAnalysis {
   Grid grid;
@@ -64,7 +43,7 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
   for (const auto& [kind, name] : api::kAnalysisKindNames) {
     routes.get(kJobPath + "/" + to_string(kind), [&jobs, kind](const Request& req, Response& res) {
       const std::string id = req.matches[1];
-      const api::AnalysisRequest request = request_of(kind, req);
+      const api::AnalysisRequest request = analysis_request_of(kind, {req.params.begin(), req.params.end()});
       // One the job JSON asked for is served as soon as it is ready, while
       // the job still runs (its event stream says when).
       if (auto kept = ready_while_running(jobs, id, request)) {

@@ -1,11 +1,18 @@
 #include "server/http/job_analysis_answer.h"
 
+#include <string>
+
+#include "api/param_error.h"
 #include "server/http/job_lookup.h"
 #include "server/http/problem.h"
 #include "server/jobs/job_manager.h"
 
 namespace voxd::server {
 namespace {
+
+ProblemError invalid_query(const std::string& detail) {
+  return ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", detail));
+}
 
 // A streamed job's request that streams reads the stored RLE slab by slab;
 // every other request reads the volumes whole, and on a streamed job only
@@ -26,6 +33,16 @@ JobOutput output_for(JobManager& jobs, const JobSnapshot& job, const api::Analys
 
 }  // namespace
 
+api::AnalysisRequest analysis_request_of(api::AnalysisKind kind, const api::Fields& fields) {
+  try {
+    return api::parse_analysis_request(kind, fields, "");
+  } catch (const api::InvalidParams& e) {
+    std::string detail;
+    for (const auto& f : e.errors()) detail += (detail.empty() ? "" : "; ") + f.path.substr(1) + " " + f.message;
+    throw invalid_query(detail);
+  }
+}
+
 AnalysisResult analyse_succeeded_job(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request) {
   // Computing (or even serving a kept result, read whole) takes memory
   // beside the job's volumes: held from the budget meanwhile. A streamed
@@ -37,7 +54,7 @@ AnalysisResult analyse_succeeded_job(JobManager& jobs, const JobSnapshot& job, c
   try {
     return job_analysis(request, job, output, artifacts_of(jobs, job.id));
   } catch (const AnalysisRejected& e) {
-    throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", e.what()));
+    throw invalid_query(e.what());
   }
 }
 

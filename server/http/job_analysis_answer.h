@@ -12,6 +12,10 @@ namespace voxd::server {
 
 class JobManager;
 
+// The analysis request of a query's fields; every problem in them goes into
+// one 400 invalid-query answer.
+api::AnalysisRequest analysis_request_of(api::AnalysisKind kind, const api::Fields& fields);
+
 AnalysisResult analyse_succeeded_job(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request);
 
 }  // namespace voxd::server

@@ -9,7 +9,6 @@
 #include <httplib.h>
 
 #include "api/analysis_request.h"
-#include "api/param_error.h"
 #include "server/http/job_analysis_answer.h"
 #include "server/http/job_lookup.h"
 #include "server/http/job_status.h"
@@ -20,16 +19,6 @@
 
 namespace voxd::server {
 namespace {
-
-api::AnalysisRequest parsed(api::AnalysisKind kind, const api::Fields& fields) {
-  try {
-    return api::parse_analysis_request(kind, fields, "");
-  } catch (const api::InvalidParams& e) {
-    std::string detail;
-    for (const auto& f : e.errors()) detail += (detail.empty() ? "" : "; ") + f.path.substr(1) + " " + f.message;
-    throw ProblemError(make_problem(400, "invalid-query", "Invalid query parameter", detail));
-  }
-}
 
 // The limits: the query's when it gives any, else those of the analysis the
 // job asked for when it was submitted.
@@ -55,12 +44,12 @@ api::Fields limits_of(const httplib::Request& req, const JobSnapshot& job) {
 void install_report_route(RouteTable& routes, JobManager& jobs) {
   routes.get(kJobPath + "/report", [&jobs](const httplib::Request& req, httplib::Response& res) {
     const JobSnapshot job = succeeded_job(jobs, req.matches[1], "report", "its report exists");
-    const api::AnalysisRequest analysis = parsed(api::AnalysisKind::analysis, limits_of(req, job));
+    const api::AnalysisRequest analysis = analysis_request_of(api::AnalysisKind::analysis, limits_of(req, job));
     const nlohmann::json report = nlohmann::json::parse(analyse_succeeded_job(jobs, job, analysis).bytes);
     std::vector<ReportPicture> pictures;
     for (const char* view : {"+z", "-y", "+x"}) {
       const api::AnalysisRequest preview =
-          parsed(api::AnalysisKind::preview, {{"view", view}, {"colour", report.value("thickness", nlohmann::json()).is_object() ? "thickness" : "none"}});
+          analysis_request_of(api::AnalysisKind::preview, {{"view", view}, {"colour", report.value("thickness", nlohmann::json()).is_object() ? "thickness" : "none"}});
       pictures.push_back({std::string("from ") + view + (preview.colour == "thickness" ? ", coloured by wall thickness" : ""),
                           analyse_succeeded_job(jobs, job, preview).bytes});
     }
