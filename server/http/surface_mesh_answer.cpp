@@ -7,6 +7,7 @@
 #include "server/http/problem.h"
 #include "server/http/volume_stream.h"
 #include "server/jobs/job_manager.h"
+#include "server/jobs/memory_budget.h"
 #include "voxd/analysis/sdf_render.h"
 #include "voxd/encode/mesh_export.h"
 #include "voxd/encode/volume_surface.h"
@@ -20,7 +21,11 @@ namespace {
 // surface); less for surface nets, held to the same.
 constexpr std::uint64_t kBytesPerFace = 128;
 
-void check_memory(std::uint64_t faces, std::uint64_t volume_bytes, const JobManager& jobs, const char* what) {
+// The memory a mesh takes while it is made and sent, held from the service's
+// budget as the analyses' is (429 when it is taken now). A mesh over the
+// per-job memory is refused outright.
+std::shared_ptr<MemoryBudget::Reservation> hold_memory(std::uint64_t faces, std::uint64_t volume_bytes, JobManager& jobs,
+                                                       const char* what) {
   const std::uint64_t bytes = faces * kBytesPerFace + volume_bytes;
   if (bytes > jobs.max_job_memory())
     throw Error(ErrorCode::limit_exceeded,
@@ -28,6 +33,7 @@ void check_memory(std::uint64_t faces, std::uint64_t volume_bytes, const JobMana
                     std::to_string(bytes >> 20) + " MiB to make, over the per-job memory of " +
                     std::to_string(jobs.max_job_memory() >> 20) +
                     " MiB: ask for the volume (format rle or nrrd) and mesh it where there is room");
+  return std::make_shared<MemoryBudget::Reservation>(jobs.reserve_memory(bytes, what));
 }
 
 // Sample edges whose ends differ in sign: the quads surface nets makes.
@@ -65,6 +71,7 @@ void answer_surface_mesh(httplib::Response& res, JobManager& jobs, const JobSnap
   const api::JobParams& params = *job.job;
   const std::string format = to_string(v.format);
   std::shared_ptr<const Mesh> mesh;
+  std::shared_ptr<MemoryBudget::Reservation> memory;  // until the mesh is sent
   std::string description;
   if (!job.has_value_volume()) {
     if (job.streamed && bit_volume_bytes(job.grid.dims) > jobs.max_job_memory())
@@ -74,7 +81,7 @@ void answer_surface_mesh(httplib::Response& res, JobManager& jobs, const JobSnap
                       " MiB, so its voxel surface cannot be made here: ask for format rle or nrrd, which stream");
     const auto volume = jobs.volume(job.id);
     if (!volume) throw unknown_job(job.id);
-    check_memory(boundary_face_count(*volume), 0, jobs, "the voxel surface");
+    memory = hold_memory(boundary_face_count(*volume), 0, jobs, "the voxel surface");
     mesh = std::make_shared<const Mesh>(voxel_surface(*volume));
     description = "voxel surface, model units";
   } else {
@@ -96,7 +103,7 @@ void answer_surface_mesh(httplib::Response& res, JobManager& jobs, const JobSnap
     if (!values) throw unknown_job(job.id);
     const auto field = params.mode->distance_field(params, *values);
     if (!field || !field->sdf) throw std::logic_error("the sdf job's values are not a distance field");
-    check_memory(sign_changes(*field->sdf), bytes, jobs, "the zero level set");
+    memory = hold_memory(sign_changes(*field->sdf), bytes, jobs, "the zero level set");
     // Half a voxel beyond the grid is outside, in the values' unit (the page's rule).
     mesh = std::make_shared<const Mesh>(
         zero_level_set(*field->sdf, field->inside_negative, static_cast<float>(0.5 * field->units_per_voxel)));
@@ -105,7 +112,8 @@ void answer_surface_mesh(httplib::Response& res, JobManager& jobs, const JobSnap
   res.set_header("X-Voxd-Mesh-Triangles", std::to_string(mesh->triangles.size()));
   stream_encoded(
       res, media_type(v.format),
-      [mesh, description, format = v.format](ByteSink& sink) { write_mesh(format, *mesh, description, sink); }, v.gzip,
+      [mesh, memory, description, format = v.format](ByteSink& sink) { write_mesh(format, *mesh, description, sink); },
+      v.gzip,
       filename, &metrics);
 }
 

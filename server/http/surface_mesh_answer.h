@@ -7,7 +7,8 @@
 //    facing out, enclosing the filled voxels' volume exactly;
 //  - an sdf job: its zero level set by surface nets, as the page draws it.
 // Anything else (grey levels, colours, palette indices) is refused with 400
-// invalid-query before any work; a mesh over the per-job memory with 413.
+// invalid-query before any work; a mesh over the per-job memory with 422
+// limit-exceeded, and one that does not fit the memory budget now with 429.
 #include <string>
 
 #include <httplib.h>

@@ -7,13 +7,16 @@
 // surface are refused before any work.
 #include <cmath>
 #include <cstring>
+#include <chrono>
 #include <map>
 #include <sstream>
+#include <thread>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include "support/http_fixture.h"
+#include "support/raw_socket.h"
 #include "support/test_meshes.h"
 
 namespace voxd::test {
@@ -154,6 +157,32 @@ TEST_F(SurfaceMeshTest, AMeshOverThePerJobMemoryIsRefused) {
   const std::string id = finished(submit(ball, R"({"grid":{"resolution":96}})"));
   const json p = expect_problem(http().Get(("/v1/jobs/" + id + "/volume?format=glb").c_str()), 422, "limit-exceeded");
   EXPECT_NE(p.at("detail").get<std::string>().find("over the per-job memory of 1 MiB"), std::string::npos) << p;
+}
+
+TEST_F(SurfaceMeshTest, AMeshIsHeldFromTheMemoryBudgetUntilItIsSent) {
+  using namespace std::chrono_literals;
+  // A ball at 384 voxels: a voxel surface of about 700 thousand faces, some
+  // 85 MiB to make and a glb (~25 MB) more than loopback's socket buffers
+  // hold. Under a budget of 128 MiB one such mesh fits, two at once do not.
+  start({"--memory-budget", std::to_string(128u << 20)});
+  const std::string id = finished(submit(to_binary_stl(make_icosphere({0, 0, 0}, 10, 4)), R"({"grid":{"resolution":384}})"));
+  const std::string get = "/v1/jobs/" + id + "/volume?format=";
+  RawSocket slow(server_->port());
+  ASSERT_TRUE(slow.send("GET " + get + "glb HTTP/1.1\r\nHost: t\r\n\r\n"));
+  ASSERT_EQ(slow.read_some(60s).rfind("HTTP/1.1 200", 0), 0u);
+  // Its reader stalls: the mesh being sent still holds its memory.
+  const auto busy = http().Get((get + "ply").c_str());
+  const json p = expect_problem(busy, 429, "memory-busy");
+  EXPECT_TRUE(busy->has_header("Retry-After"));
+  EXPECT_NE(p.at("detail").get<std::string>().find("the voxel surface needs about"), std::string::npos) << p;
+  // Once that reader goes, its mesh and its memory go with it.
+  slow.close();
+  int status = 0;
+  for (int i = 0; i < 300 && status != 200; ++i) {
+    if (i) std::this_thread::sleep_for(100ms);
+    status = http().Get((get + "ply").c_str())->status;
+  }
+  EXPECT_EQ(status, 200);
 }
 
 }  // namespace
