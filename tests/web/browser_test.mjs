@@ -14,11 +14,9 @@ import { tmpdir } from 'node:os';
 import { basename, join } from 'node:path';
 
 import { binaryStl, boxTriangles } from './test_meshes.mjs';
-import { repo, requireWebModule, startVoxd } from './voxd_server.mjs';
+import { repo, runPageTest, startVoxd } from './voxd_server.mjs';
 
-const { chromium } = requireWebModule('playwright-core');
 const artifacts = process.env.VOXD_TEST_ARTIFACTS || join(repo, 'build/test-artifacts/browser');
-const browserPath = process.env.CHROMIUM || '/usr/bin/chromium';
 rmSync(artifacts, { recursive: true, force: true });
 mkdirSync(artifacts, { recursive: true });
 const work = mkdtempSync(join(tmpdir(), 'voxd-browser-'));
@@ -52,14 +50,7 @@ const drawnPixels = (page) => page.evaluate(() => {
   return { drawn: n, total: d.length / 4 };
 });
 
-const { child, base } = await startVoxd(join(work, 'data'));
-const browser = await chromium.launch({
-  executablePath: browserPath,
-  // WebGL in a headless browser with no GPU: SwiftShader.
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
-let failed = false;
-try {
+await runPageTest(work, async (browser, base) => {
   const context = await browser.newContext({ viewport: { width: 1400, height: 1000 }, acceptDownloads: true });
   const page = await context.newPage();
   const consoleErrors = [];
@@ -386,12 +377,4 @@ try {
   assert.deepEqual(failedRequests.filter((u) => !u.includes('broken') && !/\/v1\//.test(u)), [],
                    'no file of the page failed to load');
   console.log(`browser test passed; screenshots in ${artifacts}`);
-} catch (e) {
-  failed = true;
-  console.error(e);
-} finally {
-  await browser.close();
-  child.kill('SIGTERM');
-  rmSync(work, { recursive: true, force: true });
-}
-process.exit(failed ? 1 : 0);
+});

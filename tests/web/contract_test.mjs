@@ -14,7 +14,7 @@ import { tmpdir } from 'node:os';
 import { dirname, join } from 'node:path';
 import { after, before, test } from 'node:test';
 
-import { repo, requireWebModule, startVoxd } from './voxd_server.mjs';
+import { launchChromium, repo, requireWebModule, startVoxd } from './voxd_server.mjs';
 
 const work = mkdtempSync(join(tmpdir(), 'voxd-contract-'));
 let server;
@@ -107,9 +107,7 @@ test('swagger-parser validates the served document and resolves every operation'
 });
 
 test('/docs renders every operation of the served document, offline', async () => {
-  const { chromium } = requireWebModule('playwright-core');
-  const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-                                          args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader'] });
+  const browser = await launchChromium();
   try {
     const page = await browser.newPage();
     // Whatever asks another host must be refused by the browser itself (the

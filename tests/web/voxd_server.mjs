@@ -1,7 +1,9 @@
 // Starts a real `voxd serve` on a loopback ephemeral port for the Node tests
-// (the browser page, the contract linters, the README examples), and finds
-// the repository's npm modules (web/package-lock.json).
+// (the browser page, the contract linters, the README examples), finds the
+// repository's npm modules (web/package-lock.json), and launches Debian's
+// headless Chromium for the tests that drive the page.
 import { spawn } from 'node:child_process';
+import { rmSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -27,4 +29,34 @@ export function startVoxd(dataDir, extraArgs = []) {
     child.stderr.on('data', look);
     child.on('exit', (code) => reject(new Error(`voxd serve exited (${code}):\n${log}`)));
   });
+}
+
+// Debian's Chromium, headless, with WebGL by SwiftShader (no GPU here).
+export function launchChromium() {
+  const { chromium } = requireWebModule('playwright-core');
+  return chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+  });
+}
+
+// A page test's whole life: a `voxd serve` whose data lives in `work`, and
+// Chromium; `body(browser, base)` runs against them. Both are stopped and
+// `work` removed whatever happens, then the process exits 1 if body threw
+// (printing why), else 0.
+export async function runPageTest(work, body) {
+  const { child, base } = await startVoxd(join(work, 'data'));
+  const browser = await launchChromium();
+  let failed = false;
+  try {
+    await body(browser, base);
+  } catch (e) {
+    failed = true;
+    console.error(e);
+  } finally {
+    await browser.close();
+    child.kill('SIGTERM');
+    rmSync(work, { recursive: true, force: true });
+  }
+  process.exit(failed ? 1 : 0);
 }

@@ -13,9 +13,8 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
 import { binaryStl, splitBoxTriangles, tubeTriangles } from './test_meshes.mjs';
-import { repo, requireWebModule, startVoxd } from './voxd_server.mjs';
+import { repo, runPageTest } from './voxd_server.mjs';
 
-const { chromium } = requireWebModule('playwright-core');
 const artifacts = process.env.VOXD_TEST_ARTIFACTS || join(repo, 'build/test-artifacts/wall-view');
 rmSync(artifacts, { recursive: true, force: true });
 mkdirSync(artifacts, { recursive: true });
@@ -106,13 +105,7 @@ async function readingAt(page, [x, y]) {
   return Number(v);
 }
 
-const { child, base } = await startVoxd(join(work, 'data'));
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
-let failed = false;
-try {
+await runPageTest(work, async (browser, base) => {
   const page = await browser.newPage({ viewport: { width: 1400, height: 1000 } });
   page.base = base;
   const errors = [];
@@ -182,12 +175,4 @@ try {
   await page.screenshot({ path: join(artifacts, '03-rib-voxels.png') });
   assert.deepEqual(errors, []);
   console.log(`wall view test passed: tube ${painted} px in 1.5's bands (${seen.unmatched} unmatched), rib ${thin.pixels} thin px reading ${onRib}`);
-} catch (e) {
-  failed = true;
-  console.error(e);
-} finally {
-  await browser.close();
-  child.kill('SIGTERM');
-  rmSync(work, { recursive: true, force: true });
-}
-process.exit(failed ? 1 : 0);
+});
