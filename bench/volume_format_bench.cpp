@@ -1,6 +1,8 @@
 // Encoder and decoder throughput on a solid sphere (the typical voxelizer
 // output: long runs, ~2 transitions per row) and on random bits (worst case:
-// a transition every other voxel).
+// a transition every other voxel); and the meshes of a result
+// (GET /v1/jobs/{id}/volume?format=stl|ply|glb): the sphere's voxel surface
+// made, then written as each mesh format.
 //   ./build/bench/volume_format_bench --benchmark_filter=Sphere
 #include <algorithm>
 #include <cmath>
@@ -12,8 +14,10 @@
 #include <benchmark/benchmark.h>
 
 #include "voxd/byte_source.h"
+#include "voxd/encode/mesh_export.h"
 #include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/encode/volume_surface.h"
 
 namespace {
 
@@ -156,6 +160,31 @@ void BM_RleReplaySphereFromSlices(benchmark::State& s) { replay_bench(s, sphere(
 void BM_RleReplayRandomFromMemory(benchmark::State& s) { replay_bench(s, random_bits(s.range(0)), false); }
 void BM_RleReplayRandomFromSlices(benchmark::State& s) { replay_bench(s, random_bits(s.range(0)), true); }
 
+void BM_VoxelSurfaceSphere(benchmark::State& state) {
+  const BitVolume& volume = sphere(state.range(0));
+  std::size_t triangles = 0;
+  for (auto _ : state) {
+    const voxd::Mesh mesh = voxd::voxel_surface(volume);
+    triangles = mesh.triangles.size();
+  }
+  state.counters["triangles"] = static_cast<double>(triangles);
+}
+
+using MeshWriter = void (*)(const voxd::Mesh&, const std::string&, voxd::ByteSink&);
+void mesh_write_bench(benchmark::State& state, MeshWriter write) {
+  const voxd::Mesh mesh = voxd::voxel_surface(sphere(state.range(0)));
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    CountingSink sink;
+    write(mesh, "voxel surface", sink);
+    bytes = sink.size;
+  }
+  state.counters["output_MiB"] = static_cast<double>(bytes) / (1 << 20);
+}
+void BM_MeshStlSphere(benchmark::State& s) { mesh_write_bench(s, voxd::write_mesh_stl); }
+void BM_MeshPlySphere(benchmark::State& s) { mesh_write_bench(s, voxd::write_mesh_ply); }
+void BM_MeshGlbSphere(benchmark::State& s) { mesh_write_bench(s, voxd::write_mesh_glb); }
+
 }  // namespace
 
 BENCHMARK(BM_RleEncodeSphere)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -170,3 +199,7 @@ BENCHMARK(BM_RleReplaySphereFromMemory)->Arg(512)->Unit(benchmark::kMillisecond)
 BENCHMARK(BM_RleReplaySphereFromSlices)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RleReplayRandomFromMemory)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RleReplayRandomFromSlices)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_VoxelSurfaceSphere)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MeshStlSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MeshPlySphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MeshGlbSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
