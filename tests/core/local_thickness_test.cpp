@@ -3,9 +3,14 @@
 // the error statement and the thin / thick region finder.
 #include <gtest/gtest.h>
 
+#include <glm/common.hpp>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "support/test_meshes.h"
 #include "voxd/analysis/distance_transform.h"
@@ -329,6 +334,13 @@ TEST(ThicknessStatistics, MatchesAFreshComputationOnAShape) {
   EXPECT_EQ(st.max, hi);
   EXPECT_EQ(st.histogram, hist);
   EXPECT_GT(hi, lo);
+  // The same doubles on any number of threads.
+  for (const int threads : {1, 2, 3, 8}) {
+    const ThicknessStatistics other = thickness_statistics(t, bins, threads);
+    EXPECT_EQ(other.mean, st.mean) << threads;
+    EXPECT_EQ(other.std_dev, st.std_dev) << threads;
+    EXPECT_EQ(other.histogram, st.histogram) << threads;
+  }
 }
 
 TEST(ThicknessErrorBound, StatesVoxelsAndModelUnits) {
@@ -444,6 +456,127 @@ TEST(ThicknessRegions, OrderIsSeverityThenSizeThenPosition) {
   const auto diag = find_thickness_regions(d, ThicknessRegionKind::thin, 3.0f, 1);
   ASSERT_EQ(diag.size(), 1u);
   EXPECT_EQ(diag[0].voxel_count, 3u);
+}
+
+// The regions by flood fill from each voxel in scan order, 26 neighbours at
+// a time: the independent reference for the labelling by runs.
+struct ReferenceRegion {
+  ThicknessRegion region;
+  std::vector<std::size_t> voxels;
+};
+std::vector<ReferenceRegion> flood_regions(const DenseVolume<float>& t, ThicknessRegionKind kind, float threshold) {
+  const glm::i64vec3 d = t.grid().dims;
+  auto selected = [&](std::size_t idx) {
+    const float v = t.values()[idx];
+    return v > 0 && (kind == ThicknessRegionKind::thin ? v < threshold : v > threshold);
+  };
+  std::vector<bool> seen(t.values().size(), false);
+  std::vector<ReferenceRegion> out;
+  for (std::size_t seed = 0; seed < seen.size(); ++seed) {
+    if (seen[seed] || !selected(seed)) continue;
+    ReferenceRegion r;
+    r.region.bbox_min = d;
+    r.region.bbox_max = glm::i64vec3(-1);
+    r.region.extreme_thickness = t.values()[seed];
+    long double sum = 0;
+    std::vector<std::size_t> stack{seed};
+    seen[seed] = true;
+    while (!stack.empty()) {
+      const std::size_t idx = stack.back();
+      stack.pop_back();
+      r.voxels.push_back(idx);
+      const glm::i64vec3 p(static_cast<std::int64_t>(idx) % d.x, static_cast<std::int64_t>(idx) / d.x % d.y,
+                           static_cast<std::int64_t>(idx) / (d.x * d.y));
+      const float v = t.values()[idx];
+      ++r.region.voxel_count;
+      sum += v;
+      r.region.centroid += glm::dvec3(p);
+      r.region.bbox_min = glm::min(r.region.bbox_min, p);
+      r.region.bbox_max = glm::max(r.region.bbox_max, p);
+      r.region.extreme_thickness = kind == ThicknessRegionKind::thin ? std::min(r.region.extreme_thickness, v)
+                                                                     : std::max(r.region.extreme_thickness, v);
+      for (std::int64_t dz = -1; dz <= 1; ++dz)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+          for (std::int64_t dx = -1; dx <= 1; ++dx) {
+            const glm::i64vec3 q = p + glm::i64vec3(dx, dy, dz);
+            if (q.x < 0 || q.y < 0 || q.z < 0 || q.x >= d.x || q.y >= d.y || q.z >= d.z) continue;
+            const std::size_t n = t.index(q.x, q.y, q.z);
+            if (!seen[n] && selected(n)) seen[n] = true, stack.push_back(n);
+          }
+    }
+    r.region.centroid /= static_cast<double>(r.region.voxel_count);
+    r.region.mean_thickness = static_cast<float>(sum / r.region.voxel_count);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+// A map of random walls: 0 (empty) or a thickness, a blob at a time, so
+// there are regions of every size, touching along faces, edges and corners.
+DenseVolume<float> random_walls(const glm::i64vec3& dims, double fill, std::uint64_t seed) {
+  DenseVolume<float> t(unit_grid(dims.x, dims.y, dims.z), 0.0f);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> value(0.3f, 9.0f);
+  const auto voxels = static_cast<double>(dims.x * dims.y * dims.z);
+  for (int blob = 0; blob < static_cast<int>(fill * voxels / 8); ++blob) {
+    const glm::i64vec3 c(rng() % dims.x, rng() % dims.y, rng() % dims.z);
+    const float v = value(rng);
+    for (int n = 0; n < 8; ++n) {
+      const glm::i64vec3 p = glm::clamp(c + glm::i64vec3(rng() % 3, rng() % 3, rng() % 3) - glm::i64vec3(1), glm::i64vec3(0),
+                                        dims - glm::i64vec3(1));
+      t.at(p.x, p.y, p.z) = n % 3 ? v : value(rng);
+    }
+  }
+  return t;
+}
+
+TEST(ThicknessRegions, RunsFindTheFloodFillsRegionsForAnyThreadCount) {
+  for (const double fill : {0.04, 0.3}) {
+    const DenseVolume<float> t = random_walls({53, 31, 29}, fill, 7 + static_cast<std::uint64_t>(fill * 100));
+    std::mt19937_64 rng(3);
+    std::vector<std::size_t> probes;
+    for (int p = 0; p < 4000; ++p) probes.push_back(rng() % (t.values().size() + 50));  // some past the end
+    for (const auto& [kind, threshold] : {std::pair{ThicknessRegionKind::thin, 3.0f}, {ThicknessRegionKind::thick, 5.5f}}) {
+      std::vector<ReferenceRegion> want = flood_regions(t, kind, threshold);
+      const std::uint64_t min_voxels = 3;
+      std::erase_if(want, [&](const ReferenceRegion& r) { return r.region.voxel_count < min_voxels; });
+      std::stable_sort(want.begin(), want.end(), [&](const ReferenceRegion& a, const ReferenceRegion& b) {
+        if (a.region.extreme_thickness != b.region.extreme_thickness)
+          return kind == ThicknessRegionKind::thin ? a.region.extreme_thickness < b.region.extreme_thickness
+                                                   : a.region.extreme_thickness > b.region.extreme_thickness;
+        return a.region.voxel_count > b.region.voxel_count;  // then scan order: the flood's order, kept by the stable sort
+      });
+      ASSERT_GT(want.size(), 5u) << fill;
+      std::vector<std::uint32_t> rank_of_voxel(t.values().size(), 0), want_probe(probes.size(), 0);
+      for (std::size_t r = 0; r < want.size(); ++r)
+        for (const std::size_t v : want[r].voxels) {
+        rank_of_voxel[v] = static_cast<std::uint32_t>(r + 1);
+      }
+      for (std::size_t p = 0; p < probes.size(); ++p) {
+        if (probes[p] < rank_of_voxel.size()) want_probe[p] = rank_of_voxel[probes[p]];
+      }
+      std::vector<ThicknessRegion> first;
+      for (const int threads : {1, 2, 3, 8}) {
+        std::vector<std::uint32_t> probe_regions;
+        const auto got = find_thickness_regions(t, kind, threshold, min_voxels, &probes, &probe_regions, threads);
+        ASSERT_EQ(got.size(), want.size()) << fill << " " << threads;
+        for (std::size_t r = 0; r < got.size(); ++r) {
+          const ThicknessRegion &g = got[r], &w = want[r].region;
+          ASSERT_EQ(g.voxel_count, w.voxel_count) << r;
+          EXPECT_EQ(g.bbox_min, w.bbox_min) << r;
+          EXPECT_EQ(g.bbox_max, w.bbox_max) << r;
+          EXPECT_EQ(g.centroid, w.centroid) << r;
+          EXPECT_EQ(g.extreme_thickness, w.extreme_thickness) << r;
+          EXPECT_FLOAT_EQ(g.mean_thickness, w.mean_thickness) << r;
+          if (!first.empty()) {
+            EXPECT_EQ(g.mean_thickness, first[r].mean_thickness) << "threads " << threads;
+          }
+        }
+        EXPECT_EQ(probe_regions, want_probe) << threads;
+        if (first.empty()) first = got;
+      }
+    }
+  }
 }
 
 }  // namespace

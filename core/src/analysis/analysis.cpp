@@ -24,7 +24,7 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
   step(0.3);
   report.components = find_components(v);
   step(0.6);
-  if (options.skin) report.skin = summarize_peeling(peel_depth(v, options.threads, options.peel));
+  if (options.skin) report.skin = summarize_peeling(peel_depth(v, options.threads, options.peel), options.threads);
   report.peel = options.peel;
   step(0.7);
   if (options.thickness) {
@@ -36,7 +36,7 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
     }
     const DenseVolume<float>& map = computed ? *computed : *options.thickness_map;
     ThicknessAnalysis t;
-    t.stats = thickness_statistics(map, options.histogram_bins);
+    t.stats = thickness_statistics(map, options.histogram_bins, options.threads);
     t.min_wall_voxels = options.min_wall_voxels;
     t.max_wall_voxels = options.max_wall_voxels;
     // Beyond the thresholds by more than the reading's noise (see
@@ -44,24 +44,26 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
     if (options.min_wall_voxels > 0)
       t.thin_regions = find_thickness_regions(
           map, ThicknessRegionKind::thin, static_cast<float>(options.min_wall_voxels - kWallReportTolerance),
-          options.min_region_voxels);
+          options.min_region_voxels, nullptr, nullptr, options.threads);
     if (options.max_wall_voxels > 0)
       t.thick_regions = find_thickness_regions(
           map, ThicknessRegionKind::thick, static_cast<float>(options.max_wall_voxels + kWallReportTolerance),
-          options.min_region_voxels);
+          options.min_region_voxels, nullptr, nullptr, options.threads);
     // Within the bound on the good side: found with the threshold moved a
     // bound further, less those holding a region beyond it (listed above).
     const ThicknessErrorBound bound = wall_thickness_error_bound();
     if (options.min_wall_voxels > 0) {
       const double at = options.min_wall_voxels - kWallReportTolerance;
       for (ThicknessRegion& r : find_thickness_regions(map, ThicknessRegionKind::thin,
-                                                       static_cast<float>(at + bound.below_voxels), options.min_region_voxels))
+                                                       static_cast<float>(at + bound.below_voxels), options.min_region_voxels,
+                                                       nullptr, nullptr, options.threads))
         if (r.extreme_thickness >= static_cast<float>(at)) t.near_min_wall.push_back(r);
     }
     if (options.max_wall_voxels > 0) {
       const double at = options.max_wall_voxels + kWallReportTolerance;
       for (ThicknessRegion& r : find_thickness_regions(map, ThicknessRegionKind::thick,
-                                                       static_cast<float>(at - bound.above_voxels), options.min_region_voxels))
+                                                       static_cast<float>(at - bound.above_voxels), options.min_region_voxels,
+                                                       nullptr, nullptr, options.threads))
         if (r.extreme_thickness <= static_cast<float>(at)) t.near_max_wall.push_back(r);
     }
     report.thickness = std::move(t);

@@ -151,31 +151,69 @@ DenseVolume<float> local_thickness(const BitVolume& solid, int threads, JobContr
   return out;
 }
 
-ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, int bins) {
+ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, int bins, int threads) {
   if (bins < 1) throw Error(ErrorCode::invalid_argument, "thickness histogram needs at least 1 bin");
+  // Two passes over the layers in parallel, each layer summed on its own and
+  // the layers' sums added in layer order: the same doubles whatever the
+  // thread count. The second pass sums squared deviations, which do not
+  // lose precision the way sum(v^2) - n mean^2 does.
+  const std::int64_t nz = thickness.grid().dims.z;
+  const std::size_t layer = thickness.slab_size();
+  struct Layer {
+    std::uint64_t count = 0;
+    float min = 0.0f, max = 0.0f;
+    double sum = 0.0;
+    std::vector<std::uint64_t> histogram;
+  };
+  std::vector<Layer> layers(static_cast<std::size_t>(nz));
+  parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k) {
+      Layer& l = layers[static_cast<std::size_t>(k)];
+      const float* v = thickness.slab(k);
+      for (std::size_t i = 0; i < layer; ++i) {
+        if (v[i] <= 0.0f) continue;
+        if (l.count++ == 0) l.min = l.max = v[i];
+        l.min = std::min(l.min, v[i]);
+        l.max = std::max(l.max, v[i]);
+        l.sum += v[i];
+      }
+    }
+  });
   ThicknessStatistics st;
   double sum = 0.0;
-  for (float v : thickness.values()) {
-    if (v <= 0.0f) continue;
-    if (st.voxel_count == 0) st.min = st.max = v;
-    st.min = std::min<double>(st.min, v);
-    st.max = std::max<double>(st.max, v);
-    sum += v;
-    ++st.voxel_count;
+  for (const Layer& l : layers) {
+    if (l.count == 0) continue;
+    if (st.voxel_count == 0) st.min = l.min, st.max = l.max;
+    st.min = std::min<double>(st.min, l.min);
+    st.max = std::max<double>(st.max, l.max);
+    sum += l.sum;
+    st.voxel_count += l.count;
   }
   if (st.voxel_count == 0) return st;
   st.mean = sum / static_cast<double>(st.voxel_count);
-  // Second pass for the variance: sum of squared deviations does not lose
-  // precision the way sum(v^2) - n mean^2 does.
-  st.histogram.assign(static_cast<std::size_t>(bins), 0);
   const double range = st.max - st.min;
+  parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k) {
+      Layer& l = layers[static_cast<std::size_t>(k)];
+      if (l.count == 0) continue;
+      l.sum = 0.0;
+      l.histogram.assign(static_cast<std::size_t>(bins), 0);
+      const float* v = thickness.slab(k);
+      for (std::size_t i = 0; i < layer; ++i) {
+        if (v[i] <= 0.0f) continue;
+        l.sum += (v[i] - st.mean) * (v[i] - st.mean);
+        std::int64_t b = range > 0.0 ? static_cast<std::int64_t>((v[i] - st.min) / range * bins) : 0;
+        b = std::clamp<std::int64_t>(b, 0, bins - 1);
+        ++l.histogram[static_cast<std::size_t>(b)];
+      }
+    }
+  });
+  st.histogram.assign(static_cast<std::size_t>(bins), 0);
   double ss = 0.0;
-  for (float v : thickness.values()) {
-    if (v <= 0.0f) continue;
-    ss += (v - st.mean) * (v - st.mean);
-    std::int64_t b = range > 0.0 ? static_cast<std::int64_t>((v - st.min) / range * bins) : 0;
-    b = std::clamp<std::int64_t>(b, 0, bins - 1);
-    ++st.histogram[static_cast<std::size_t>(b)];
+  for (const Layer& l : layers) {
+    if (l.count == 0) continue;
+    ss += l.sum;
+    for (std::size_t b = 0; b < l.histogram.size(); ++b) st.histogram[b] += l.histogram[b];
   }
   st.std_dev = std::sqrt(ss / static_cast<double>(st.voxel_count));
   return st;

@@ -16,18 +16,40 @@ constexpr std::uint32_t kMaxDepth = std::numeric_limits<Depth>::max();
 
 // One axis of the city-block distance: d[i] = min(d[i], d[i-1] + 1) forward
 // and min(d[i], d[i+1] + 1) backward, with empty space beyond both ends.
-void sweep(Depth* d, std::int64_t n, std::int64_t stride) {
+void sweep(Depth* d, std::int64_t n) {
   std::uint32_t prev = 0;
   for (std::int64_t i = 0; i < n; ++i) {
-    Depth& v = d[i * stride];
-    prev = std::min<std::uint32_t>(v, prev + 1);
-    v = static_cast<Depth>(prev);
+    prev = std::min<std::uint32_t>(d[i], prev + 1);
+    d[i] = static_cast<Depth>(prev);
   }
   std::uint32_t next = 0;
   for (std::int64_t i = n - 1; i >= 0; --i) {
-    Depth& v = d[i * stride];
-    next = std::min<std::uint32_t>(v, next + 1);
-    v = static_cast<Depth>(next);
+    next = std::min<std::uint32_t>(d[i], next + 1);
+    d[i] = static_cast<Depth>(next);
+  }
+}
+
+// Empty space beyond both ends of `width` neighbouring columns of n lines:
+// the first and last lines are at most 1 deep.
+void clamp_ends(Depth* d, std::int64_t n, std::int64_t stride, std::int64_t width) {
+  if (n == 0) return;
+  for (Depth* line : {d, d + (n - 1) * stride})
+    for (std::int64_t i = 0; i < width; ++i) line[i] = std::min<Depth>(line[i], 1);
+}
+
+// The same sweep along y or z (after clamp_ends), for `width` neighbouring columns at once (a
+// row's worth, contiguous): line p of the columns starts at d + p * stride.
+// After the x sweep every depth is at most half a row, so + 1 cannot wrap.
+void sweep_columns(Depth* d, std::int64_t n, std::int64_t stride, std::int64_t width) {
+  for (std::int64_t p = 1; p < n; ++p) {
+    Depth* cur = d + p * stride;
+    const Depth* before = cur - stride;
+    for (std::int64_t i = 0; i < width; ++i) cur[i] = std::min<Depth>(cur[i], static_cast<Depth>(before[i] + 1));
+  }
+  for (std::int64_t p = n - 2; p >= 0; --p) {
+    Depth* cur = d + p * stride;
+    const Depth* after = cur + stride;
+    for (std::int64_t i = 0; i < width; ++i) cur[i] = std::min<Depth>(cur[i], static_cast<Depth>(after[i] + 1));
   }
 }
 
@@ -44,60 +66,83 @@ DenseVolume<Depth> peel_depth(const BitVolume& volume, int threads, PeelMetric m
     const DenseVolume<std::uint32_t> d2 = squared_distance_transform(volume, threads);
     const auto& src = d2.values();
     auto& dst = d.values();
-    for (std::size_t i = 0; i < src.size(); ++i) {
-      if (src[i] == 0) continue;
-      auto r = static_cast<std::uint64_t>(std::sqrt(static_cast<double>(src[i])));
-      while (r * r > src[i]) --r;
-      while (r * r < src[i]) ++r;
-      dst[i] = static_cast<Depth>(r);
-    }
+    const auto n = static_cast<std::int64_t>(src.size());
+    parallel_for(0, n, std::max<std::int64_t>(1 << 16, n / 64), threads, [&](std::int64_t a, std::int64_t b) {
+      for (auto i = static_cast<std::size_t>(a); i < static_cast<std::size_t>(b); ++i) {
+        if (src[i] == 0) continue;
+        auto r = static_cast<std::uint64_t>(std::sqrt(static_cast<double>(src[i])));
+        while (r * r > src[i]) --r;
+        while (r * r < src[i]) ++r;
+        dst[i] = static_cast<Depth>(r);
+      }
+    });
     return d;
   }
   const std::int64_t nx = g.dims.x, ny = g.dims.y, nz = g.dims.z;
   // Start: filled = "infinity" (capped), empty = 0; then sweep x, y, z.
+  // The grid's first and last voxels along y and z have empty space beyond
+  // them: 0 before the first, as the x sweep starts.
   parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k)
+    for (std::int64_t k = k0; k < k1; ++k) {
       for (std::int64_t j = 0; j < ny; ++j) {
         Depth* line = &d.at(0, j, k);
         const std::uint64_t* row = volume.row(j, k);
         for (std::int64_t i = 0; i < nx; ++i) line[i] = ((row[i >> 6] >> (i & 63)) & 1u) ? static_cast<Depth>(kMaxDepth) : 0;
-        sweep(line, nx, 1);
+        sweep(line, nx);
       }
+      clamp_ends(&d.at(0, 0, k), ny, nx, nx);
+      sweep_columns(&d.at(0, 0, k), ny, nx, nx);
+    }
   });
-  // y sweeps: per slab, each column i; z sweeps: per row j, each column i.
-  parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t i = 0; i < nx; ++i) sweep(&d.at(i, 0, k), ny, nx);
-  });
-  parallel_for(0, ny, 1, threads, [&](std::int64_t j0, std::int64_t j1) {
-    for (std::int64_t j = j0; j < j1; ++j)
-      for (std::int64_t i = 0; i < nx; ++i) sweep(&d.at(i, j, 0), nz, nx * ny);
+  // z: a band of rows at a time, every layer.
+  const std::int64_t band = std::max<std::int64_t>(1, 4096 / std::max<std::int64_t>(1, nx));
+  parallel_for(0, ny, band, threads, [&](std::int64_t j0, std::int64_t j1) {
+    Depth* first = &d.at(0, j0, 0);
+    const std::int64_t width = (j1 - j0) * nx, stride = nx * ny;
+    clamp_ends(first, nz, stride, width);
+    sweep_columns(first, nz, stride, width);
   });
   return d;
 }
 
-PeelSummary summarize_peeling(const DenseVolume<Depth>& depth) {
+PeelSummary summarize_peeling(const DenseVolume<Depth>& depth, int threads) {
+  // Each layer's counts alone, then added: integers, in any order.
+  const std::int64_t nz = depth.grid().dims.z;
+  const std::size_t layer = depth.slab_size();
+  std::vector<std::vector<std::uint64_t>> counts(static_cast<std::size_t>(nz));
+  parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k) {
+      auto& c = counts[static_cast<std::size_t>(k)];
+      const Depth* v = depth.slab(k);
+      for (std::size_t i = 0; i < layer; ++i) {
+        if (!v[i]) continue;
+        if (v[i] > c.size()) c.resize(v[i], 0);
+        ++c[v[i] - 1u];
+      }
+    }
+  });
   PeelSummary s;
-  for (Depth v : depth.values()) {
-    if (!v) continue;
-    if (v > s.voxels_per_layer.size()) s.voxels_per_layer.resize(v, 0);
-    ++s.voxels_per_layer[v - 1u];
+  for (const auto& c : counts) {
+    if (c.size() > s.voxels_per_layer.size()) s.voxels_per_layer.resize(c.size(), 0);
+    for (std::size_t d = 0; d < c.size(); ++d) s.voxels_per_layer[d] += c[d];
   }
   s.max_depth = static_cast<std::uint32_t>(s.voxels_per_layer.size());
-  if (s.max_depth > 0) s.innermost = find_components(peeled(depth, s.max_depth - 1)).parts;
+  if (s.max_depth > 0) s.innermost = find_components(peeled(depth, s.max_depth - 1, threads)).parts;
   return s;
 }
 
-BitVolume peeled(const DenseVolume<Depth>& depth, std::uint32_t layers) {
+BitVolume peeled(const DenseVolume<Depth>& depth, std::uint32_t layers, int threads) {
   const Grid& g = depth.grid();
   BitVolume out(g);
-  for (std::int64_t k = 0; k < g.dims.z; ++k)
-    for (std::int64_t j = 0; j < g.dims.y; ++j) {
-      const Depth* line = &depth.at(0, j, k);
-      std::uint64_t* row = out.row(j, k);
-      for (std::int64_t i = 0; i < g.dims.x; ++i)
-        if (line[i] > layers) row[i >> 6] |= std::uint64_t{1} << (i & 63);
-    }
+  parallel_for(0, g.dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j) {
+        const Depth* line = &depth.at(0, j, k);
+        std::uint64_t* row = out.row(j, k);
+        for (std::int64_t i = 0; i < g.dims.x; ++i)
+          if (line[i] > layers) row[i >> 6] |= std::uint64_t{1} << (i & 63);
+      }
+  });
   return out;
 }
 

@@ -1,127 +1,240 @@
-// Connected thin / thick regions by flood fill: one scan in voxel order, an
-// explicit stack (no recursion depth limit), a bit per voxel to mark visits.
-// Sequential: the scan order is what makes the output deterministic, and the
-// cost is a few passes over the voxels, small next to the thickness itself.
+// Connected thin / thick regions by runs, as parts and voids are found
+// (components.cpp): one parallel pass over the map finds each row's runs of
+// selected voxels with their sums; a union-find over the runs joins each
+// run to the runs it touches (26-connectivity: in the row before in its
+// layer, and in the three rows round it in the layer before); each
+// region's sums are then gathered from its runs.
+//
+// Every sum is an integer, the thickness included (in fixed point, exact
+// for every value the map can hold above 2^-41 voxels), and a region's
+// first voxel in scan order is a minimum, so the regions, their order and
+// the probes' answers do not depend on the thread count or on the order in
+// which runs are joined. Memory: the runs (28 bytes each; a smooth map has
+// a few a row) and a union-find entry each.
 #include "voxd/analysis/thickness_regions.h"
 
 #include <algorithm>
-#include <unordered_map>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
 
 #include <glm/common.hpp>
 
+#include "voxd/parallel.h"
+
 namespace voxd {
+namespace {
+
+using Int128 = __int128;
+
+// The fixed point of the thickness sums: 2^-64 voxels.
+constexpr int kFixedBits = 64;
+
+// v * 2^64 for a positive finite float v = m * 2^(e - 150) (e its biased
+// exponent, m its 24-bit significand; subnormals have e = 1 and no hidden
+// bit): exact from 2^-41 up, the bits below 2^-64 dropped.
+Int128 fixed_point(float v) {
+  const auto bits = std::bit_cast<std::uint32_t>(v);
+  const int e = static_cast<int>(bits >> 23);
+  const std::uint32_t m = (bits & 0x7fffffu) | (e ? 0x800000u : 0u);
+  const int shift = std::max(e, 1) - 150 + kFixedBits;
+  return shift >= 0 ? static_cast<Int128>(m) << shift : static_cast<Int128>(m >> std::min(-shift, 31));
+}
+
+double from_fixed_point(Int128 sum) { return std::ldexp(static_cast<double>(sum), -kFixedBits); }
+
+// A run of selected voxels [begin, end) of one row, and what it holds.
+struct Run {
+  std::int32_t begin, end;
+};
+struct RunSums {
+  float extreme;  // the row's min (thin) or max (thick) over the run
+  Int128 thickness;
+};
+
+struct UnionFind {
+  std::vector<std::uint32_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// What a region gathers from its runs: integer sums, so any order gives the
+// same region.
+struct RegionSums {
+  std::uint64_t voxels = 0;
+  std::int64_t si = 0, sj = 0, sk = 0;
+  glm::i64vec3 lo{std::numeric_limits<std::int64_t>::max()}, hi{-1};
+  float extreme = 0.0f;
+  Int128 thickness = 0;
+  std::uint64_t first = std::numeric_limits<std::uint64_t>::max();  // its first voxel in scan order
+};
+
+}  // namespace
 
 std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
                                                     float threshold_voxels, std::uint64_t min_voxels,
                                                     const std::vector<std::size_t>* probes,
-                                                    std::vector<std::uint32_t>* probe_regions) {
-  const auto d = thickness.grid().dims;
-  const auto& t = thickness.values();
-  auto selected = [&](std::size_t idx) {
-    const float v = t[idx];
-    return kind == ThicknessRegionKind::thin ? (v > 0.0f && v < threshold_voxels) : (v > 0.0f && v > threshold_voxels);
-  };
-  std::vector<std::uint64_t> visited((t.size() + 63) / 64, 0);
-  auto test_and_mark = [&](std::size_t idx) {
-    std::uint64_t& w = visited[idx >> 6];
-    const std::uint64_t bit = std::uint64_t{1} << (idx & 63);
-    const bool was = (w & bit) != 0;
-    w |= bit;
-    return was;
-  };
+                                                    std::vector<std::uint32_t>* probe_regions, int threads) {
+  const glm::i64vec3 d = thickness.grid().dims;
+  const bool thin = kind == ThicknessRegionKind::thin;
+  auto selected = [&](float v) { return v > 0.0f && (thin ? v < threshold_voxels : v > threshold_voxels); };
+  if (d.x > std::numeric_limits<std::int32_t>::max())
+    throw std::length_error("find_thickness_regions: rows longer than 2^31 voxels");
 
-  // The probed voxels, a bit each; the region each one's flood met it in
-  // (by the order regions are met, -1 for none), by voxel.
-  std::vector<std::uint64_t> probed;
-  std::unordered_map<std::size_t, std::int64_t> met_in;
-  if (probes) {
-    probed.assign(visited.size(), 0);
-    for (const std::size_t p : *probes)
-      if (p < t.size()) probed[p >> 6] |= std::uint64_t{1} << (p & 63);
-  }
-  std::int64_t met = 0;  // regions met so far, kept or not
-  std::vector<std::int64_t> kept_as;  // per region met: its place in `found`, or -1
-
-  struct Found {
-    ThicknessRegion region;
-    std::size_t first;
-    std::size_t order;  // its place in `found` before sorting
-  };
-  std::vector<Found> found;
-  std::vector<std::size_t> stack;
-  const auto sx = static_cast<std::size_t>(d.x);
-  const auto sxy = static_cast<std::size_t>(d.x * d.y);
-  for (std::size_t seed = 0; seed < t.size(); ++seed) {
-    if (!selected(seed) || test_and_mark(seed)) continue;
-    ThicknessRegion r;
-    r.bbox_min = {d.x, d.y, d.z};
-    r.bbox_max = {-1, -1, -1};
-    r.extreme_thickness = t[seed];
-    glm::dvec3 sum{0.0};
-    double thickness_sum = 0.0;
-    stack.assign(1, seed);
-    while (!stack.empty()) {
-      const std::size_t idx = stack.back();
-      stack.pop_back();
-      const auto i = static_cast<std::int64_t>(idx % sx);
-      const auto j = static_cast<std::int64_t>((idx / sx) % static_cast<std::size_t>(d.y));
-      const auto k = static_cast<std::int64_t>(idx / sxy);
-      ++r.voxel_count;
-      if (!probed.empty() && (probed[idx >> 6] >> (idx & 63) & 1)) met_in[idx] = met;
-      thickness_sum += t[idx];
-      sum += glm::dvec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
-      r.bbox_min = glm::min(r.bbox_min, glm::i64vec3(i, j, k));
-      r.bbox_max = glm::max(r.bbox_max, glm::i64vec3(i, j, k));
-      r.extreme_thickness = kind == ThicknessRegionKind::thin ? std::min(r.extreme_thickness, t[idx])
-                                                              : std::max(r.extreme_thickness, t[idx]);
-      for (std::int64_t dz = -1; dz <= 1; ++dz) {
-        const std::int64_t z = k + dz;
-        if (z < 0 || z >= d.z) continue;
-        for (std::int64_t dy = -1; dy <= 1; ++dy) {
-          const std::int64_t y = j + dy;
-          if (y < 0 || y >= d.y) continue;
-          for (std::int64_t dx = -1; dx <= 1; ++dx) {
-            const std::int64_t x = i + dx;
-            if (x < 0 || x >= d.x) continue;
-            const std::size_t n = thickness.index(x, y, z);
-            if (selected(n) && !test_and_mark(n)) stack.push_back(n);
+  // Each row's runs, found layer by layer in parallel; row r = j + ny k.
+  const std::int64_t rows = d.y * d.z;
+  std::vector<std::vector<Run>> layer_runs(static_cast<std::size_t>(d.z));
+  std::vector<std::vector<RunSums>> layer_sums(layer_runs.size());
+  std::vector<std::uint32_t> row_count(static_cast<std::size_t>(rows), 0);
+  parallel_for(0, d.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k) {
+      auto& runs = layer_runs[static_cast<std::size_t>(k)];
+      auto& sums = layer_sums[static_cast<std::size_t>(k)];
+      for (std::int64_t j = 0; j < d.y; ++j) {
+        const float* row = thickness.slab(k) + j * d.x;
+        std::uint32_t n = 0;
+        for (std::int64_t i = 0; i < d.x;) {
+          if (!selected(row[i])) {
+            ++i;
+            continue;
           }
+          const std::int64_t begin = i;
+          float extreme = row[i];
+          Int128 sum = 0;
+          for (; i < d.x && selected(row[i]); ++i) {
+            extreme = thin ? std::min(extreme, row[i]) : std::max(extreme, row[i]);
+            sum += fixed_point(row[i]);
+          }
+          runs.push_back({static_cast<std::int32_t>(begin), static_cast<std::int32_t>(i)});
+          sums.push_back({extreme, sum});
+          ++n;
         }
+        row_count[static_cast<std::size_t>(j + d.y * k)] = n;
       }
     }
-    ++met;
-    kept_as.push_back(r.voxel_count < min_voxels ? -1 : static_cast<std::int64_t>(found.size()));
-    if (r.voxel_count < min_voxels) continue;
-    r.centroid = sum / static_cast<double>(r.voxel_count);
-    r.mean_thickness = static_cast<float>(thickness_sum / static_cast<double>(r.voxel_count));
-    found.push_back({r, seed, found.size()});
-  }
-  // Most severe first: the thinnest (thickest) extreme, then the larger
-  // region, then scan order.
-  std::stable_sort(found.begin(), found.end(), [kind](const Found& a, const Found& b) {
-    if (a.region.extreme_thickness != b.region.extreme_thickness)
-      return kind == ThicknessRegionKind::thin ? a.region.extreme_thickness < b.region.extreme_thickness
-                                               : a.region.extreme_thickness > b.region.extreme_thickness;
-    if (a.region.voxel_count != b.region.voxel_count) return a.region.voxel_count > b.region.voxel_count;
-    return a.first < b.first;
   });
-  std::vector<ThicknessRegion> regions;
-  regions.reserve(found.size());
-  std::vector<std::uint32_t> rank_of_found(found.size());
-  for (const Found& f : found) {
-    rank_of_found[f.order] = static_cast<std::uint32_t>(regions.size());
-    regions.push_back(f.region);
+  // The runs numbered in scan order: row r's are [row_start[r], row_start[r + 1]).
+  std::vector<std::uint64_t> row_start(static_cast<std::size_t>(rows) + 1, 0);
+  for (std::int64_t r = 0; r < rows; ++r)
+    row_start[static_cast<std::size_t>(r) + 1] = row_start[static_cast<std::size_t>(r)] + row_count[static_cast<std::size_t>(r)];
+  const std::uint64_t total = row_start.back();
+  if (total > std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("find_thickness_regions: more than 2^32 runs");
+  std::vector<Run> runs;
+  std::vector<RunSums> sums;
+  runs.reserve(static_cast<std::size_t>(total));
+  sums.reserve(static_cast<std::size_t>(total));
+  for (std::size_t k = 0; k < layer_runs.size(); ++k) {
+    runs.insert(runs.end(), layer_runs[k].begin(), layer_runs[k].end());
+    sums.insert(sums.end(), layer_sums[k].begin(), layer_sums[k].end());
+    std::vector<Run>().swap(layer_runs[k]);
+    std::vector<RunSums>().swap(layer_sums[k]);
+  }
+  row_count = {};
+
+  // Join each run with the runs it touches in rows already seen: runs of a
+  // row are sorted, and touch when they overlap [begin - 1, end + 1).
+  UnionFind regions(static_cast<std::size_t>(total));
+  auto link = [&](std::uint64_t run, std::int64_t other_row) {
+    const Run& r = runs[static_cast<std::size_t>(run)];
+    const auto first = runs.begin() + static_cast<std::ptrdiff_t>(row_start[static_cast<std::size_t>(other_row)]);
+    const auto last = runs.begin() + static_cast<std::ptrdiff_t>(row_start[static_cast<std::size_t>(other_row) + 1]);
+    auto it = std::lower_bound(first, last, r.begin - 1, [](const Run& a, std::int64_t x) { return a.end <= x; });
+    for (; it != last && it->begin < r.end + 1; ++it)
+      regions.unite(static_cast<std::uint32_t>(run), static_cast<std::uint32_t>(it - runs.begin()));
+  };
+  for (std::int64_t k = 0; k < d.z; ++k)
+    for (std::int64_t j = 0; j < d.y; ++j) {
+      const std::int64_t row = j + d.y * k;
+      for (std::uint64_t run = row_start[static_cast<std::size_t>(row)]; run < row_start[static_cast<std::size_t>(row) + 1]; ++run) {
+        if (j > 0) link(run, row - 1);
+        if (k > 0)
+          for (std::int64_t jj = std::max<std::int64_t>(0, j - 1); jj <= std::min(d.y - 1, j + 1); ++jj) link(run, jj + d.y * (k - 1));
+      }
+    }
+
+  // Each region's sums, gathered at its root (the run it starts with).
+  std::vector<std::uint32_t> region_of(static_cast<std::size_t>(total));
+  std::vector<RegionSums> found;  // by first voxel: the order regions are met in scan order
+  for (std::int64_t row = 0; row < rows; ++row) {
+    const std::int64_t j = row % d.y, k = row / d.y;
+    for (std::uint64_t run = row_start[static_cast<std::size_t>(row)]; run < row_start[static_cast<std::size_t>(row) + 1]; ++run) {
+      const std::uint32_t root = regions.find(static_cast<std::uint32_t>(run));
+      // The root is the region's first run in scan order (the smaller id
+      // always stays the root), so its region was numbered when met.
+      if (root == run) {
+        region_of[static_cast<std::size_t>(run)] = static_cast<std::uint32_t>(found.size());
+        found.emplace_back();
+      } else {
+        region_of[static_cast<std::size_t>(run)] = region_of[root];
+      }
+      RegionSums& s = found[region_of[static_cast<std::size_t>(run)]];
+      const Run& r = runs[static_cast<std::size_t>(run)];
+      const RunSums& rs = sums[static_cast<std::size_t>(run)];
+      const auto n = static_cast<std::int64_t>(r.end - r.begin);
+      s.extreme = s.voxels == 0 ? rs.extreme : thin ? std::min(s.extreme, rs.extreme) : std::max(s.extreme, rs.extreme);
+      s.voxels += static_cast<std::uint64_t>(n);
+      s.si += (static_cast<std::int64_t>(r.begin) + r.end - 1) * n / 2;
+      s.sj += j * n;
+      s.sk += k * n;
+      s.lo = glm::min(s.lo, glm::i64vec3(r.begin, j, k));
+      s.hi = glm::max(s.hi, glm::i64vec3(r.end - 1, j, k));
+      s.thickness += rs.thickness;
+      s.first = std::min(s.first, static_cast<std::uint64_t>(row) * static_cast<std::uint64_t>(d.x) + static_cast<std::uint64_t>(r.begin));
+    }
+  }
+
+  // Those of at least min_voxels, most severe first: the thinnest (thickest)
+  // extreme, then the larger region, then scan order.
+  std::vector<std::uint32_t> kept;
+  for (std::uint32_t f = 0; f < found.size(); ++f)
+    if (found[f].voxels >= min_voxels) kept.push_back(f);
+  std::stable_sort(kept.begin(), kept.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const RegionSums &x = found[a], &y = found[b];
+    if (x.extreme != y.extreme) return thin ? x.extreme < y.extreme : x.extreme > y.extreme;
+    if (x.voxels != y.voxels) return x.voxels > y.voxels;
+    return x.first < y.first;
+  });
+  std::vector<ThicknessRegion> out;
+  out.reserve(kept.size());
+  std::vector<std::uint32_t> rank(found.size(), 0);  // 1 + place in `out`, 0 for none
+  for (const std::uint32_t f : kept) {
+    const RegionSums& s = found[f];
+    const double count = static_cast<double>(s.voxels);
+    ThicknessRegion r;
+    r.voxel_count = s.voxels;
+    r.bbox_min = s.lo;
+    r.bbox_max = s.hi;
+    r.centroid = glm::dvec3(static_cast<double>(s.si), static_cast<double>(s.sj), static_cast<double>(s.sk)) / count;
+    r.extreme_thickness = s.extreme;
+    r.mean_thickness = static_cast<float>(from_fixed_point(s.thickness) / count);
+    rank[f] = static_cast<std::uint32_t>(out.size()) + 1;
+    out.push_back(r);
   }
   if (probes && probe_regions) {
     probe_regions->assign(probes->size(), 0);
-    for (std::size_t i = 0; i < probes->size(); ++i) {
-      const auto it = met_in.find((*probes)[i]);
-      if (it == met_in.end()) continue;
-      const std::int64_t place = kept_as[static_cast<std::size_t>(it->second)];
-      if (place >= 0) (*probe_regions)[i] = rank_of_found[static_cast<std::size_t>(place)] + 1;
+    for (std::size_t p = 0; p < probes->size(); ++p) {
+      const std::size_t idx = (*probes)[p];
+      if (idx >= thickness.values().size()) continue;
+      const auto row = static_cast<std::int64_t>(idx / static_cast<std::size_t>(d.x));
+      const auto i = static_cast<std::int32_t>(idx % static_cast<std::size_t>(d.x));
+      const auto first = runs.begin() + static_cast<std::ptrdiff_t>(row_start[static_cast<std::size_t>(row)]);
+      const auto last = runs.begin() + static_cast<std::ptrdiff_t>(row_start[static_cast<std::size_t>(row) + 1]);
+      const auto it = std::upper_bound(first, last, i, [](std::int32_t x, const Run& a) { return x < a.end; });
+      if (it != last && it->begin <= i) (*probe_regions)[p] = rank[region_of[static_cast<std::size_t>(it - runs.begin())]];
     }
   }
-  return regions;
+  return out;
 }
 
 }  // namespace voxd

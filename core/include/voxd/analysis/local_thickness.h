@@ -80,8 +80,10 @@ struct ThicknessStatistics {
   double bin_width() const { return histogram.empty() ? 0.0 : (max - min) / static_cast<double>(histogram.size()); }
 };
 
-// Throws Error(invalid_argument) when bins < 1.
-ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, int bins);
+// Throws Error(invalid_argument) when bins < 1. `threads` 0 = all cores; the
+// result does not depend on it (each z layer is summed alone, and the
+// layers' sums are added in order).
+ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, int bins, int threads = 0);
 
 // How far a reported thickness can be from the mesh's true wall thickness, in
 // voxels, for walls with parallel faces:

@@ -39,9 +39,10 @@ struct PeelSummary {
   std::vector<VoxelRegion> innermost;  // connected regions peeled last, largest first
 };
 
-PeelSummary summarize_peeling(const DenseVolume<std::uint16_t>& depth);
+// `threads` 0 = all cores, here and below; the result does not depend on it.
+PeelSummary summarize_peeling(const DenseVolume<std::uint16_t>& depth, int threads = 0);
 
 // The model after `layers` peels: voxels whose depth exceeds `layers`.
-BitVolume peeled(const DenseVolume<std::uint16_t>& depth, std::uint32_t layers);
+BitVolume peeled(const DenseVolume<std::uint16_t>& depth, std::uint32_t layers, int threads = 0);
 
 }  // namespace voxd

@@ -42,11 +42,15 @@ struct ThicknessRegion {
 // `probes` (voxel indices, as DenseVolume::index gives them), when given,
 // are answered in `probe_regions`: for each, 1 + the index in the returned
 // list of the region it lies in, or 0 for none (what a vertex on the part's
-// surface reads, voxd/analysis/surface_thickness.h), at the cost of a bit
-// per voxel.
+// surface reads, voxd/analysis/surface_thickness.h).
+//
+// `threads` 0 = all cores; the result does not depend on it. The mean
+// thickness is the exact sum of the voxels' values (below 2^-41 voxels a
+// value counts as 0) over their count, rounded once.
 std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
                                                     float threshold_voxels, std::uint64_t min_voxels,
                                                     const std::vector<std::size_t>* probes = nullptr,
-                                                    std::vector<std::uint32_t>* probe_regions = nullptr);
+                                                    std::vector<std::uint32_t>* probe_regions = nullptr,
+                                                    int threads = 0);
 
 }  // namespace voxd
