@@ -17,11 +17,11 @@
 #include <bit>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 
 #include <glm/common.hpp>
 
+#include "union_find.h"
 #include "voxd/parallel.h"
 
 namespace voxd {
@@ -54,19 +54,6 @@ struct RunSums {
   Int128 thickness;
 };
 
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 // What a region gathers from its runs: integer sums, so any order gives the
 // same region.
@@ -144,14 +131,14 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
 
   // Join each run with the runs it touches in rows already seen: runs of a
   // row are sorted, and touch when they overlap [begin - 1, end + 1).
-  UnionFind regions(static_cast<std::size_t>(total));
+  detail::UnionFind regions(static_cast<std::size_t>(total));
   auto link = [&](std::uint64_t run, std::int64_t other_row) {
     const Run& r = runs[static_cast<std::size_t>(run)];
     const auto first = runs.begin() + static_cast<std::ptrdiff_t>(row_start[static_cast<std::size_t>(other_row)]);
     const auto last = runs.begin() + static_cast<std::ptrdiff_t>(row_start[static_cast<std::size_t>(other_row) + 1]);
     auto it = std::lower_bound(first, last, r.begin - 1, [](const Run& a, std::int64_t x) { return a.end <= x; });
     for (; it != last && it->begin < r.end + 1; ++it)
-      regions.unite(static_cast<std::uint32_t>(run), static_cast<std::uint32_t>(it - runs.begin()));
+      regions.join(static_cast<std::uint32_t>(run), static_cast<std::uint32_t>(it - runs.begin()));
   };
   for (std::int64_t k = 0; k < d.z; ++k)
     for (std::int64_t j = 0; j < d.y; ++j) {

@@ -4,7 +4,6 @@
 #include <array>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -12,6 +11,7 @@
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
+#include "union_find.h"
 #include "voxd/error.h"
 
 namespace voxd {
@@ -52,19 +52,6 @@ std::array<Cell, 4> corners(const Cell& voxel, int direction) {
   }
   return c;
 }
-
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void join(std::uint32_t a, std::uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 }  // namespace
 
@@ -136,7 +123,7 @@ struct VoxelSurfaceBuilder {
   //    empty;
   //  - into the concave corner, onto the face of v + b + d towards -b.
   Mesh build(const std::unordered_set<std::uint64_t>& crossed, std::vector<Cell>& vertex_point) const {
-    UnionFind nodes(4 * keys.size());
+    detail::UnionFind nodes(4 * keys.size());
     for (std::uint32_t f = 0; f < keys.size(); ++f) {
       const Cell v = voxel_of[f];
       const int d = static_cast<int>(keys[f] % 6);
