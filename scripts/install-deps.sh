@@ -26,6 +26,7 @@ packages=(
   python3 python3-numpy python3-jsonschema python3-yaml python3-venv python3-pip python3-setuptools
   clang libclang-rt-14-dev util-linux
   systemd  # systemd-analyze verifies deploy/systemd/voxd.service (tests/tools/check_deploy.py)
+  docker-compose  # docker-compose config reads deploy/compose.yaml as Docker would (tests/tools/check_deploy.py)
   chromium
   poppler-utils  # pdfinfo and pdftotext read the report Chromium prints to PDF (tests/web/browser_test.mjs)
 )

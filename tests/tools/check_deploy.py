@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Checks the deployment files against the code, since no container engine
-runs here: the Dockerfile builds with the scripts CI runs and its runtime
+runs here (docker-compose reads the compose file, with no engine): the Dockerfile builds with the scripts CI runs and its runtime
 stage installs every library the binary links (ldd); compose, Kubernetes and
 systemd use only settings `voxd serve --help` lists, probe the real routes,
 and give running jobs more time to stop than voxd's own shutdown grace.
@@ -102,6 +102,12 @@ for lib in re.findall(r"=> (/\S+)", ldd):
         check(owner in installed_with_runtime, f"runtime stage misses {owner} (for {os.path.basename(lib)}): add it to install-deps.sh")
 
 # --- compose -----------------------------------------------------------------
+# Docker's own reading of the file (Debian's docker-compose: the Compose
+# file schema, interpolation, and the build context, with no engine).
+config = subprocess.run(["docker-compose", "-f", os.path.join(source, "deploy/compose.yaml"), "config", "-q"],
+                        capture_output=True, text=True)
+check(config.returncode == 0 and not config.stderr.strip(),
+      "docker-compose config: " + (config.stderr + config.stdout).strip())
 compose = yaml.safe_load(read("deploy/compose.yaml"))
 svc = compose["services"]["voxd"]
 check(svc["build"]["dockerfile"] == "Dockerfile" and os.path.normpath(os.path.join(source, "deploy", svc["build"]["context"])) == os.path.normpath(source),
