@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -577,6 +578,21 @@ TEST(ThicknessRegions, RunsFindTheFloodFillsRegionsForAnyThreadCount) {
       }
     }
   }
+}
+
+TEST(ThicknessRegions, HugeAndInfiniteValuesCountAtTheCap) {
+  // 2^30 voxels and more (and infinity) add 2^30 to a region's mean; the
+  // extreme is the value itself.
+  DenseVolume<float> t(unit_grid(4, 1, 1), 0.0f);
+  t.at(0, 0, 0) = std::numeric_limits<float>::infinity();
+  t.at(1, 0, 0) = 1e30f;
+  t.at(2, 0, 0) = 0x1p30f;
+  t.at(3, 0, 0) = 0x1p29f;
+  const auto thick = find_thickness_regions(t, ThicknessRegionKind::thick, 1.0f, 1);
+  ASSERT_EQ(thick.size(), 1u);
+  EXPECT_EQ(thick[0].voxel_count, 4u);
+  EXPECT_EQ(thick[0].extreme_thickness, std::numeric_limits<float>::infinity());
+  EXPECT_EQ(thick[0].mean_thickness, (3 * 0x1p30f + 0x1p29f) / 4);
 }
 
 }  // namespace

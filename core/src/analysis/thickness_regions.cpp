@@ -32,14 +32,18 @@ using Int128 = __int128;
 // The fixed point of the thickness sums: 2^-64 voxels.
 constexpr int kFixedBits = 64;
 
-// v * 2^64 for a positive finite float v = m * 2^(e - 150) (e its biased
+// v * 2^64 for a positive float v = m * 2^(e - 150) (e its biased
 // exponent, m its 24-bit significand; subnormals have e = 1 and no hidden
-// bit): exact from 2^-41 up, the bits below 2^-64 dropped.
+// bit): exact from 2^-41 up, the bits below 2^-64 dropped. Values from
+// 2^30 voxels up (no grid has such a wall; infinity) count as 2^30, so
+// that 2^32 voxels' sum still fits.
 Int128 fixed_point(float v) {
+  constexpr int kMaxShift = 30 - 24 + kFixedBits;  // m < 2^24: v * 2^64 < 2^(30 + 64)
   const auto bits = std::bit_cast<std::uint32_t>(v);
   const int e = static_cast<int>(bits >> 23);
   const std::uint32_t m = (bits & 0x7fffffu) | (e ? 0x800000u : 0u);
   const int shift = std::max(e, 1) - 150 + kFixedBits;
+  if (shift > kMaxShift) return Int128{1} << (30 + kFixedBits);
   return shift >= 0 ? static_cast<Int128>(m) << shift : static_cast<Int128>(m >> std::min(-shift, 31));
 }
 
