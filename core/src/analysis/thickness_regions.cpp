@@ -6,8 +6,9 @@
 // region's sums are then gathered from its runs.
 //
 // Every sum is an integer, the thickness included (in fixed point, exact
-// for every value the map can hold above 2^-41 voxels), and a region's
-// first voxel in scan order is a minimum, so the regions, their order and
+// for every value the map can hold from 2^-41 to 2^30 voxels; a larger one,
+// infinity too, counts as 2^30), and regions are numbered in the scan order
+// of their first voxels, so the regions, their order and
 // the probes' answers do not depend on the thread count or on the order in
 // which runs are joined. Memory: the runs (28 bytes each; a smooth map has
 // a few a row) and a union-find entry each.
@@ -67,7 +68,6 @@ struct RegionSums {
   glm::i64vec3 lo{std::numeric_limits<std::int64_t>::max()}, hi{-1};
   float extreme = 0.0f;
   Int128 thickness = 0;
-  std::uint64_t first = std::numeric_limits<std::uint64_t>::max();  // its first voxel in scan order
 };
 
 }  // namespace
@@ -181,12 +181,11 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
       s.lo = glm::min(s.lo, glm::i64vec3(r.begin, j, k));
       s.hi = glm::max(s.hi, glm::i64vec3(r.end - 1, j, k));
       s.thickness += rs.thickness;
-      s.first = std::min(s.first, static_cast<std::uint64_t>(row) * static_cast<std::uint64_t>(d.x) + static_cast<std::uint64_t>(r.begin));
     }
   }
 
   // Those of at least min_voxels, most severe first: the thinnest (thickest)
-  // extreme, then the larger region, then scan order.
+  // extreme, then the larger region, then scan order (found's order).
   std::vector<std::uint32_t> kept;
   for (std::uint32_t f = 0; f < found.size(); ++f)
     if (found[f].voxels >= min_voxels) kept.push_back(f);
@@ -194,7 +193,7 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
     const RegionSums &x = found[a], &y = found[b];
     if (x.extreme != y.extreme) return thin ? x.extreme < y.extreme : x.extreme > y.extreme;
     if (x.voxels != y.voxels) return x.voxels > y.voxels;
-    return x.first < y.first;
+    return a < b;
   });
   std::vector<ThicknessRegion> out;
   out.reserve(kept.size());

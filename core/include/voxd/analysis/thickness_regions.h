@@ -46,7 +46,7 @@ struct ThicknessRegion {
 //
 // `threads` 0 = all cores; the result does not depend on it. The mean
 // thickness is the exact sum of the voxels' values (below 2^-41 voxels a
-// value counts as 0) over their count, rounded once.
+// value counts as 0, from 2^30 up as 2^30) over their count, rounded once.
 std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
                                                     float threshold_voxels, std::uint64_t min_voxels,
                                                     const std::vector<std::size_t>* probes = nullptr,
