@@ -6,9 +6,14 @@
 # thickness, which must answer 422. Prints the seconds of each step and the
 # server's peak RSS (VmHWM) after each.
 #   bench/stream_service_bench.sh [BUILD_DIR] [RESOLUTION]
+#   STEPS   the steps after the job, of: volume radiography analysis preview
+#           thickness (default: all)
+#   KEEP    a folder to copy the analysis report into (analysis.json)
 set -euo pipefail
 build="${1:-build}"
 res="${2:-8192}"
+steps=" ${STEPS:-volume radiography analysis preview thickness} "
+want() { [[ "$steps" == *" $1 "* ]]; }
 voxd="$build/server/voxd"
 work="$(mktemp -d)"
 server=""
@@ -45,15 +50,26 @@ done
 [[ $state == succeeded ]] || { echo "job $state: $status"; exit 1; }
 python3 -c 'import json,sys; s=json.loads(sys.argv[1]); print("job: grid", s["grid"]["dims"], "streamed", s["streamed"], "filled", s["filled_voxels"])' "$status"
 step "job (upload to succeeded)" "$t0"
-t0=$(now); bytes=$(curl -sf "$url/v1/jobs/$id/volume" | wc -c); step "GET /volume rle ($((bytes >> 20)) MiB)" "$t0"
+if want volume; then
+  t0=$(now); bytes=$(curl -sf "$url/v1/jobs/$id/volume" | wc -c); step "GET /volume rle ($((bytes >> 20)) MiB)" "$t0"
+fi
 # (nrrd and raw stream too, but at 8192^3 they are 512 GiB of bytes or 64 GiB
 # of bits to send: minutes of transfer, not a measure of the service.)
-t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=z&measure=max" -o "$work/z.png"; step "radiography z (png16)" "$t0"
-t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=x&measure=total&format=json" -o /dev/null; step "radiography x (json)" "$t0"
-t0=$(now); curl -sf "$url/v1/jobs/$id/analysis?thickness=false&skin=false" -o "$work/analysis.json"; step "mass properties, parts, voids" "$t0"
-python3 -c 'import json,sys; a=json.load(open(sys.argv[1])); print("  volume", a["mass_properties"]["voxels"]["volume"], "parts", a["parts"]["count"], "voids", a["voids"]["count"])' "$work/analysis.json"
-t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=%2Bz" -o "$work/top.png"; step "preview +z (two passes)" "$t0"
-t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=-x" -o "$work/side.png"; step "preview -x (two passes)" "$t0"
-code=$(curl -s -o "$work/problem.json" -w '%{http_code}' "$url/v1/jobs/$id/thickness")
-echo "local thickness: HTTP $code: $(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["detail"])' "$work/problem.json")"
-[[ $code == 422 ]]
+if want radiography; then
+  t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=z&measure=max" -o "$work/z.png"; step "radiography z (png16)" "$t0"
+  t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=x&measure=total&format=json" -o /dev/null; step "radiography x (json)" "$t0"
+fi
+if want analysis; then
+  t0=$(now); curl -sf "$url/v1/jobs/$id/analysis?thickness=false&skin=false" -o "$work/analysis.json"; step "mass properties, parts, voids" "$t0"
+  python3 -c 'import json,sys; a=json.load(open(sys.argv[1])); print("  volume", a["mass_properties"]["voxels"]["volume"], "parts", a["parts"]["count"], "voids", a["voids"]["count"])' "$work/analysis.json"
+  [[ -n "${KEEP:-}" ]] && cp "$work/analysis.json" "$KEEP/analysis.json"
+fi
+if want preview; then
+  t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=%2Bz" -o "$work/top.png"; step "preview +z (two passes)" "$t0"
+  t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=-x" -o "$work/side.png"; step "preview -x (two passes)" "$t0"
+fi
+if want thickness; then
+  code=$(curl -s -o "$work/problem.json" -w '%{http_code}' "$url/v1/jobs/$id/thickness")
+  echo "local thickness: HTTP $code: $(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["detail"])' "$work/problem.json")"
+  [[ $code == 422 ]]
+fi

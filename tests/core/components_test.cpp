@@ -1,12 +1,20 @@
 // Parts and voids against shapes with known answers and against a
 // brute-force flood fill on random volumes, for both connectivities.
+#include <algorithm>
 #include <queue>
 #include <random>
+#include <string>
+#include <tuple>
+#include <utility>
 
+#include <glm/common.hpp>
 #include <gtest/gtest.h>
 
 #include "support/test_meshes.h"
 #include "voxd/analysis/components.h"
+#include "voxd/byte_sink.h"
+#include "voxd/encode/rle_slabs.h"
+#include "voxd/encode/volume_format.h"
 #include "voxd/voxelize/voxelize.h"
 
 namespace voxd {
@@ -15,17 +23,26 @@ namespace {
 using test::unit_grid;
 
 // Reference: BFS over voxels. Solid 26-connected; empty 6-connected, with
-// regions touching the border dropped.
-std::vector<std::uint64_t> brute_force_sizes(const BitVolume& v, bool empty_phase) {
+// regions touching the border dropped. Each region as its voxel count, box
+// and centroid, in the labeller's order (largest first, then by box).
+struct Found {
+  std::uint64_t voxels;
+  glm::i64vec3 lo, hi;
+  glm::dvec3 centroid;
+  bool operator==(const Found&) const = default;
+};
+
+std::vector<Found> brute_force_regions(const BitVolume& v, bool empty_phase) {
   const auto d = v.grid().dims;
   std::vector<char> seen(static_cast<std::size_t>(d.x * d.y * d.z), 0);
   auto idx = [&](std::int64_t i, std::int64_t j, std::int64_t k) { return static_cast<std::size_t>(i + d.x * (j + d.y * k)); };
-  std::vector<std::uint64_t> sizes;
+  std::vector<Found> found;
   for (std::int64_t k = 0; k < d.z; ++k)
     for (std::int64_t j = 0; j < d.y; ++j)
       for (std::int64_t i = 0; i < d.x; ++i) {
         if (seen[idx(i, j, k)] || v.get(i, j, k) == empty_phase) continue;
         std::uint64_t n = 0;
+        glm::i64vec3 lo{i, j, k}, hi{i, j, k}, sum{0};
         bool border = false;
         std::queue<glm::i64vec3> q;
         q.push({i, j, k});
@@ -34,6 +51,9 @@ std::vector<std::uint64_t> brute_force_sizes(const BitVolume& v, bool empty_phas
           const auto p = q.front();
           q.pop();
           ++n;
+          sum += p;
+          lo = glm::min(lo, p);
+          hi = glm::max(hi, p);
           if (p.x == 0 || p.y == 0 || p.z == 0 || p.x == d.x - 1 || p.y == d.y - 1 || p.z == d.z - 1) border = true;
           for (int dz = -1; dz <= 1; ++dz)
             for (int dy = -1; dy <= 1; ++dy)
@@ -47,16 +67,28 @@ std::vector<std::uint64_t> brute_force_sizes(const BitVolume& v, bool empty_phas
                 q.push(q2);
               }
         }
-        if (!(empty_phase && border)) sizes.push_back(n);
+        if (!(empty_phase && border))
+          found.push_back({n, lo, hi, glm::dvec3(sum) / static_cast<double>(n)});
       }
-  std::sort(sizes.rbegin(), sizes.rend());
-  return sizes;
+  std::sort(found.begin(), found.end(), [](const Found& a, const Found& b) {
+    if (a.voxels != b.voxels) return a.voxels > b.voxels;
+    return std::tuple(a.lo.z, a.lo.y, a.lo.x, a.hi.z, a.hi.y, a.hi.x, a.centroid.z, a.centroid.y, a.centroid.x) <
+           std::tuple(b.lo.z, b.lo.y, b.lo.x, b.hi.z, b.hi.y, b.hi.x, b.centroid.z, b.centroid.y, b.centroid.x);
+  });
+  return found;
 }
 
-std::vector<std::uint64_t> sizes_of(const std::vector<VoxelRegion>& regions) {
-  std::vector<std::uint64_t> s;
-  for (const auto& r : regions) s.push_back(r.voxels);
-  return s;
+// The labeller's regions as the reference gives them (ties in count and box,
+// which the labeller leaves in any order, ordered by centroid).
+std::vector<Found> found_of(const std::vector<VoxelRegion>& regions) {
+  std::vector<Found> f;
+  for (const auto& r : regions) f.push_back({r.voxels, r.bbox_min, r.bbox_max, r.centroid});
+  std::stable_sort(f.begin(), f.end(), [](const Found& a, const Found& b) {
+    if (a.voxels != b.voxels) return a.voxels > b.voxels;
+    return std::tuple(a.lo.z, a.lo.y, a.lo.x, a.hi.z, a.hi.y, a.hi.x, a.centroid.z, a.centroid.y, a.centroid.x) <
+           std::tuple(b.lo.z, b.lo.y, b.lo.x, b.hi.z, b.hi.y, b.hi.x, b.centroid.z, b.centroid.y, b.centroid.x);
+  });
+  return f;
 }
 
 TEST(Components, TwoDisjointBoxesAreTwoPartsWithExactCountsAndBoxes) {
@@ -130,12 +162,25 @@ TEST(Components, RandomVolumesMatchABruteForceFloodFill) {
     for (std::int64_t k = 0; k < dims.z; ++k)
       for (std::int64_t j = 0; j < dims.y; ++j)
         for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
-    const ComponentReport r = find_components(v);
-    EXPECT_EQ(sizes_of(r.parts), brute_force_sizes(v, false)) << "trial " << trial;
-    EXPECT_EQ(sizes_of(r.voids), brute_force_sizes(v, true)) << "trial " << trial;
-    std::uint64_t solid = 0;
-    for (const auto& p : r.parts) solid += p.voxels;
-    EXPECT_EQ(solid, v.count());
+    const std::vector<Found> parts = brute_force_regions(v, false), voids = brute_force_regions(v, true);
+    // In memory on 1, 2 or 3 threads, and from the volume's stored runs in
+    // slabs of 1 and 4 layers: every region's count, box and centroid.
+    std::vector<std::pair<std::string, ComponentReport>> reports;
+    for (int threads : {1, 2, 3}) reports.emplace_back("threads " + std::to_string(threads), find_components(v, threads));
+    VectorSink rle;
+    write_rle(v, rle);
+    for (std::int64_t layers : {1, 4}) {
+      ComponentLabeller labeller(v.grid(), 2);
+      read_rle_run_slabs(rle.data, layers, [&](std::int64_t k0, const RunSlab& slab) { labeller.add(k0, slab); });
+      reports.emplace_back("runs in slabs of " + std::to_string(layers), labeller.finish());
+    }
+    for (const auto& [how, r] : reports) {
+      EXPECT_EQ(found_of(r.parts), parts) << "trial " << trial << ", " << how;
+      EXPECT_EQ(found_of(r.voids), voids) << "trial " << trial << ", " << how;
+      std::uint64_t solid = 0;
+      for (const auto& p : r.parts) solid += p.voxels;
+      EXPECT_EQ(solid, v.count());
+    }
   }
 }
 

@@ -186,21 +186,102 @@ TEST(RleSlabs, ASourceReadAPieceAtATimeGivesTheSameSlabsAndErrors) {
   EXPECT_NE(padded_error.second.find("unexpected bytes after the end block"), std::string::npos) << padded_error.second;
 }
 
+// The runs of a stored result (read_rle_run_slabs): the stored voxels, in
+// order, whatever the slab size and the source's reads, and the same errors
+// as the bit slabs where the stream is broken.
+TEST(RleSlabs, RunSlabsAreTheStoredVoxelsForAnySlabsAndReads) {
+  for (const Stored& s : cases()) {
+    for (std::int64_t layers : slab_sizes(s.volume.grid())) {
+      for (std::size_t step : {std::size_t{5}, s.rle.size()}) {
+        SCOPED_TRACE("layers " + std::to_string(layers) + ", reads of " + std::to_string(step));
+        BitVolume whole(s.volume.grid());
+        std::int64_t next = 0;
+        Trickle source(s.rle, step);
+        read_rle_run_slabs(source, layers, [&](std::int64_t k0, const RunSlab& slab) {
+          EXPECT_EQ(k0, next);
+          EXPECT_LE(slab.grid().dims.z, layers);
+          next = k0 + slab.grid().dims.z;
+          const BitVolume bits = slab.to_bits();
+          std::memcpy(whole.slab(k0), bits.data(), bits.byte_size());
+        });
+        EXPECT_EQ(next, s.volume.grid().dims.z);
+        EXPECT_TRUE(same_words(whole, s.volume));
+      }
+    }
+  }
+  const Stored& s = cases()[1];
+  auto error_of = [](std::span<const std::uint8_t> input, bool runs) {
+    try {
+      if (runs) read_rle_run_slabs(input, 2, [](std::int64_t, const RunSlab&) {});
+      else read_rle_bit_slabs(input, 2, [](std::int64_t, const BitVolume&) {});
+    } catch (const Error& e) {
+      return std::make_pair(e.code(), std::string(e.what()));
+    }
+    return std::make_pair(ErrorCode::io_error, std::string("no error"));
+  };
+  const std::vector<std::uint8_t> cut(s.rle.begin(), s.rle.begin() + static_cast<std::ptrdiff_t>(s.rle.size() / 2));
+  EXPECT_EQ(error_of(cut, true), error_of(cut, false));
+  EXPECT_EQ(error_of(cut, true).first, ErrorCode::truncated_input);
+  std::vector<std::uint8_t> padded = s.rle;
+  padded.push_back(0);
+  EXPECT_EQ(error_of(padded, true), error_of(padded, false));
+}
+
+// A slab of runs ends early once it holds kRunSlabRuns runs, so memory is
+// bounded by the runs however many layers are asked for: a grid striped
+// along x (a run every other voxel) of 131072 runs a layer, whose parts
+// (its planes of odd x) are found across the cut.
+TEST(RleSlabs, ARunSlabEndsOnceItHoldsEnoughRuns) {
+  Grid g;
+  g.dims = {512, 512, 70};
+  BitVolume striped(g);
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j) {
+      std::uint64_t* row = striped.row(j, k);
+      for (std::int64_t w = 0; w < striped.row_words(); ++w) row[w] = 0xAAAAAAAAAAAAAAAAu;  // odd x filled
+    }
+  VectorSink rle;
+  write_rle(striped, rle);
+  const std::int64_t layer_runs = 512 * 256;
+  const auto full = static_cast<std::int64_t>((kRunSlabRuns + layer_runs - 1) / layer_runs);  // layers of the first slab
+  std::vector<std::pair<std::int64_t, std::int64_t>> slabs;
+  ComponentLabeller labeller(g, 2);
+  read_rle_run_slabs(rle.data, g.dims.z, [&](std::int64_t k0, const RunSlab& slab) {
+    slabs.emplace_back(k0, slab.grid().dims.z);
+    EXPECT_EQ(slab.count(), static_cast<std::uint64_t>(slab.grid().dims.z * 512 * 256));
+    labeller.add(k0, slab);
+  });
+  ASSERT_EQ(slabs.size(), 2u);
+  EXPECT_EQ(slabs[0], std::make_pair(std::int64_t{0}, full));
+  EXPECT_EQ(slabs[1], std::make_pair(full, g.dims.z - full));
+  // Each plane of odd x is a part; the planes between touch the border.
+  const ComponentReport r = labeller.finish();
+  ASSERT_EQ(r.parts.size(), 256u);
+  for (std::size_t p = 0; p < r.parts.size(); ++p) {
+    EXPECT_EQ(r.parts[p].voxels, std::uint64_t{512 * 70});
+    EXPECT_EQ(r.parts[p].bbox_min, glm::i64vec3(2 * p + 1, 0, 0));
+    EXPECT_EQ(r.parts[p].bbox_max, glm::i64vec3(2 * p + 1, 511, 69));
+  }
+  EXPECT_TRUE(r.voids.empty());
+}
+
 TEST(SlabAnalyses, MassPropertiesAreExactlyTheInMemoryOnesForAnySlabsAndThreads) {
   for (const Stored& s : cases()) {
     const MassProperties expected = voxel_mass_properties(s.volume, 1);
     ASSERT_GT(expected.volume, 0.0);
     for (std::int64_t layers : slab_sizes(s.volume.grid())) {
       for (int threads : {1, 3}) {
-        VoxelMassAccumulator sums(s.volume.grid());
+        VoxelMassAccumulator sums(s.volume.grid()), from_runs(s.volume.grid());
         read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { sums.add(k0, slab, threads); });
-        const MassProperties got = sums.result();
-        EXPECT_EQ(got.volume, expected.volume);
-        for (int a = 0; a < 3; ++a) {
-          EXPECT_EQ(got.centroid[a], expected.centroid[a]);
-          EXPECT_EQ(got.bbox.min[a], expected.bbox.min[a]);
-          EXPECT_EQ(got.bbox.max[a], expected.bbox.max[a]);
-          for (int b = 0; b < 3; ++b) EXPECT_EQ(got.inertia[a][b], expected.inertia[a][b]);
+        read_rle_run_slabs(s.rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.add(k0, slab, threads); });
+        for (const MassProperties& got : {sums.result(), from_runs.result()}) {
+          EXPECT_EQ(got.volume, expected.volume);
+          for (int a = 0; a < 3; ++a) {
+            EXPECT_EQ(got.centroid[a], expected.centroid[a]);
+            EXPECT_EQ(got.bbox.min[a], expected.bbox.min[a]);
+            EXPECT_EQ(got.bbox.max[a], expected.bbox.max[a]);
+            for (int b = 0; b < 3; ++b) EXPECT_EQ(got.inertia[a][b], expected.inertia[a][b]);
+          }
         }
       }
     }
@@ -280,24 +361,28 @@ TEST(SlabAnalyses, PartsAndVoidsAreExactlyTheInMemoryOnes) {
   Stored made{std::move(shell), shell_rle.data};
   all.push_back(&made);
   for (const Stored* s : all) {
-    const ComponentReport expected = find_components(s->volume);
+    const ComponentReport expected = find_components(s->volume, 1);
     for (std::int64_t layers : slab_sizes(s->volume.grid())) {
-      SCOPED_TRACE("layers " + std::to_string(layers));
-      ComponentLabeller labeller(s->volume.grid());
-      read_rle_bit_slabs(s->rle, layers, [&](std::int64_t k0, const BitVolume& slab) { labeller.add(k0, slab); });
-      const ComponentReport got = labeller.finish();
-      ASSERT_EQ(got.parts.size(), expected.parts.size());
-      ASSERT_EQ(got.voids.size(), expected.voids.size());
-      auto same = [](const std::vector<VoxelRegion>& a, const std::vector<VoxelRegion>& b) {
-        for (std::size_t r = 0; r < a.size(); ++r) {
-          EXPECT_EQ(a[r].voxels, b[r].voxels);
-          EXPECT_EQ(a[r].bbox_min, b[r].bbox_min);
-          EXPECT_EQ(a[r].bbox_max, b[r].bbox_max);
-          EXPECT_EQ(a[r].centroid, b[r].centroid);
+      for (int threads : {1, 2}) {
+        SCOPED_TRACE("layers " + std::to_string(layers) + ", threads " + std::to_string(threads));
+        ComponentLabeller labeller(s->volume.grid(), threads), from_runs(s->volume.grid(), threads);
+        read_rle_bit_slabs(s->rle, layers, [&](std::int64_t k0, const BitVolume& slab) { labeller.add(k0, slab); });
+        read_rle_run_slabs(s->rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.add(k0, slab); });
+        for (const ComponentReport& got : {labeller.finish(), from_runs.finish()}) {
+          ASSERT_EQ(got.parts.size(), expected.parts.size());
+          ASSERT_EQ(got.voids.size(), expected.voids.size());
+          auto same = [](const std::vector<VoxelRegion>& a, const std::vector<VoxelRegion>& b) {
+            for (std::size_t r = 0; r < a.size(); ++r) {
+              EXPECT_EQ(a[r].voxels, b[r].voxels);
+              EXPECT_EQ(a[r].bbox_min, b[r].bbox_min);
+              EXPECT_EQ(a[r].bbox_max, b[r].bbox_max);
+              EXPECT_EQ(a[r].centroid, b[r].centroid);
+            }
+          };
+          same(got.parts, expected.parts);
+          same(got.voids, expected.voids);
         }
-      };
-      same(got.parts, expected.parts);
-      same(got.voids, expected.voids);
+      }
     }
   }
   const ComponentReport r = find_components(made.volume);

@@ -25,6 +25,7 @@
 
 #include "support/test_meshes.h"
 #include "voxd/error.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
 
 namespace voxd {
@@ -1207,8 +1208,34 @@ TEST(VolumeFormatMutation, GeneratedRleStreams) {
       BitVolume decoded;
       ASSERT_NO_THROW(decoded = read_rle_bits(stream)) << "stream " << n;
       expect_same_voxels(expected, decoded);
+      // Read as runs: each row's runs maximal and in order (a stored run
+      // split by a 0-run of length 0, or going on into the next row, is
+      // joined or cut), and the same voxels.
+      BitVolume from_runs(make_grid(dims));
+      std::int64_t next_layer = 0;
+      ASSERT_NO_THROW(read_rle_run_slabs(stream, 1 + n % 3, [&](std::int64_t k0, const RunSlab& slab) {
+        ASSERT_EQ(k0, next_layer);
+        next_layer += slab.grid().dims.z;
+        for (std::int64_t k = 0; k < slab.grid().dims.z; ++k)
+          for (std::int64_t j = 0; j < dims.y; ++j) {
+            const auto runs = slab.row(j, k);
+            for (std::size_t r = 0; r < runs.size(); r += 2) {
+              ASSERT_LT(runs[r], runs[r + 1]);
+              ASSERT_LE(runs[r + 1], dims.x);
+              if (r + 2 < runs.size()) {
+                ASSERT_GT(runs[r + 2], runs[r + 1]) << "runs touch: not maximal";
+              }
+              for (std::uint32_t i = runs[r]; i < runs[r + 1]; ++i) from_runs.set(i, j, k0 + k, true);
+            }
+          }
+      })) << "stream " << n;
+      EXPECT_EQ(next_layer, dims.z);
+      expect_same_voxels(expected, from_runs);
     } else {
       EXPECT_EQ(error_code_of([&] { read_rle_bits(stream); }), ErrorCode::malformed_input) << "stream " << n;
+      EXPECT_EQ(error_code_of([&] { read_rle_run_slabs(stream, 2, [](std::int64_t, const RunSlab&) {}); }),
+                ErrorCode::malformed_input)
+          << "stream " << n;
     }
   }
   EXPECT_GT(valid_streams, 1000);

@@ -2,6 +2,7 @@
 // runs past the grid must be an Error, never an allocation or a read past
 // the input.
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <utility>
@@ -63,7 +64,49 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     });
   };
   Dribble dribbled_bits(bytes);
-  if (bits(bytes) != bits(dribbled_bits)) __builtin_trap();
+  const auto from_bits = bits(bytes);
+  if (from_bits != bits(dribbled_bits)) __builtin_trap();
+  // The same stream read as runs: the same voxels layer by layer, or the
+  // same error (each reader bounds its own memory, so a limit may differ).
+  auto layers_of_bits = [&](auto&& input) {
+    return outcome([&](std::uint64_t& digest) {
+      voxd::read_rle_bit_slabs(input, 3, [&](std::int64_t k0, const voxd::BitVolume& slab) {
+        for (std::int64_t k = 0; k < slab.grid().dims.z; ++k) {
+          std::uint64_t n = 0;
+          const std::uint64_t* layer = slab.slab(k);
+          for (std::int64_t w = 0; w < slab.row_words() * slab.grid().dims.y; ++w)
+            n += static_cast<std::uint64_t>(std::popcount(layer[w]));
+          digest = digest * 31 + static_cast<std::uint64_t>(k0 + k) * 7 + n;
+        }
+      }, limits);
+    });
+  };
+  auto layers_of_runs = [&](auto&& input) {
+    return outcome([&](std::uint64_t& digest) {
+      voxd::read_rle_run_slabs(input, 3, [&](std::int64_t k0, const voxd::RunSlab& slab) {
+        for (std::int64_t k = 0; k < slab.grid().dims.z; ++k) {
+          std::uint64_t n = 0;
+          for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) {
+            const auto runs = slab.row(j, k);
+            for (std::size_t r = 0; r < runs.size(); r += 2) {
+              if (runs[r] >= runs[r + 1] || runs[r + 1] > slab.grid().dims.x || (r > 0 && runs[r] <= runs[r - 1]))
+                __builtin_trap();  // runs in order, apart and in the row
+              n += runs[r + 1] - runs[r];
+            }
+          }
+          digest = digest * 31 + static_cast<std::uint64_t>(k0 + k) * 7 + n;
+        }
+      }, limits);
+    });
+  };
+  const auto layer_bits = layers_of_bits(bytes);
+  Dribble dribbled_runs(bytes);
+  const auto layer_runs = layers_of_runs(dribbled_runs);
+  const int limit = static_cast<int>(voxd::ErrorCode::limit_exceeded);
+  if (layer_bits.second != limit && layer_runs.second != limit) {
+    if (layer_bits.second != layer_runs.second) __builtin_trap();
+    if (layer_bits.second < 0 && layer_bits.first != layer_runs.first) __builtin_trap();
+  }
   auto values = [&](auto&& input) {
     return outcome([&](std::uint64_t& digest) {
       voxd::read_rle_value_slabs(input, 2, [&](std::int64_t k0, const voxd::ValueVolume& slab) {

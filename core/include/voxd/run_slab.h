@@ -41,6 +41,9 @@ class RunSlab {
     filled_ += end - begin;
   }
   void end_row() { starts_.push_back(static_cast<std::uint32_t>(bounds_.size())); }
+  // Ends the slab after its first `layers` layers, whose rows are all
+  // built: a slab handed on before its grid's last layer.
+  void set_layers(std::int64_t layers) { grid_.dims.z = layers; }
   // Appends the rows of `next`, a slab of the layers after this one's rows
   // (a whole grid's runs gathered slab by slab).
   void append_rows(const RunSlab& next);

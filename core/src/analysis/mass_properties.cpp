@@ -92,10 +92,12 @@ struct IndexMoments {
 // Σ i² for i in [0, m).
 inline std::int64_t squares_below(std::int64_t m) { return (m - 1) * m * (2 * m - 1) / 6; }
 
-void add_row(const std::uint64_t* row, std::int64_t dims_x, std::int64_t words, std::int64_t j, std::int64_t k,
-             IndexMoments& s) {
+// Adds row (j, k), whose filled runs [begin, end) along x `for_each_run`
+// hands to its callback in order.
+template <class ForEachRun>
+void add_row(const ForEachRun& for_each_run, std::int64_t j, std::int64_t k, IndexMoments& s) {
   std::int64_t n = 0, si = 0, sii = 0, first = -1, last = -1;
-  detail::for_each_row_run(row, words, dims_x, false, [&](std::int64_t begin, std::int64_t end) {
+  for_each_run([&](std::int64_t begin, std::int64_t end) {
     if (first < 0) first = begin;
     n += end - begin;
     si += (begin + end - 1) * (end - begin) / 2;
@@ -131,12 +133,32 @@ VoxelMassAccumulator::~VoxelMassAccumulator() = default;
 
 void VoxelMassAccumulator::add(std::int64_t k0, const BitVolume& slab, int threads) {
   std::mutex total_mutex;
+  const std::int64_t nx = slab.grid().dims.x, words = slab.row_words();
   parallel_for(0, slab.grid().dims.z, 4, threads, [&](std::int64_t a, std::int64_t b) {
     IndexMoments s;
     for (std::int64_t k = a; k < b; ++k)
-      for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) add_row(slab.row(j, k), slab.grid().dims.x, slab.row_words(), j, k0 + k, s);
+      for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) {
+        const std::uint64_t* row = slab.row(j, k);
+        add_row([&](const auto& on_run) { detail::for_each_row_run(row, words, nx, false, on_run); }, j, k0 + k, s);
+      }
     std::lock_guard lock(total_mutex);
     *sums_ += s;  // integers: the total does not depend on the order
+  });
+}
+
+void VoxelMassAccumulator::add(std::int64_t k0, const RunSlab& slab, int threads) {
+  std::mutex total_mutex;
+  parallel_for(0, slab.grid().dims.z, 4, threads, [&](std::int64_t a, std::int64_t b) {
+    IndexMoments s;
+    for (std::int64_t k = a; k < b; ++k)
+      for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) {
+        const auto runs = slab.row(j, k);
+        add_row([&](const auto& on_run) {
+          for (std::size_t r = 0; r < runs.size(); r += 2) on_run(std::int64_t{runs[r]}, std::int64_t{runs[r + 1]});
+        }, j, k0 + k, s);
+      }
+    std::lock_guard lock(total_mutex);
+    *sums_ += s;
   });
 }
 

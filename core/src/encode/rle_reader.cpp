@@ -363,6 +363,75 @@ void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_la
   read_rle_bit_slabs(source, slab_layers, consume, limits);
 }
 
+void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunSlabConsumer& consume,
+                        const ReadLimits& limits) {
+  SourceWindow window(source);
+  const Grid grid = read_header_of_type(window, encode::RleValueType::bit, "read_rle_run_slabs").grid;
+  const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
+  const std::uint64_t slab_voxels = slab_voxel_count(grid);
+  // One layer's runs: at most one a pair of voxels and one more a row (a
+  // stored run may go on from one row into the next), two bounds of 4
+  // bytes each, and a row's start. A slab's bounds are indexed in 32 bits.
+  const std::uint64_t layer_runs = slab_voxels / 2 + static_cast<std::uint64_t>(ny) + 1;
+  encode::check_read_limit(8 * layer_runs + 4 * static_cast<std::uint64_t>(ny + 1), limits, "RLE run reader");
+  if (kRunSlabRuns + layer_runs > UINT32_MAX / 2)
+    throw Error(ErrorCode::limit_exceeded, "RLE run reader: a layer of " + std::to_string(slab_voxels) +
+                                               " voxels may hold more runs than a run slab indexes");
+  const std::int64_t layers = std::clamp<std::int64_t>(slab_layers, 1, std::max<std::int64_t>(nz, 1));
+  RunSlab slab;
+  std::int64_t k0 = 0;
+  for (std::int64_t k = 0; k < nz; ++k) {
+    if (k == k0) slab.reset(slab_grid(grid, k0, std::min(layers, nz - k0)));
+    const SlabBlock block = next_slab_block(window, k, nz, max_bit_payload(slab_voxels));
+    // Rows are closed in order; a run is held until the next one shows it
+    // is maximal (a stream may split a run with a 0-run of length 0).
+    std::int64_t row = 0;
+    std::uint32_t held_begin = 0, held_end = 0;
+    std::int64_t held_row = -1;
+    auto flush = [&] {
+      if (held_row < 0) return;
+      for (; row < held_row; ++row) slab.end_row();
+      slab.add_run(held_begin, held_end);
+      held_row = -1;
+    };
+    decode_bit_payload(payload_cursor(block.payload, block.at, k), slab_voxels,
+                       [&](std::uint64_t first, std::uint64_t length) {
+                         auto j = static_cast<std::int64_t>(first / static_cast<std::uint64_t>(nx));
+                         auto i = static_cast<std::int64_t>(first % static_cast<std::uint64_t>(nx));
+                         while (length > 0) {
+                           const auto n = static_cast<std::int64_t>(
+                               std::min<std::uint64_t>(length, static_cast<std::uint64_t>(nx - i)));
+                           if (held_row == j && held_end == static_cast<std::uint32_t>(i)) {
+                             held_end = static_cast<std::uint32_t>(i + n);
+                           } else {
+                             flush();
+                             held_row = j;
+                             held_begin = static_cast<std::uint32_t>(i);
+                             held_end = static_cast<std::uint32_t>(i + n);
+                           }
+                           length -= static_cast<std::uint64_t>(n);
+                           i = 0;
+                           ++j;
+                         }
+                       });
+    flush();
+    for (; row < ny; ++row) slab.end_row();
+    const std::int64_t in_slab = k + 1 - k0;
+    if (in_slab == slab.grid().dims.z || slab.run_count() >= kRunSlabRuns) {
+      if (in_slab < slab.grid().dims.z) slab.set_layers(in_slab);
+      consume(k0, slab);
+      k0 = k + 1;
+    }
+  }
+  read_end(window, nz);
+}
+
+void read_rle_run_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const RunSlabConsumer& consume,
+                        const ReadLimits& limits) {
+  SpanSource source(data);
+  read_rle_run_slabs(source, slab_layers, consume, limits);
+}
+
 namespace {
 
 template <class T>

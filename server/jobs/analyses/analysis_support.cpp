@@ -45,6 +45,20 @@ void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from
                      kStoredSlabLimits);
 }
 
+void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume) {
+  if (!in.output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
+  const Grid& grid = in.job.grid;
+  JobControl* control = in.control;
+  const double layers_total = static_cast<double>(grid.dims.z);
+  read_rle_run_slabs(*in.output.rle->open(), grid.dims.z,
+                     [&](std::int64_t k0, const RunSlab& slab) {
+                       if (control) control->check_cancelled();
+                       consume(k0, slab);
+                       if (control) control->set_progress(static_cast<double>(k0 + slab.grid().dims.z) / layers_total);
+                     },
+                     kStoredSlabLimits);
+}
+
 void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume) {
   if (!in.output.values_rle) throw std::logic_error("a streamed job's section of values without its stored values");
   const Grid& grid = in.job.grid;

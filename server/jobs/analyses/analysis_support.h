@@ -28,6 +28,10 @@ std::optional<BitVolume> peeled_volume(const api::AnalysisRequest& r, const BitV
 // with progress over [from, to] of the bar (a request of two passes takes
 // half each) and cancellation between slabs.
 void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from = 0.0, double to = 1.0);
+// The same as runs (voxd/run_slab.h), for analyses that work on runs: they
+// then cost the stored runs, not the grid's voxels. Slabs hold up to
+// kRunSlabRuns runs.
+void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume);
 // The same for a streamed job's stored values.
 void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume);
 

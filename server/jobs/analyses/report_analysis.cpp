@@ -7,6 +7,7 @@
 #include "voxd/analysis/analysis.h"
 #include "voxd/analysis/components.h"
 #include "voxd/analysis/mass_properties.h"
+#include "voxd/encode/rle_slabs.h"
 
 namespace voxd::server {
 namespace {
@@ -58,7 +59,7 @@ class ReportAnalysis final : public JobAnalysisKind {
     const JobSnapshot& job = in.job;
     VoxelMassAccumulator mass(job.grid);
     ComponentLabeller components(job.grid);
-    replay(in, [&](std::int64_t k0, const BitVolume& slab) {
+    replay_runs(in, [&](std::int64_t k0, const RunSlab& slab) {
       mass.add(k0, slab);
       components.add(k0, slab);
     });
@@ -67,6 +68,12 @@ class ReportAnalysis final : public JobAnalysisKind {
     report.components = components.finish();
     report.peel = in.request.peel_metric;
     return report_json(report, job);
+  }
+
+  // A slab of runs (kRunSlabRuns of 8 bytes). The labeller's two layers of
+  // runs a phase are a layer's runs: a few per row of a real part.
+  std::uint64_t over_slabs_memory(const api::AnalysisRequest&, const Grid&) const override {
+    return kRunSlabRuns * 8;
   }
 
   // The distance transform and the thickness map (floats), the labels of

@@ -13,6 +13,7 @@
 #include <glm/vec3.hpp>
 
 #include "voxd/bit_volume.h"
+#include "voxd/run_slab.h"
 
 namespace voxd {
 
@@ -30,7 +31,10 @@ struct ComponentReport {
 // Runs are labelled row by row with a union-find over runs, so memory is
 // proportional to the number of runs, not voxels. Empty voxels on the grid's
 // border are connected to the outside.
-ComponentReport find_components(const BitVolume& volume);
+// `threads`: the runs of a few layers are found in parallel, and the two
+// phases (parts, voids) are labelled on a thread each (0 = all cores); the
+// result is the same for any count.
+ComponentReport find_components(const BitVolume& volume, int threads = 0);
 
 // find_components of a volume that arrives slab by slab in z order (a
 // streamed voxelization, a stored result replayed from its RLE): add() every
@@ -39,7 +43,7 @@ ComponentReport find_components(const BitVolume& volume);
 // whatever nz is; find_components is the one-slab case.
 class ComponentLabeller {
  public:
-  explicit ComponentLabeller(const Grid& grid);
+  explicit ComponentLabeller(const Grid& grid, int threads = 0);
   ~ComponentLabeller();
   ComponentLabeller(const ComponentLabeller&) = delete;
   ComponentLabeller& operator=(const ComponentLabeller&) = delete;
@@ -47,12 +51,17 @@ class ComponentLabeller {
   // Layers [k0, k0 + slab.grid().dims.z), right after the previous slab's.
   // Throws std::logic_error out of order.
   void add(std::int64_t k0, const BitVolume& slab);
+  // The same layers as runs (a stored result read as its runs): the cost
+  // is the runs', not the voxels'.
+  void add(std::int64_t k0, const RunSlab& slab);
   // After the last layer. Throws std::logic_error if layers are missing.
   ComponentReport finish();
 
  private:
   class Phase;
+  void check_next(std::int64_t k0) const;
   glm::i64vec3 dims_;
+  int threads_;
   std::unique_ptr<Phase> parts_, voids_;
   std::int64_t next_k_ = 0;
 };

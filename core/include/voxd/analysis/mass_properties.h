@@ -12,6 +12,7 @@
 
 #include "voxd/bit_volume.h"
 #include "voxd/mesh.h"
+#include "voxd/run_slab.h"
 
 namespace voxd {
 
@@ -48,6 +49,8 @@ class VoxelMassAccumulator {
 
   // Layers [k0, k0 + slab.grid().dims.z) of the grid.
   void add(std::int64_t k0, const BitVolume& slab, int threads = 0);
+  // The same layers as runs (a stored result read as its runs).
+  void add(std::int64_t k0, const RunSlab& slab, int threads = 0);
   MassProperties result() const;
 
  private:

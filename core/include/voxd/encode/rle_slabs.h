@@ -10,6 +10,7 @@
 #include "voxd/encode/slab_writer.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/grid.h"
+#include "voxd/run_slab.h"
 
 namespace voxd {
 
@@ -30,6 +31,18 @@ void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_la
 // The same from a source read front to back (a stored result fetched as it
 // is read): memory is one slab and one layer's block, never the stream.
 void read_rle_bit_slabs(ByteSource& source, std::int64_t slab_layers, const BitSlabConsumer& consume,
+                        const ReadLimits& limits = {});
+
+// The same stream's filled runs, row by row (RunSlab), never its bits: the
+// streamed analyses that work on runs (mass properties, parts and voids)
+// then cost the runs, not the voxels (an 8192^3 result is 136 MiB of runs
+// and 64 GiB of bits). A slab holds up to `slab_layers` whole layers, fewer
+// once it holds kRunSlabRuns runs; memory is one slab. Checked and thrown
+// like read_rle_bit_slabs; `limits` bounds the runs one layer can need.
+inline constexpr std::size_t kRunSlabRuns = std::size_t{1} << 23;
+void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunSlabConsumer& consume,
+                        const ReadLimits& limits = {});
+void read_rle_run_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const RunSlabConsumer& consume,
                         const ReadLimits& limits = {});
 
 // The same for a stream of values (u8, f32 or rgba8), each slab a
