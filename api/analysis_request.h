@@ -62,6 +62,11 @@ struct AnalysisRequest {
   std::string colour = "none";
   // preview: +x | -x | +y | -y | +z | -z.
   std::string view = "+z";
+  // preview: the image's longest side at most, in pixels (a larger view is
+  // shrunk by an integer factor: voxd/analysis/preview.h); 0 = full size,
+  // one pixel a voxel ("full").
+  std::int64_t size = kDefaultPreviewSize;
+  static constexpr std::int64_t kDefaultPreviewSize = 2048;
 
   // Every parameter of the kind, defaults included, in a fixed order, e.g.
   // "axis=z&measure=max&format=png16&unit=voxels": the route's canonical URL

@@ -81,6 +81,42 @@ TEST(AnalysisRequest, EveryProblemIsReportedAtItsField) {
             (std::set<std::string>{"/view"}));
 }
 
+// Issue #39: a preview is at most `size` pixels along its longest side
+// (2048 by default), or one pixel a voxel with size=full.
+TEST(AnalysisRequest, APreviewsSizeIsPixelsOrFull) {
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::preview, {}, "").size, 2048);
+  // The default shows nowhere, as before previews had a size.
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::preview, {{"size", "2048"}}, "").query(), "view=%2Bz&colour=none");
+  EXPECT_FALSE(to_json(parse_analysis_request(AnalysisKind::preview, {}, "")).contains("size"));
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::preview, {{"size", "full"}}, "").size, 0);
+  const AnalysisRequest small = parse_analysis_request(AnalysisKind::preview, {{"size", "300"}, {"view", "-x"}}, "");
+  EXPECT_EQ(small.size, 300);
+  EXPECT_EQ(small.query(), "view=-x&colour=none&size=300");
+  EXPECT_EQ(parse_analysis_request(AnalysisKind::preview, {{"size", "full"}}, "").query(), "view=%2Bz&colour=none&size=full");
+  EXPECT_EQ(to_json(small), json::parse(R"({"kind":"preview","view":"-x","colour":"none","size":300})"));
+  for (const char* bad : {"0", "15", "65537", "1.5", "big", "", "-20"}) {
+    try {
+      parse_analysis_request(AnalysisKind::preview, {{"size", bad}}, "/q");
+      ADD_FAILURE() << bad;
+    } catch (const InvalidParams& e) {
+      ASSERT_EQ(e.errors().size(), 1u);
+      EXPECT_EQ(e.errors()[0].path, "/q/size");
+      EXPECT_EQ(e.errors()[0].message, std::string("must be the image's longest side in pixels, from 16 to 65536, or full "
+                                                   "(one pixel a voxel), got '") + bad + "'");
+    }
+  }
+  // Only previews take it.
+  EXPECT_EQ(error_paths([] { parse_analysis_request(AnalysisKind::section, {{"index", "1"}, {"size", "100"}}, ""); }),
+            (std::set<std::string>{"/size"}));
+  // In the job JSON, a number or "full".
+  const JobParams p = parse_job_params(json::parse(R"({"grid":{"resolution":32},"analyses":[
+      {"kind":"preview","size":512},{"kind":"preview","size":"full"}]})"));
+  ASSERT_EQ(p.analyses.size(), 2u);
+  EXPECT_EQ(p.analyses[0].size, 512);
+  EXPECT_EQ(p.analyses[1].size, 0);
+  EXPECT_EQ(to_json(p.analyses[1]).at("size"), "full");
+}
+
 TEST(AnalysisRequest, JobJsonAnalysesAreTypedAndCheckedTogetherWithTheRest) {
   const JobParams p = parse_job_params(json::parse(R"({"grid":{"resolution":32},"analyses":[
       {"kind":"analysis","min_wall":0.8,"thickness":true},{"kind":"section","axis":"y","index":3,"colour":"thickness"},

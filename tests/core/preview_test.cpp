@@ -423,6 +423,108 @@ TEST(PreviewPng, PlainPreviewDecodesWithTextAndWhiteBackground) {
   }
 }
 
+// Issue #39: a preview of a huge grid is shown at a sensible size. The
+// factor is the smallest that fits; each shown pixel is its block's nearest
+// visible voxel, found here by walking the block's rays voxel by voxel, so
+// a plate one voxel thick seen edge-on stays in view at any factor.
+TEST(PreviewShrink, FactorIsTheSmallestThatFits) {
+  EXPECT_EQ(shrink_factor(8194, 7918, 2048), 5);
+  EXPECT_EQ(shrink_factor(2048, 100, 2048), 1);
+  EXPECT_EQ(shrink_factor(2049, 100, 2048), 2);
+  EXPECT_EQ(shrink_factor(100, 4097, 2048), 3);
+  EXPECT_EQ(shrink_factor(8194, 7918, 0), 1);  // full size
+  EXPECT_EQ(code_of([] { shrink_preview(PreviewImage{}, unit_grid(1, 1, 1), View{}, 0); }), ErrorCode::invalid_argument);
+}
+
+TEST(PreviewShrink, EachPixelIsItsBlocksNearestVoxelAndThinWallsStay) {
+  const Grid g = unit_grid(61, 47, 29);
+  BitVolume vol(g);
+  std::mt19937 rng(5);
+  for (int n = 0; n < 25; ++n) {
+    const glm::i64vec3 lo{rng() % 61, rng() % 47, rng() % 29};
+    const glm::i64vec3 size{1 + rng() % 12, 1 + rng() % 12, 1 + rng() % 12};
+    fill_box(vol, lo, glm::min(lo + size - std::int64_t{1}, g.dims - std::int64_t{1}));
+  }
+  // Plates one voxel thick, edge-on to some view: x = 50, y = 40, z = 3.
+  fill_box(vol, {50, 0, 0}, {50, 46, 28});
+  fill_box(vol, {0, 40, 0}, {60, 40, 28});
+  fill_box(vol, {0, 0, 3}, {60, 46, 3});
+  for (const ViewCase& v : kViews) {
+    const PreviewImage full = render_preview(vol, view_of(v), 2);
+    for (int factor : {1, 2, 3, 7, 64}) {
+      SCOPED_TRACE(std::string(v.name) + ", factor " + std::to_string(factor));
+      const PreviewImage small = shrink_preview(full, g, view_of(v), factor);
+      ASSERT_EQ(small.width, (full.width + factor - 1) / factor);
+      ASSERT_EQ(small.height, (full.height + factor - 1) / factor);
+      for (std::int64_t r = 0; r < small.height; ++r)
+        for (std::int64_t c = 0; c < small.width; ++c) {
+          // The block's rays walked from the camera: the nearest voxel, the
+          // first in row order among equals.
+          std::int64_t want = -1, want_depth = 0, want_pixel = -1;
+          for (std::int64_t br = r * factor; br < std::min<std::int64_t>(full.height, (r + 1) * factor); ++br)
+            for (std::int64_t bc = c * factor; bc < std::min<std::int64_t>(full.width, (c + 1) * factor); ++bc) {
+              glm::i64vec3 p{0};
+              p[v.right_axis] = right_coord(v, g.dims, bc);
+              p[v.up_axis] = up_coord(v, g.dims, br);
+              for (std::int64_t depth = 0; depth < g.dims[v.axis]; ++depth) {
+                p[v.axis] = v.from_positive ? g.dims[v.axis] - 1 - depth : depth;
+                if (!vol.get(p.x, p.y, p.z)) continue;
+                if (want < 0 || depth < want_depth) {
+                  want = p.x + g.dims.x * (p.y + g.dims.y * p.z);
+                  want_depth = depth;
+                  want_pixel = br * full.width + bc;
+                }
+                break;
+              }
+            }
+          const std::size_t q = at(small, c, r);
+          ASSERT_EQ(small.voxel[q], want) << c << "," << r;
+          if (want >= 0) {
+            EXPECT_EQ(small.shade[q], full.shade[static_cast<std::size_t>(want_pixel)]);
+            EXPECT_EQ(small.normal[q], full.normal[static_cast<std::size_t>(want_pixel)]);
+          } else {
+            EXPECT_EQ(small.shade[q], 0.0f);
+          }
+        }
+    }
+  }
+}
+
+TEST(PreviewShrink, ThePngSaysHowMuchAPixelSpans) {
+  BitVolume vol(unit_grid(40, 30, 20, 0.5));
+  fill_box(vol, {3, 4, 2}, {36, 25, 17});
+  const View top = view_of(kViews[0]);
+  const json full = decode_png(preview_png(vol, top, nullptr, {}, 0, 0));
+  const json fits = decode_png(preview_png(vol, top, nullptr, {}, 0, 40));
+  EXPECT_EQ(full, fits);  // already fits: the same image
+  EXPECT_FALSE(full["text"].contains("voxd:shrunk"));
+  const json small = decode_png(preview_png(vol, top, nullptr, {}, 0, 16));
+  EXPECT_EQ(small["width"], 14);  // 40 / 3, rounded up
+  EXPECT_EQ(small["height"], 10);
+  EXPECT_EQ(small["text"]["voxd:voxel_size"], "1.5 model units per pixel");
+  EXPECT_EQ(small["text"]["voxd:shrunk"], "each pixel a block of 3 x 3 voxels, showing its nearest visible voxel");
+  // The pixels are the shrunk image's, coloured as a full-size preview is.
+  const PreviewImage shown = shrink_preview(render_preview(vol, top), vol.grid(), top, 3);
+  for (std::int64_t r = 0; r < shown.height; ++r)
+    for (std::int64_t c = 0; c < shown.width; ++c) {
+      const std::size_t p = at(shown, c, r);
+      const Rgb want = shown.voxel[p] < 0 ? Rgb{255, 255, 255} : shaded(kPreviewPartColour, shown.shade[p]);
+      EXPECT_EQ(png_pixel(small, c, r), want) << c << "," << r;
+    }
+  // A thickness legend keeps its size: the same strip under a smaller map.
+  DenseVolume<float> map(vol.grid(), 0.0f);
+  for (std::int64_t k = 0; k < 20; ++k)
+    for (std::int64_t j = 0; j < 30; ++j)
+      for (std::int64_t i = 0; i < 40; ++i) map.at(i, j, k) = vol.get(i, j, k) ? 4.0f + static_cast<float>(i % 5) : 0.0f;
+  const json coloured_full = decode_png(preview_png(vol, top, &map, {}, 0, 0));
+  const json coloured_small = decode_png(preview_png(vol, top, &map, {}, 0, 20));
+  EXPECT_EQ(coloured_full["width"], 40);
+  EXPECT_EQ(coloured_full["height"], 30 + kLegendHeight);
+  EXPECT_EQ(coloured_small["width"], 20);
+  EXPECT_EQ(coloured_small["height"], 15 + kLegendHeight);
+  EXPECT_EQ(coloured_small["text"]["voxd:legend"], coloured_full["text"]["voxd:legend"]);
+}
+
 TEST(PreviewPng, ThicknessColoursUseTheWholeMapRange) {
   // Two plates seen from +z: 4 voxels thick at small x, 8 at large x. One
   // voxel under the thick plate (hidden from +z) says 16: the ramp must span

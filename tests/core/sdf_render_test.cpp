@@ -394,6 +394,37 @@ TEST(SdfRender, PngDecodesWithItsMetadata) {
     EXPECT_NE(png["text"]["voxd:lighting"].get<std::string>().find("Phong"), std::string::npos);
     EXPECT_EQ(png["text"]["voxd:job"], "abc");
   }
+  // Issue #39: shrunk to a size, each pixel its block's nearest hit (found
+  // here from the render's hits), and the PNG says so.
+  for (const ViewCase& v : {kViews[1], kViews[4]}) {
+    SCOPED_TRACE(v.name);
+    const SdfRenderImage img = render_sdf(in, view_of(v), 0, 2);
+    const int factor = 3;
+    const int side = (std::max(img.width, img.height) + factor - 1) / factor;
+    const json png = decode_png(sdf_preview_png(in, view_of(v), {}, 0, 2, side));
+    ASSERT_EQ(png["width"], (img.width + factor - 1) / factor);
+    ASSERT_EQ(png["height"], (img.height + factor - 1) / factor);
+    EXPECT_EQ(png["text"]["voxd:voxel_size"], "0.75 model units per pixel");
+    EXPECT_EQ(png["text"]["voxd:shrunk"], "each pixel a block of 3 x 3 rendered pixels, showing its nearest hit");
+    const auto pixels = png["pixels"].get<std::vector<std::uint8_t>>();
+    const int w = png["width"];
+    for (int r = 0; r < png["height"].get<int>(); ++r)
+      for (int c = 0; c < w; ++c) {
+        int best = -1;
+        for (int br = r * factor; br < std::min(img.height, (r + 1) * factor); ++br)
+          for (int bc = c * factor; bc < std::min(img.width, (c + 1) * factor); ++bc) {
+            const int p = br * img.width + bc;
+            const double at = img.hit[static_cast<std::size_t>(p)][v.axis];
+            if (std::isnan(at)) continue;
+            const double best_at = best < 0 ? 0.0 : img.hit[static_cast<std::size_t>(best)][v.axis];
+            if (best < 0 || (v.from_positive ? at > best_at : at < best_at)) best = p;
+          }
+        for (int ch = 0; ch < 3; ++ch)
+          EXPECT_EQ(pixels[static_cast<std::size_t>(3 * (r * w + c) + ch)],
+                    best < 0 ? 255 : img.image.pixels[static_cast<std::size_t>(3 * best + ch)])
+              << c << "," << r;
+      }
+  }
   if (const char* dir = std::getenv("VOXD_SDF_RENDER_PNG_DIR")) {  // for looking at the picture
     test::write_file(std::string(dir) + "/sdf_sphere_px.png", sdf_preview_png(in, View{0, true}, {}, 0, 4));
   }

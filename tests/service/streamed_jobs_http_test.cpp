@@ -3,6 +3,7 @@
 // with the bytes of the same job made in memory; what needs the whole grid
 // runs while it fits the per-job memory and past it answers a 422 that
 // names the largest grid it accepts. The real `voxd serve` on loopback.
+#include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -83,6 +84,23 @@ TEST_F(StreamedJobsHttpTest, AStreamedJobAnswersWithTheInMemoryJobsBytes) {
   }
   for (const char* view : {"%2Bx", "-x", "%2By", "-y", "%2Bz", "-z"}) png_routes.push_back(std::string("preview?view=") + view);
   png_routes.push_back("section?axis=z&index=30&colour=thickness");
+  // Issue #39: a preview shrunk to a size (here 30 pixels: each pixel 4 x 4
+  // voxels) or at full size, streamed or not.
+  png_routes.push_back("preview?view=-y&size=30");
+  png_routes.push_back("preview?view=%2Bz&size=full");
+  for (const std::string& size : {std::string("30"), std::string("full")}) {
+    const std::string png = get_ok("/v1/jobs/" + b + "/preview?view=-y&size=" + size);
+    auto be32 = [&](std::size_t at) {
+      return (std::uint32_t{static_cast<std::uint8_t>(png[at])} << 24) | (std::uint32_t{static_cast<std::uint8_t>(png[at + 1])} << 16) |
+             (std::uint32_t{static_cast<std::uint8_t>(png[at + 2])} << 8) | std::uint32_t{static_cast<std::uint8_t>(png[at + 3])};
+    };
+    const json grid = done.at("grid").at("dims");
+    const auto wide = grid.at(0).get<std::uint32_t>(), high = grid.at(2).get<std::uint32_t>();  // -y: right +x, up +z
+    const std::uint32_t factor = size == "full" ? 1 : (std::max(wide, high) + 29) / 30;
+    EXPECT_EQ(be32(16), (wide + factor - 1) / factor) << size;  // IHDR width, height
+    EXPECT_EQ(be32(20), (high + factor - 1) / factor) << size;
+    EXPECT_EQ(png.find("voxd:shrunk") != std::string::npos, size != "full") << size;
+  }
   for (const std::string& route : json_routes) {
     const std::string expected = get_ok("/v1/jobs/" + a + "/" + route);
     const std::string got = get_ok("/v1/jobs/" + b + "/" + route);

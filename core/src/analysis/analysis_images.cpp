@@ -133,20 +133,26 @@ void check_preview_maps(const Grid& g, const DenseVolume<float>* thickness, cons
 
 // The preview in the part's grey-blue, coloured by thickness, or in each
 // visible voxel's own colour.
-std::vector<std::uint8_t> render_preview_png(const PreviewImage& preview, const Grid& g, View view,
+std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const Grid& g, View view,
                                              const DenseVolume<float>* thickness, const DenseVolume<Rgba8>* colours,
-                                             std::vector<PngText> text) {
+                                             std::vector<PngText> text, int max_side) {
   check_preview_maps(g, thickness, colours);
+  const int factor = shrink_factor(rendered.width, rendered.height, max_side);
+  const PreviewImage shrunk = factor > 1 ? shrink_preview(rendered, g, view, factor) : PreviewImage{};
+  const PreviewImage& preview = factor > 1 ? shrunk : rendered;
   const ViewBasis basis = view_basis(view);
   std::vector<PngText> chunks = {
       {"voxd:view", to_string(view)},
       {"voxd:right", signed_axis(basis.right_axis, basis.right_positive)},
       {"voxd:up", signed_axis(basis.up_axis, basis.up_positive)},
-      {"voxd:voxel_size", number_text(g.voxel_size) + " model units per pixel"},
+      {"voxd:voxel_size", number_text(g.voxel_size * factor) + " model units per pixel"},
       {"voxd:lighting",
        "Orthographic view of the first filled voxel on each ray, normals from its 26 neighbours (Patil & Ravi) "
        "smoothed over 3x3 pixels, lit from the viewer's upper left: shade = 0.2 + 0.8 max(0, n.L), up to 20% darker "
        "with depth."}};
+  if (factor > 1)
+    chunks.push_back({"voxd:shrunk", "each pixel a block of " + std::to_string(factor) + " x " + std::to_string(factor) +
+                                         " voxels, showing its nearest visible voxel"});
   const std::size_t pixels = preview.voxel.size();
   RgbImage image;
   if (!thickness) {
@@ -190,19 +196,22 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& preview, const 
 }  // namespace
 
 std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
-                                      std::vector<PngText> text, int threads) {
+                                      std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), thickness, nullptr);
-  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, thickness, nullptr, std::move(text));
+  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, thickness, nullptr, std::move(text),
+                            max_side);
 }
 
-std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view, std::vector<PngText> text) {
-  return render_preview_png(preview, grid, view, nullptr, nullptr, std::move(text));
+std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view, std::vector<PngText> text,
+                                      int max_side) {
+  return render_preview_png(preview, grid, view, nullptr, nullptr, std::move(text), max_side);
 }
 
 std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
-                                             std::vector<PngText> text, int threads) {
+                                             std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), nullptr, &colours);
-  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, nullptr, &colours, std::move(text));
+  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, nullptr, &colours, std::move(text),
+                            max_side);
 }
 
 }  // namespace voxd

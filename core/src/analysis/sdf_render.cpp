@@ -270,24 +270,62 @@ SdfRenderImage render_sdf(const SdfRenderInput& input, View view, int threads, i
   return img;
 }
 
+namespace {
+
+// The render `factor` times smaller along each side (rounded up), each pixel
+// its block's nearest hit (ties: the first in row order), as
+// shrink_preview does for a voxel preview.
+RgbImage shrink_render(const SdfRenderImage& render, View view, int factor) {
+  RgbImage out;
+  out.width = (render.width + factor - 1) / factor;
+  out.height = (render.height + factor - 1) / factor;
+  out.pixels.assign(static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height) * 3, 255);
+  const double towards_camera = view.from_positive ? 1.0 : -1.0;
+  for (int row = 0; row < out.height; ++row)
+    for (int col = 0; col < out.width; ++col) {
+      std::size_t best = SIZE_MAX;
+      double best_nearness = 0.0;
+      for (int r = row * factor; r < std::min(render.height, (row + 1) * factor); ++r)
+        for (int c = col * factor; c < std::min(render.width, (col + 1) * factor); ++c) {
+          const std::size_t p = static_cast<std::size_t>(r) * static_cast<std::size_t>(render.width) + static_cast<std::size_t>(c);
+          const double at = render.hit[p][view.axis];
+          if (std::isnan(at)) continue;
+          if (best == SIZE_MAX || at * towards_camera > best_nearness) {
+            best = p;
+            best_nearness = at * towards_camera;
+          }
+        }
+      if (best == SIZE_MAX) continue;
+      std::copy_n(&render.image.pixels[3 * best], 3,
+                  &out.pixels[3 * (static_cast<std::size_t>(row) * static_cast<std::size_t>(out.width) + static_cast<std::size_t>(col))]);
+    }
+  return out;
+}
+
+}  // namespace
+
 std::vector<std::uint8_t> sdf_preview_png(const SdfRenderInput& input, View view, std::vector<PngText> text, int threads,
-                                          int pixels_per_voxel) {
+                                          int pixels_per_voxel, int max_side) {
   const SdfRenderImage render = render_sdf(input, view, threads, pixels_per_voxel);
+  const int factor = shrink_factor(render.width, render.height, max_side);
   const ViewBasis basis = view_basis(view);
   std::vector<PngText> chunks = {
       {"voxd:view", to_string(view)},
       {"voxd:right", signed_axis(basis.right_axis, basis.right_positive)},
       {"voxd:up", signed_axis(basis.up_axis, basis.up_positive)},
-      {"voxd:voxel_size", number_text(input.sdf->grid().voxel_size / pixels_per_voxel) + " model units per pixel"},
+      {"voxd:voxel_size", number_text(input.sdf->grid().voxel_size * factor / pixels_per_voxel) + " model units per pixel"},
       {"voxd:pixels_per_voxel", std::to_string(pixels_per_voxel)},
       {"voxd:lighting",
        "Orthographic view of the zero level set of the trilinearly interpolated signed distance field, normals from "
        "its central-difference gradient, Phong lighting from the viewer's upper left: colour = part colour x (0.2 + "
        "0.7 max(0, n.L)) + white x 0.3 max(0, R.V)^24."},
       {"voxd:render", "sdf sphere tracing"}};
+  if (factor > 1)
+    chunks.push_back({"voxd:shrunk", "each pixel a block of " + std::to_string(factor) + " x " + std::to_string(factor) +
+                                         " rendered pixels, showing its nearest hit"});
   chunks.insert(chunks.end(), text.begin(), text.end());
   VectorSink out;
-  write_png_rgb8(render.image, chunks, out);
+  write_png_rgb8(factor > 1 ? shrink_render(render, view, factor) : render.image, chunks, out);
   return std::move(out.data);
 }
 

@@ -11,6 +11,9 @@
 namespace voxd::server {
 namespace {
 
+// The request's size as the engine takes it: 0 for full size.
+int max_side(const api::AnalysisRequest& r) { return static_cast<int>(r.size); }
+
 class PreviewAnalysis final : public JobAnalysisKind {
  public:
   api::AnalysisKind kind() const override { return api::AnalysisKind::preview; }
@@ -20,14 +23,15 @@ class PreviewAnalysis final : public JobAnalysisKind {
     const View view = *parse_view(r.view);
     // A distance field's surface is its zero level set, rendered directly.
     if (const auto field = sdf_input(in); field && r.colour == "none")
-      return to_bytes(sdf_preview_png(*field, view, image_text(in)));
+      return to_bytes(sdf_preview_png(*field, view, image_text(in), 0, 1, max_side(r)));
     // A colour job's preview shows its colours.
     const std::shared_ptr<const ValueVolume>& values = in.output.values;
     if (values && std::holds_alternative<DenseVolume<Rgba8>>(*values) && r.colour == "none")
-      return to_bytes(colour_preview_png(volume, std::get<DenseVolume<Rgba8>>(*values), view, image_text(in)));
+      return to_bytes(colour_preview_png(volume, std::get<DenseVolume<Rgba8>>(*values), view, image_text(in), 0,
+                                         max_side(r)));
     std::shared_ptr<const DenseVolume<float>> map;
     if (r.colour == "thickness") map = job_thickness_map(volume, in.artifacts, in.control);
-    return to_bytes(preview_png(volume, view, map.get(), image_text(in)));
+    return to_bytes(preview_png(volume, view, map.get(), image_text(in), 0, max_side(r)));
   }
 
   bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.colour == "none"; }
@@ -40,7 +44,7 @@ class PreviewAnalysis final : public JobAnalysisKind {
     PreviewRenderer preview(grid, view);
     replay(in, [&](std::int64_t k0, const BitVolume& slab) { preview.find(k0, slab); }, 0.0, 0.5);
     replay(in, [&](std::int64_t k0, const BitVolume& slab) { preview.shade(k0, slab); }, 0.5, 1.0);
-    return to_bytes(preview_png(preview.take(), grid, view, image_text(in)));
+    return to_bytes(preview_png(preview.take(), grid, view, image_text(in), max_side(in.request)));
   }
 
   // The visible voxels, depths, normals (raw and smoothed), shades, pixels

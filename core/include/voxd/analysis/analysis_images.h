@@ -53,17 +53,21 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
 // voxd:up, voxd:voxel_size, voxd:lighting, the colour map's chunks when
 // coloured, then `text`. Throws Error(invalid_argument) when the map's dims
 // differ from the volume's or the volume has a zero dimension.
+// `max_side` > 0: an image larger than max_side x max_side is shrunk by the
+// smallest integer factor that fits (shrink_preview: each pixel its block's
+// nearest visible voxel; voxd:voxel_size then counts the block, and
+// voxd:shrunk says so). The legend keeps its size. 0: one pixel a voxel.
 inline constexpr Rgb kPreviewPartColour{176, 190, 210};  // steel blue-grey
 std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
-                                      std::vector<PngText> text = {}, int threads = 0);
+                                      std::vector<PngText> text = {}, int threads = 0, int max_side = 0);
 // The same from a rendered preview (a PreviewRenderer's over slabs) of a
 // volume on `grid`, without a thickness map: the bytes preview_png gives.
 std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view,
-                                      std::vector<PngText> text = {});
+                                      std::vector<PngText> text = {}, int max_side = 0);
 // The same view with each visible voxel in its own colour (a slice job's
 // colours; alpha ignored), shaded alike. Throws as preview_png, and when the
 // colours' dims differ from the volume's.
 std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
-                                             std::vector<PngText> text = {}, int threads = 0);
+                                             std::vector<PngText> text = {}, int threads = 0, int max_side = 0);
 
 }  // namespace voxd

@@ -92,4 +92,18 @@ class PreviewRenderer {
   std::unique_ptr<State> state_;
 };
 
+// How many rendered pixels a side of a shown pixel spans so that an image of
+// width x height fits in max_side x max_side: the smallest integer that
+// does, 1 when it already fits or max_side is 0 (full size).
+int shrink_factor(int width, int height, int max_side);
+
+// The preview `factor` times smaller along each side (rounded up): each
+// pixel stands for a block of factor x factor rendered ones and shows the
+// block's nearest visible voxel (the nearest to the camera; ties: the first
+// in row order) with its shade and normal, so a wall thinner than a block
+// stays in view however far the image shrinks, and a pixel is background
+// only where its whole block is. Factor 1 returns the image as it is.
+// Throws Error(invalid_argument) for a factor below 1.
+PreviewImage shrink_preview(const PreviewImage& image, const Grid& grid, View view, int factor);
+
 }  // namespace voxd

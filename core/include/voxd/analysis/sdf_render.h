@@ -99,8 +99,9 @@ SdfRenderImage render_sdf(const SdfRenderInput& input, View view, int threads = 
 // The render as 8-bit RGB PNG. tEXt: voxd:view, voxd:right, voxd:up,
 // voxd:voxel_size (model units per pixel), voxd:pixels_per_voxel,
 // voxd:lighting, voxd:render = "sdf sphere tracing", then `text`. Throws as
-// render_sdf().
+// render_sdf(). `max_side` > 0 shrinks a larger image as preview_png does
+// (each pixel its block's nearest hit; voxd:shrunk says so).
 std::vector<std::uint8_t> sdf_preview_png(const SdfRenderInput& input, View view, std::vector<PngText> text = {},
-                                          int threads = 0, int pixels_per_voxel = 1);
+                                          int threads = 0, int pixels_per_voxel = 1, int max_side = 0);
 
 }  // namespace voxd
