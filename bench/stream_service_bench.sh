@@ -67,6 +67,9 @@ fi
 if want preview; then
   t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=%2Bz" -o "$work/top.png"; step "preview +z (two passes)" "$t0"
   t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=-x" -o "$work/side.png"; step "preview -x (two passes)" "$t0"
+  for png in top side; do
+    python3 -c 'import struct,sys; d=open(sys.argv[1],"rb").read(); w,h=struct.unpack(">II",d[16:24]); print(f"  {sys.argv[2]}: {w} x {h} pixels, {len(d)/2**20:.1f} MiB")' "$work/$png.png" "$png"
+  done
 fi
 if want thickness; then
   code=$(curl -s -o "$work/problem.json" -w '%{http_code}' "$url/v1/jobs/$id/thickness")
