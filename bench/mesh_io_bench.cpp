@@ -1,7 +1,7 @@
 // Mesh ingest speed on a 1.1M-triangle torus: the binary STL decode from
 // memory (the format of large uploads), welding its soup, the report, and
 // what "inside": "auto" adds to a job: the edge count it chooses from (on
-// 1, 2 and all threads), and orienting the mesh (the winding number's, or
+// 1, 2 and all threads; and for a 10,000-triangle job), and orienting the mesh (the winding number's, or
 // a closed mesh's that is inside out).
 // Run: build/bench/mesh_io_bench --benchmark_min_time=2
 #include <benchmark/benchmark.h>
@@ -25,6 +25,13 @@ const std::vector<std::uint8_t>& torus_stl() {
 
 const Mesh& torus_soup() {
   static const Mesh soup = decode_mesh_as(MeshFormat::stl_binary, torus_stl());
+  return soup;
+}
+
+// The service's small job: 100 x 50 quads = 10,000 triangles, as uploaded.
+const Mesh& small_soup() {
+  static const Mesh soup =
+      decode_mesh_as(MeshFormat::stl_binary, test::to_binary_stl(test::make_torus({0, 0, 0}, 40, 10, 100, 50)));
   return soup;
 }
 
@@ -55,6 +62,14 @@ void BM_EdgeTopology(benchmark::State& state) {
   state.counters["threads"] = threads;
 }
 BENCHMARK(BM_EdgeTopology)->Arg(1)->Arg(2)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// What every small job pays for "inside": "auto" (issue #39: the small
+// jobs' throughput).
+void BM_EdgeTopologySmall(benchmark::State& state) {
+  const Mesh& soup = small_soup();
+  for (auto _ : state) benchmark::DoNotOptimize(count_edge_topology(soup));
+}
+BENCHMARK(BM_EdgeTopologySmall)->Unit(benchmark::kMicrosecond)->UseRealTime();
 
 void BM_OrientOutward(benchmark::State& state) {
   const Mesh& soup = torus_soup();

@@ -1,6 +1,6 @@
-// Edge topology by hashing (voxd/edge_topology.h): two passes over the
-// triangles hash every edge, the first to count each bucket's keys, the
-// second to write them in place; then each bucket's edges are counted in a
+// Edge topology by hashing (voxd/edge_topology.h): a pass over the
+// triangles hashes every edge once, counting each bucket's keys; a second
+// pass writes the keys in place; then each bucket's edges are counted in a
 // small hash table of its own. Nothing is welded and no table is shared between threads.
 #include "voxd/edge_topology.h"
 
@@ -106,47 +106,62 @@ EdgeTopology count_edge_topology(const Mesh& mesh, int threads) {
   const auto n = static_cast<std::int64_t>(mesh.triangles.size());
   if (n == 0) return out;
   const std::int64_t chunks = (n + kGrain - 1) / kGrain;
+  // Buckets of about 256 edges at most kBuckets: a small mesh's few edges
+  // are not spread over a thousand tiny tables.
+  const int bucket_bits = std::min(static_cast<int>(std::bit_width(static_cast<std::uint64_t>(3 * n) / 256)), kBucketBits);
+  const std::size_t buckets = std::size_t{1} << bucket_bits;
+  auto bucket_of = [bucket_bits](std::uint64_t key) {
+    return bucket_bits == 0 ? std::size_t{0} : static_cast<std::size_t>(key >> (64 - bucket_bits));
+  };
 
-  // Pass 1: each chunk's count per bucket, and its share of the volume.
-  std::vector<std::uint32_t> counts(static_cast<std::size_t>(chunks) * kBuckets, 0);
+  // Pass 1: each chunk's keys (hashed once), its count per bucket, and its
+  // share of the volume.
+  std::vector<std::uint32_t> counts(static_cast<std::size_t>(chunks) * buckets, 0);
   std::vector<double> volumes(static_cast<std::size_t>(chunks), 0.0);
+  std::vector<std::vector<std::uint64_t>> chunk_keys(static_cast<std::size_t>(chunks));
   const glm::dvec3 origin(mesh.vertices[mesh.triangles[0][0]]);
   parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
     for (std::int64_t c = c0; c < c1; ++c) {
-      std::uint32_t* count = counts.data() + static_cast<std::size_t>(c) * kBuckets;
-      volumes[static_cast<std::size_t>(c)] = for_each_edge(
-          mesh, c * kGrain, std::min(n, (c + 1) * kGrain), origin, [&](std::uint64_t key) { ++count[key >> (64 - kBucketBits)]; });
+      std::uint32_t* count = counts.data() + static_cast<std::size_t>(c) * buckets;
+      std::vector<std::uint64_t>& mine = chunk_keys[static_cast<std::size_t>(c)];
+      mine.reserve(static_cast<std::size_t>(3 * (std::min(n, (c + 1) * kGrain) - c * kGrain)));
+      volumes[static_cast<std::size_t>(c)] =
+          for_each_edge(mesh, c * kGrain, std::min(n, (c + 1) * kGrain), origin, [&](std::uint64_t key) {
+            ++count[bucket_of(key)];
+            mine.push_back(key);
+          });
     }
   });
   for (double v : volumes) out.six_volume += v;
 
   // Where each chunk writes in each bucket: buckets in order, chunks in
   // order within them.
-  std::vector<std::size_t> bucket_start(kBuckets + 1, 0), at(counts.size());
+  std::vector<std::size_t> bucket_start(buckets + 1, 0), at(counts.size());
   std::size_t total = 0;
-  for (std::size_t b = 0; b < kBuckets; ++b) {
+  for (std::size_t b = 0; b < buckets; ++b) {
     bucket_start[b] = total;
     for (std::int64_t c = 0; c < chunks; ++c) {
-      const std::size_t i = static_cast<std::size_t>(c) * kBuckets + b;
+      const std::size_t i = static_cast<std::size_t>(c) * buckets + b;
       at[i] = total;
       total += counts[i];
     }
   }
-  bucket_start[kBuckets] = total;
+  bucket_start[buckets] = total;
 
   // Pass 2: the keys, each chunk into its own ranges.
   std::vector<std::uint64_t> keys(total);
   parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
     for (std::int64_t c = c0; c < c1; ++c) {
-      std::size_t* cursor = at.data() + static_cast<std::size_t>(c) * kBuckets;
-      for_each_edge(mesh, c * kGrain, std::min(n, (c + 1) * kGrain), origin,
-                    [&](std::uint64_t key) { keys[cursor[key >> (64 - kBucketBits)]++] = key; });
+      std::size_t* cursor = at.data() + static_cast<std::size_t>(c) * buckets;
+      std::vector<std::uint64_t>& mine = chunk_keys[static_cast<std::size_t>(c)];
+      for (std::uint64_t key : mine) keys[cursor[bucket_of(key)]++] = key;
+      mine = {};
     }
   });
 
   // Each bucket's edges counted.
   std::atomic<std::uint64_t> boundary{0}, nonmanifold{0}, inconsistent{0};
-  parallel_for(0, static_cast<std::int64_t>(kBuckets), 16, threads, [&](std::int64_t b0, std::int64_t b1) {
+  parallel_for(0, static_cast<std::int64_t>(buckets), 16, threads, [&](std::int64_t b0, std::int64_t b1) {
     std::uint64_t bd = 0, nm = 0, ic = 0;
     Counter counter;
     for (std::int64_t b = b0; b < b1; ++b)
