@@ -71,6 +71,13 @@ int serve_command(int argc, char** argv) {
   // buffers come from per-thread arenas that keep them: 20 uploads over 16
   // HTTP threads held 700 MB after they were refused.
   ::mallopt(M_MMAP_THRESHOLD, 1 << 20);
+  // Fixing that threshold also fixes the trim threshold at glibc's 128 KiB:
+  // every thread's arena then handed its free top back to the kernel after
+  // each small job (madvise) and faulted it in again for the next, 330
+  // page faults and 0.3 ms of a 10,000-triangle job's 3.5 ms of CPU
+  // (docs/benchmarks.md, issue #39). An arena keeps up to 8 MiB of free top
+  // now, blocks under 1 MiB only; the large ones are still unmapped.
+  ::mallopt(M_TRIM_THRESHOLD, 8 << 20);
 
   Metrics metrics;
   JobManagerConfig jc;
