@@ -230,7 +230,7 @@ TEST(RleSlabs, RunSlabsAreTheStoredVoxelsForAnySlabsAndReads) {
 // A slab of runs ends early once it holds kRunSlabRuns runs, so memory is
 // bounded by the runs however many layers are asked for: a grid striped
 // along x (a run every other voxel) of 131072 runs a layer, whose parts
-// (its planes of odd x) are found across the cut.
+// (its planes of odd x) are found across the cut; and by its rows.
 TEST(RleSlabs, ARunSlabEndsOnceItHoldsEnoughRuns) {
   Grid g;
   g.dims = {512, 512, 70};
@@ -263,6 +263,23 @@ TEST(RleSlabs, ARunSlabEndsOnceItHoldsEnoughRuns) {
     EXPECT_EQ(r.parts[p].bbox_max, glm::i64vec3(2 * p + 1, 511, 69));
   }
   EXPECT_TRUE(r.voids.empty());
+  // Rows bound a slab too (each has a start): a grid of 4096 x 4096 rows
+  // one voxel long comes in slabs of kRunSlabRuns rows, runs or none.
+  Grid rows_grid;
+  rows_grid.dims = {1, 4096, 4096};
+  BitVolume one_voxel_rows(rows_grid);
+  one_voxel_rows.set(0, 5, 4000, true);
+  VectorSink rows_rle;
+  write_rle(one_voxel_rows, rows_rle);
+  std::vector<std::int64_t> layers;
+  std::uint64_t filled = 0;
+  read_rle_run_slabs(rows_rle.data, rows_grid.dims.z, [&](std::int64_t, const RunSlab& slab) {
+    layers.push_back(slab.grid().dims.z);
+    filled += slab.count();
+  });
+  const auto most = static_cast<std::int64_t>(kRunSlabRuns / 4096);
+  EXPECT_EQ(layers, (std::vector<std::int64_t>{most, 4096 - most}));
+  EXPECT_EQ(filled, 1u);
 }
 
 TEST(SlabAnalyses, MassPropertiesAreExactlyTheInMemoryOnesForAnySlabsAndThreads) {

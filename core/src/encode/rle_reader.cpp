@@ -377,7 +377,11 @@ void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunS
   if (kRunSlabRuns + layer_runs > UINT32_MAX / 2)
     throw Error(ErrorCode::limit_exceeded, "RLE run reader: a layer of " + std::to_string(slab_voxels) +
                                                " voxels may hold more runs than a run slab indexes");
-  const std::int64_t layers = std::clamp<std::int64_t>(slab_layers, 1, std::max<std::int64_t>(nz, 1));
+  // A slab's rows are indexed too (a start each), so it holds at most
+  // kRunSlabRuns rows as well as runs: a slab of every layer of a large
+  // grid would otherwise reserve a start for each of its rows at once.
+  const std::int64_t row_bound = std::max<std::int64_t>(1, static_cast<std::int64_t>(kRunSlabRuns) / std::max<std::int64_t>(ny, 1));
+  const std::int64_t layers = std::clamp<std::int64_t>(std::min(slab_layers, row_bound), 1, std::max<std::int64_t>(nz, 1));
   RunSlab slab;
   std::int64_t k0 = 0;
   for (std::int64_t k = 0; k < nz; ++k) {

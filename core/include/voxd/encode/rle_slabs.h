@@ -37,7 +37,8 @@ void read_rle_bit_slabs(ByteSource& source, std::int64_t slab_layers, const BitS
 // streamed analyses that work on runs (mass properties, parts and voids)
 // then cost the runs, not the voxels (an 8192^3 result is 136 MiB of runs
 // and 64 GiB of bits). A slab holds up to `slab_layers` whole layers, fewer
-// once it holds kRunSlabRuns runs; memory is one slab. Checked and thrown
+// once it holds kRunSlabRuns runs, and never more than kRunSlabRuns rows;
+// memory is one slab. Checked and thrown
 // like read_rle_bit_slabs; `limits` bounds the runs one layer can need.
 inline constexpr std::size_t kRunSlabRuns = std::size_t{1} << 23;
 void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunSlabConsumer& consume,
