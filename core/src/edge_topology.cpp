@@ -16,8 +16,7 @@
 namespace voxd {
 namespace {
 
-constexpr int kBucketBits = 10;
-constexpr std::size_t kBuckets = std::size_t{1} << kBucketBits;
+constexpr int kBucketBits = 10;  // at most 1024 buckets
 constexpr std::int64_t kGrain = 1 << 14;
 
 // A vertex's 64-bit hash from its position's bits (-0.0 and 0.0 are the
@@ -106,7 +105,7 @@ EdgeTopology count_edge_topology(const Mesh& mesh, int threads) {
   const auto n = static_cast<std::int64_t>(mesh.triangles.size());
   if (n == 0) return out;
   const std::int64_t chunks = (n + kGrain - 1) / kGrain;
-  // Buckets of about 256 edges at most kBuckets: a small mesh's few edges
+  // Buckets of about 256 edges, at most 1024: a small mesh's few edges
   // are not spread over a thousand tiny tables.
   const int bucket_bits = std::min(static_cast<int>(std::bit_width(static_cast<std::uint64_t>(3 * n) / 256)), kBucketBits);
   const std::size_t buckets = std::size_t{1} << bucket_bits;
