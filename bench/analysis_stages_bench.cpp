@@ -29,6 +29,7 @@
 #include "voxd/analysis/skin_removal.h"
 #include "voxd/analysis/thickness_regions.h"
 #include "voxd/analysis/wall_thickness.h"
+#include "voxd/detail/nearest_empty.h"
 #include "voxd/grid.h"
 #include "voxd/progress.h"
 #include "voxd/voxelize/voxelize.h"
@@ -138,6 +139,15 @@ void BM_WallThickness(benchmark::State& state, const char* name) {
     state.counters[PhaseClock::kNames[p]] = sums[p] / static_cast<double>(state.iterations());
 }
 
+// Wall thickness's first phase on its own: the feature transform (the
+// nearest empty voxel of every voxel), which its third phase repeats for
+// the nearest medial voxel.
+void BM_NearestEmpty(benchmark::State& state, const char* name) {
+  const BitVolume& v = solid(name, state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(detail::nearest_empty_voxels(v, threads_of(state)).values().data());
+  counters(state, v);
+}
+
 // What the report does with the thickness map: statistics, and thin, thick
 // and near regions at both thresholds (analysis.cpp).
 void BM_ThicknessRegions(benchmark::State& state, const char* name) {
@@ -184,6 +194,7 @@ void stage_args(benchmark::internal::Benchmark* b) {
 VOXD_STAGE(BM_Mass);
 VOXD_STAGE(BM_PartsAndVoids);
 VOXD_STAGE(BM_Skin);
+VOXD_STAGE(BM_NearestEmpty);
 VOXD_STAGE(BM_WallThickness);
 VOXD_STAGE(BM_ThicknessRegions);
 VOXD_STAGE(BM_ThicknessPreview);

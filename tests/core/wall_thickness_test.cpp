@@ -85,14 +85,24 @@ TEST(PaddedIndex, DecodesEveryIndexItMakesUpToThe32BitLimit) {
 }
 
 TEST(NearestEmpty, IsAnEmptyVoxelAtTheDistanceTransformsDistance) {
+  // Dense fills, and (from trial 6) fills inside a box of the grid whose
+  // corners vary, with empty voxels around it: passes y and z read only
+  // from the voxel before the first filled one of a line to the one after
+  // its last, and may not miss a boundary.
   std::mt19937 rng(7);
-  for (int trial = 0; trial < 6; ++trial) {
-    const Grid g = test::unit_grid(13 + trial, 11, 9 + trial % 3);
+  for (int trial = 0; trial < 14; ++trial) {
+    const Grid g = test::unit_grid(13 + trial % 6 + (trial >= 6 ? 20 : 0), 11, 9 + trial % 3);
     BitVolume v(g);
     std::bernoulli_distribution fill(trial % 2 ? 0.9 : 0.7);
-    for (std::int64_t k = 0; k < g.dims.z; ++k)
-      for (std::int64_t j = 0; j < g.dims.y; ++j)
-        for (std::int64_t i = 0; i < g.dims.x; ++i) v.set(i, j, k, fill(rng));
+    glm::i64vec3 lo{0}, hi = g.dims;
+    if (trial >= 6)
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = static_cast<std::int64_t>(rng() % 3);
+        hi[a] = g.dims[a] - static_cast<std::int64_t>(rng() % 3);
+      }
+    for (std::int64_t k = lo.z; k < hi.z; ++k)
+      for (std::int64_t j = lo.y; j < hi.y; ++j)
+        for (std::int64_t i = lo.x; i < hi.x; ++i) v.set(i, j, k, fill(rng));
     const auto nearest = detail::nearest_empty_voxels(v, 1 + trial % 2);
     const auto d2 = squared_distance_transform(v, 1);
     const detail::PaddedIndex padded(g);
@@ -130,12 +140,28 @@ TEST(NearestMarked, IsAMarkedVoxelAtTheBruteForceDistanceAndNoneWithoutOne) {
           }
     // Written over a volume that held something else.
     DenseVolume<std::uint32_t> nearest(g, 12345u);
-    detail::nearest_marked_voxels(marked, nearest, 1 + trial % 2);
+    detail::nearest_marked_voxels(marked, nearest, nullptr, 1 + trial % 2);
+    // Wanted only in a ball and a few scattered voxels, none in rows 0 and 8
+    // (the last pass skips those rows' lines): the wanted voxels get the
+    // same answer as without it.
+    BitVolume wanted(g);
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i)
+          wanted.set(i, j, k, (i - 4) * (i - 4) + (j - 4) * (j - 4) + (k - 3) * (k - 3) <= 9 || (j == 6 && (i + k) % 5 == 0));
+    DenseVolume<std::uint32_t> nearest_wanted(g, 777u);
+    detail::nearest_marked_voxels(marked, nearest_wanted, &wanted, 1 + trial % 2);
     const detail::PaddedIndex padded(g);
+    std::int64_t skipped = 0;
     for (std::int64_t k = 0; k < g.dims.z; ++k)
       for (std::int64_t j = 0; j < g.dims.y; ++j)
         for (std::int64_t i = 0; i < g.dims.x; ++i) {
           const glm::i64vec3 p{i, j, k};
+          if (wanted.get(i, j, k)) {
+            ASSERT_EQ(nearest_wanted.at(i, j, k), nearest.at(i, j, k)) << i << " " << j << " " << k;
+          } else {
+            skipped += nearest_wanted.at(i, j, k) != nearest.at(i, j, k);
+          }
           if (marks.empty()) {
             ASSERT_EQ(nearest.at(i, j, k), detail::kNoNearestVoxel);
             continue;
@@ -152,6 +178,11 @@ TEST(NearestMarked, IsAMarkedVoxelAtTheBruteForceDistanceAndNoneWithoutOne) {
           const glm::i64vec3 e = f - p;
           ASSERT_EQ(e.x * e.x + e.y * e.y + e.z * e.z, best) << trial << ": " << i << " " << j << " " << k;
         }
+    // The skipped lines are really skipped (their voxels keep pass y's
+    // nearest within their layer), where some voxel has a mark to find.
+    if (!marks.empty()) {
+      EXPECT_GT(skipped, 0) << trial;
+    }
   }
 }
 

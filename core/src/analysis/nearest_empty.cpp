@@ -9,6 +9,13 @@
 // the winning site hands its voxel on. As in the distance transform, an
 // empty voxel (g = 0) hides everything beyond it, so each run of filled
 // voxels is solved between its two bounding empty voxels.
+//
+// Passes y and z touch only what can change. For the nearest empty voxel,
+// a block's lines are read from just before their first filled voxel to
+// just after their last: the empty voxels beyond are their own sites and
+// are left as pass x wrote them (on a part in its padded grid, half the
+// grid or more). For the nearest marked voxel, pass z skips the blocks with
+// no voxel whose answer is wanted.
 #include "voxd/detail/nearest_empty.h"
 
 #include <algorithm>
@@ -28,11 +35,70 @@ constexpr std::int64_t kBlock = 16;  // uint32 lines gathered together: one cach
 // g of a voxel with no site in reach yet: its parabola is left out.
 constexpr std::int64_t kNoSite = std::int64_t{1} << 60;
 
+// Where the set bits of a volume lie along the lines of passes y and z, a
+// block of kBlock lines at a time: for pass y, line (x, *, k), the first and
+// last row j of layer k with a set bit in the block's columns; for pass z,
+// line (x, j, *), the first and last layer k. A block with none has
+// first > last.
+struct SetExtents {
+  struct Span {
+    std::int32_t first = INT32_MAX, last = -1;
+  };
+  std::int64_t blocks = 0;
+  std::vector<Span> y, z;  // y: [k * blocks + b], z: [j * blocks + b]
+};
+
+// The bits of row `row` in block b's columns.
+inline std::uint64_t block_bits(const std::uint64_t* row, std::int64_t b, std::int64_t nx) {
+  const std::int64_t x0 = b * kBlock;
+  const std::int64_t width = std::min(kBlock, nx - x0);
+  const std::uint64_t mask = width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << width) - 1;
+  return (row[x0 >> 6] >> (x0 & 63)) & mask;
+}
+
+SetExtents set_extents(const BitVolume& v, int nthreads) {
+  static_assert(64 % kBlock == 0, "a block's columns lie in one word");
+  const glm::i64vec3 d = v.grid().dims;
+  SetExtents e;
+  e.blocks = (d.x + kBlock - 1) / kBlock;
+  e.y.resize(static_cast<std::size_t>(d.z * e.blocks));
+  e.z.resize(static_cast<std::size_t>(d.y * e.blocks));
+  // Each span is written by one thread: pass y's by layer, pass z's by row.
+  parallel_for(0, d.z, std::max<std::int64_t>(1, d.z / (nthreads * 8)), nthreads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < d.y; ++j) {
+        const std::uint64_t* row = v.row(j, k);
+        for (std::int64_t b = 0; b < e.blocks; ++b) {
+          if (!block_bits(row, b, d.x)) continue;
+          SetExtents::Span& s = e.y[static_cast<std::size_t>(k * e.blocks + b)];
+          s.first = std::min(s.first, static_cast<std::int32_t>(j));
+          s.last = static_cast<std::int32_t>(j);
+        }
+      }
+  });
+  parallel_for(0, d.y, std::max<std::int64_t>(1, d.y / (nthreads * 8)), nthreads, [&](std::int64_t j0, std::int64_t j1) {
+    for (std::int64_t k = 0; k < d.z; ++k)
+      for (std::int64_t j = j0; j < j1; ++j) {
+        const std::uint64_t* row = v.row(j, k);
+        for (std::int64_t b = 0; b < e.blocks; ++b) {
+          if (!block_bits(row, b, d.x)) continue;
+          SetExtents::Span& s = e.z[static_cast<std::size_t>(j * e.blocks + b)];
+          s.first = std::min(s.first, static_cast<std::int32_t>(k));
+          s.last = static_cast<std::int32_t>(k);
+        }
+      }
+  });
+  return e;
+}
+
 // The feature transform of the sites: the set bits of `bits` if
 // `sites_are_set`, else its clear bits, and with `outside_is_site`
 // everything outside the grid. Voxels with no site get kNoNearestVoxel.
-void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_site, DenseVolume<std::uint32_t>& out,
-                   int threads, JobControl* control, double progress_from, double progress_to) {
+// With `wanted`, only its set voxels are sure of their answer (the others
+// may keep pass y's).
+void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_site, const BitVolume* wanted,
+                   DenseVolume<std::uint32_t>& out, int threads, JobControl* control, double progress_from,
+                   double progress_to) {
   const Grid& grid = solid.grid();
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
   const PaddedIndex padded(grid);
@@ -70,9 +136,28 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
   });
   progress.report(1.0 / 3.0);
 
+  // Which part [lo, hi) of a block's lines a pass reads and writes (none
+  // when lo >= hi). The nearest empty voxel: from the empty voxel before
+  // the lines' first filled one to the one after their last (the runs of
+  // filled voxels and the empty voxels bounding them; outside, the grid's
+  // edge bounds them). The nearest marked voxel: whole lines, in pass z
+  // only where a voxel is wanted.
+  const std::int64_t blocks = (nx + kBlock - 1) / kBlock;
+  const bool sites_are_empty = !sites_are_set && outside_is_site;
+  const BitVolume* extents_of = sites_are_empty ? &solid : wanted;
+  const SetExtents extents = extents_of ? set_extents(*extents_of, nthreads) : SetExtents{};
+  auto part_of = [&](int axis, std::int64_t n, std::int64_t line_index,
+                     std::int64_t block) -> std::pair<std::int64_t, std::int64_t> {
+    if (!sites_are_empty && (axis == 1 || !wanted)) return {0, n};
+    const SetExtents::Span& span =
+        (axis == 1 ? extents.y : extents.z)[static_cast<std::size_t>(line_index * extents.blocks + block)];
+    if (span.first > span.last) return {0, 0};
+    if (!sites_are_empty) return {0, n};
+    return {std::max<std::int64_t>(0, span.first - 1), std::min<std::int64_t>(n, span.last + 2)};
+  };
+
   // Passes y and z over blocks of kBlock x-adjacent lines. `point(c, p)`
   // gives the coordinates of line c's voxel p (p = -1 and n: outside).
-  const std::int64_t blocks = (nx + kBlock - 1) / kBlock;
   auto strided_pass = [&](int axis, std::int64_t n, std::size_t stride, std::int64_t lines_per_block_row,
                           auto&& base_of, int pass) {
     const std::int64_t items = lines_per_block_row * blocks;
@@ -86,10 +171,12 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
       std::vector<std::uint32_t> won(static_cast<std::size_t>(len));
       for (std::int64_t item = i0; item < i1; ++item) {
         const std::int64_t line_index = item / blocks;
+        const auto [lo, hi] = part_of(axis, n, line_index, item % blocks);
+        if (lo >= hi) continue;
         const std::int64_t x0 = (item % blocks) * kBlock;
         const std::int64_t width = std::min(kBlock, nx - x0);
         std::uint32_t* base = data + base_of(line_index) + static_cast<std::size_t>(x0);
-        for (std::int64_t p = 0; p < n; ++p) {
+        for (std::int64_t p = lo; p < hi; ++p) {
           const std::uint32_t* src = base + static_cast<std::size_t>(p) * stride;
           for (std::int64_t c = 0; c < width; ++c) buf[static_cast<std::size_t>(c * len + p + 1)] = src[c];
         }
@@ -111,11 +198,12 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
           g[static_cast<std::size_t>(n + 1)] = g[0];
           // A voxel that is its own site costs no decode; a line with no
           // site anywhere (outside or in) stays as it is.
-          const glm::i64vec3 first = point(0);
+          const glm::i64vec3 first = point(lo);
           const std::int64_t step = axis == 1 ? padded.px : padded.px * padded.py;
           std::int64_t own = padded.of(first.x, first.y, first.z);
+          const std::int64_t own_row_first = own / padded.px - lo * padded.py;  // the row of p = 0's voxel
           bool any_site = outside_is_site;
-          for (std::int64_t p = 0; p < n; ++p, own += step) {
+          for (std::int64_t p = lo; p < hi; ++p, own += step) {
             const std::uint32_t at = line[p + 1];
             if (at == kNoNearestVoxel) {
               g[static_cast<std::size_t>(p + 1)] = kNoSite;
@@ -126,18 +214,28 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
               g[static_cast<std::size_t>(p + 1)] = 0;
               continue;
             }
-            const glm::i64vec3 d = padded.at(at) - point(p);
-            g[static_cast<std::size_t>(p + 1)] = d.x * d.x + d.y * d.y + d.z * d.z;
+            // Pass x found sites along the voxel's row, pass y within its
+            // layer: the offset along x is the indices' difference, and
+            // across a layer one division tells the row apart.
+            std::int64_t dx = static_cast<std::int64_t>(at) - own, dy = 0;
+            if (axis == 2) {
+              const std::int64_t row = padded.row_of(at), own_row = own_row_first + p * padded.py;
+              dy = row - own_row;
+              dx -= dy * padded.px;
+            }
+            g[static_cast<std::size_t>(p + 1)] = dx * dx + dy * dy;
           }
           if (!any_site) continue;
-          std::int64_t i = 1;
-          while (i <= n) {
+          // Line positions p + 1 for p in [lo, hi); a run of filled voxels
+          // ends inside them or at the outside entry n + 1.
+          std::int64_t i = lo + 1;
+          while (i <= hi) {
             if (g[static_cast<std::size_t>(i)] == 0) {
               ++i;
               continue;
             }
             const std::int64_t a = i;
-            while (i <= n && g[static_cast<std::size_t>(i)] != 0) ++i;
+            while (i <= hi && g[static_cast<std::size_t>(i)] != 0) ++i;
             const std::int64_t b = i;
             const int m = static_cast<int>(b - a + 2);
             lower_envelope<true>(g.data() + a - 1, m, s.data(), t.data(), kNoSite, [&](int u, int i) { site[u] = i; });
@@ -147,7 +245,7 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
             for (int u = 1; u < m - 1; ++u) line[a - 1 + u] = won[static_cast<std::size_t>(u)];
           }
         }
-        for (std::int64_t p = 0; p < n; ++p) {
+        for (std::int64_t p = lo; p < hi; ++p) {
           std::uint32_t* dst = base + static_cast<std::size_t>(p) * stride;
           for (std::int64_t c = 0; c < width; ++c) dst[c] = buf[static_cast<std::size_t>(c * len + p + 1)];
         }
@@ -165,13 +263,13 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
 DenseVolume<std::uint32_t> nearest_empty_voxels(const BitVolume& solid, int threads, JobControl* control,
                                                 double progress_from, double progress_to) {
   DenseVolume<std::uint32_t> out;
-  nearest_sites(solid, false, true, out, threads, control, progress_from, progress_to);
+  nearest_sites(solid, false, true, nullptr, out, threads, control, progress_from, progress_to);
   return out;
 }
 
-void nearest_marked_voxels(const BitVolume& marked, DenseVolume<std::uint32_t>& out, int threads, JobControl* control,
-                           double progress_from, double progress_to) {
-  nearest_sites(marked, true, false, out, threads, control, progress_from, progress_to);
+void nearest_marked_voxels(const BitVolume& marked, DenseVolume<std::uint32_t>& out, const BitVolume* wanted,
+                           int threads, JobControl* control, double progress_from, double progress_to) {
+  nearest_sites(marked, true, false, wanted, out, threads, control, progress_from, progress_to);
 }
 
 }  // namespace voxd::detail

@@ -543,7 +543,7 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
   const MedialIndex index(centres, medial);
   smooth_medial_values(centres, medial, index, nthreads);
   store_depths(solid, nearest, out, nthreads);
-  detail::nearest_marked_voxels(centres, nearest, nthreads, control, 0.45, 0.65);
+  detail::nearest_marked_voxels(centres, nearest, &solid, nthreads, control, 0.45, 0.65);
   const BitVolume left = paint_nearest_walls(solid, nearest, medial, index, out, nthreads, progress.part(0.65, 0.75));
   nearest = {};
   // The junctions of walls (a rib's root in the wall it stands on), where

@@ -42,6 +42,8 @@ struct PaddedIndex {
   // floor(n / d) = (ceil(2^64 / d) * n) >> 64 exactly (Lemire, Kaser &
   // Kurz 2019), and every padded index fits in 32 bits (larger grids are
   // refused).
+  // The padded row (y + 1) + py (z + 1) an index lies in.
+  std::uint32_t row_of(std::uint32_t index) const { return divide(index, inverse_px_); }
   glm::i64vec3 at(std::uint32_t index) const {
     const std::uint32_t row = divide(index, inverse_px_), slab = divide(row, inverse_py_);
     return {static_cast<std::int64_t>(index) - static_cast<std::int64_t>(row) * px - 1,
@@ -73,8 +75,12 @@ inline constexpr std::uint32_t kNoNearestVoxel = 0xFFFFFFFFu;
 // grid is reused as it is: wall thickness reuses its feature transform's,
 // once done with it, rather than touch as much memory again). Wall
 // thickness gives each voxel the wall of its nearest medial voxel with it.
-// Same method, limits and arguments as nearest_empty_voxels.
-void nearest_marked_voxels(const BitVolume& marked, DenseVolume<std::uint32_t>& out, int threads = 0,
-                           JobControl* control = nullptr, double progress_from = 0.0, double progress_to = 1.0);
+// With `wanted` (same grid), only its set voxels are sure of their answer,
+// the same one as without it; the others may hold any voxel (the last pass
+// skips the lines where none is wanted: wall thickness wants the filled
+// voxels only). Same method, limits and arguments as nearest_empty_voxels.
+void nearest_marked_voxels(const BitVolume& marked, DenseVolume<std::uint32_t>& out,
+                           const BitVolume* wanted = nullptr, int threads = 0, JobControl* control = nullptr,
+                           double progress_from = 0.0, double progress_to = 1.0);
 
 }  // namespace voxd::detail
