@@ -27,6 +27,18 @@ class VectorSink final : public ByteSink {
   std::vector<std::uint8_t> data;
 };
 
+// Collects the bytes in a string, the type an HTTP body and a kept result
+// are: a result of hundreds of megabytes (a thickness volume) is not copied
+// once more at the end. Reserve `data` when the size is known.
+class StringSink final : public ByteSink {
+ public:
+  using ByteSink::write;
+  void write(std::span<const std::uint8_t> bytes) override {
+    data.append(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  }
+  std::string data;
+};
+
 // Writes to a file; throws Error(io_error) on failure. close() reports a
 // failed flush; the destructor closes silently.
 class FileSink final : public ByteSink {

@@ -11,17 +11,18 @@
 namespace voxd {
 namespace {
 
-// Slab by slab, little-endian whatever the machine.
-void write_float_data(const DenseVolume<float>& volume, ByteSink& sink) {
+// Slab by slab, little-endian whatever the machine, each value times
+// `scale` (a unit's) in a slab's buffer rather than in a copy of the volume.
+void write_float_data(const DenseVolume<float>& volume, ByteSink& sink, float scale) {
   const std::size_t n = volume.slab_size();
-  if constexpr (std::endian::native == std::endian::little) {
+  if (std::endian::native == std::endian::little && scale == 1.0f) {
     for (std::int64_t k = 0; k < volume.grid().dims.z; ++k) sink.write(volume.slab(k), n * sizeof(float));
   } else {
     std::vector<std::uint8_t> bytes(n * sizeof(float));
     for (std::int64_t k = 0; k < volume.grid().dims.z; ++k) {
       const float* values = volume.slab(k);
       for (std::size_t i = 0; i < n; ++i) {
-        const auto bits = std::bit_cast<std::uint32_t>(values[i]);
+        const auto bits = std::bit_cast<std::uint32_t>(values[i] * scale);
         for (int b = 0; b < 4; ++b) bytes[4 * i + b] = static_cast<std::uint8_t>(bits >> (8 * b));
       }
       sink.write(bytes.data(), bytes.size());
@@ -42,9 +43,9 @@ void write_raw(const DenseVolume<Rgba8>& volume, ByteSink& sink) {
   for (std::int64_t k = 0; k < volume.grid().dims.z; ++k) sink.write(volume.slab(k), volume.slab_size() * sizeof(Rgba8));
 }
 
-void write_raw(const DenseVolume<float>& volume, ByteSink& sink) {
+void write_raw(const DenseVolume<float>& volume, ByteSink& sink, float scale) {
   encode::require_voxels(volume, "raw writer");
-  write_float_data(volume, sink);
+  write_float_data(volume, sink, scale);
 }
 
 }  // namespace voxd

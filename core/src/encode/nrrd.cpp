@@ -62,9 +62,10 @@ void write_nrrd(const DenseVolume<std::uint8_t>& volume, std::string_view conten
   write_nrrd_with(volume.grid(), "uchar", content, encoding, sink, [&](ByteSink& out) { write_raw(volume, out); });
 }
 
-void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink, NrrdEncoding encoding) {
+void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink, NrrdEncoding encoding,
+                float scale) {
   encode::require_voxels(volume, "NRRD writer");
-  write_nrrd_with(volume.grid(), "float", content, encoding, sink, [&](ByteSink& out) { write_raw(volume, out); });
+  write_nrrd_with(volume.grid(), "float", content, encoding, sink, [&](ByteSink& out) { write_raw(volume, out, scale); });
 }
 
 }  // namespace voxd

@@ -122,24 +122,29 @@ class ThicknessAnalysis final : public JobAnalysisKind {
   std::string compute(const AnalysisInput& in, const BitVolume& volume) const override {
     const api::AnalysisRequest& r = in.request;
     if (on_mesh(r)) return on_part(in, *job_thickness_map(volume, in.artifacts, in.control, r.thickness_measure));
-    const DenseVolume<float> map =
-        thickness_in(*job_thickness_map(volume, in.artifacts, in.control, r.thickness_measure), r.unit);
-    VectorSink out;
+    const auto map = job_thickness_map(volume, in.artifacts, in.control, r.thickness_measure);
+    StringSink out;
     if (r.format == "rle") {
-      write_rle(map, out);
-    } else if (r.format == "raw") {
-      write_raw(map, out);
+      write_rle(thickness_in(*map, r.unit), out);
+      return std::move(out.data);
+    }
+    // NRRD and raw are the floats (and a header), scaled as they are
+    // written: the map is neither copied nor its bytes gathered twice.
+    out.data.reserve(map->values().size() * sizeof(float) + 4096);
+    const float scale = r.unit == "model" ? static_cast<float>(map->grid().voxel_size) : 1.0f;
+    if (r.format == "raw") {
+      write_raw(*map, out, scale);
     } else {
-      write_nrrd(map,
+      write_nrrd(*map,
                  std::string(to_string(r.thickness_measure)) + " thickness (" +
                      (r.unit == "model" ? "model units" : "voxels") + ")",
-                 out);
+                 out, NrrdEncoding::raw, scale);
     }
-    return to_bytes(out.data);
+    return std::move(out.data);
   }
 
-  // The map's 18 bytes a voxel, then the map in the asked unit, the encoded
-  // volume and its kept copy.
+  // The map's 18 bytes a voxel, then the map in the asked unit (RLE only),
+  // the encoded volume and its kept copy.
   std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest&) const override { return 18 + 12; }
 
   // On the part: the kept mesh read, decoded and turned (18 bytes a

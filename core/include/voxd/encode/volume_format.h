@@ -112,13 +112,15 @@ void write_rle(const DenseVolume<float>& volume, ByteSink& sink);
 // infinities clamp to the ends. Quantized slab by slab: no copy of the
 // volume. Throws Error(invalid_argument) for Quantize::none.
 void write_rle_quantized(const DenseVolume<float>& volume, Quantize levels, std::string_view content, ByteSink& sink);
-void write_raw(const DenseVolume<float>& volume, ByteSink& sink);
+// Float volumes' raw and NRRD writers write each value times `scale` (a
+// unit's: voxels to model units), a slab at a time.
+void write_raw(const DenseVolume<float>& volume, ByteSink& sink, float scale = 1.0f);
 void write_raw(const DenseVolume<Rgba8>& volume, ByteSink& sink);
 // Colour volumes (slice voxelization, voxd/voxelize/slice_functions.h): voxd RLE with
 // value_type rgba8, runs of equal colours (all four bytes r, g, b, a equal).
 void write_rle(const DenseVolume<Rgba8>& volume, ByteSink& sink);
 void write_nrrd(const DenseVolume<float>& volume, std::string_view content, ByteSink& sink,
-                NrrdEncoding encoding = NrrdEncoding::raw);
+                NrrdEncoding encoding = NrrdEncoding::raw, float scale = 1.0f);
 
 // What a reader may allocate for the decoded volume. Readers validate the
 // whole input before allocating, so a lying header cannot make them allocate;
