@@ -149,7 +149,7 @@ int analyze_command(int argc, char** argv) {
       },
       // Only the thickness maps are worth keeping: every other result is
       // written once and never asked for again.
-      [&kept](const std::string& key, const std::string& bytes) {
+      [&kept](const std::string& key, std::string_view bytes) {
         if (key == server::thickness_map_key(api::ThicknessMeasure::local)) kept[key] = bytes;
       },
       map};

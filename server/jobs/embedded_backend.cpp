@@ -173,7 +173,7 @@ RemoveResult EmbeddedJobBackend::cancel_or_delete(const std::string& id) {
   return RemoveResult::deleted;
 }
 
-void EmbeddedJobBackend::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) {
+void EmbeddedJobBackend::save_artifact(const std::string& id, const std::string& key, std::string_view bytes) {
   std::shared_ptr<Job> job;
   {
     std::lock_guard lock(engine_.mutex);

@@ -6,6 +6,7 @@
 // previous process left queued or running as interrupted.
 #include <memory>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 
 #include "server/jobs/job_backend.h"
@@ -37,7 +38,7 @@ class EmbeddedJobBackend final : public JobBackend {
                                 const JobFilter& filter) const override;
   TenantUsage usage(const std::string& tenant) const override;
   RemoveResult cancel_or_delete(const std::string& id) override;
-  void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) override;
+  void save_artifact(const std::string& id, const std::string& key, std::string_view bytes) override;
   JobCounts counts() const override;
   std::size_t expire() override;
 

@@ -107,7 +107,7 @@ std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& gri
 
 ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id) {
   return {id, [&jobs, id](const std::string& key) { return jobs.load_artifact(id, key); },
-          [&jobs, id](const std::string& key, const std::string& bytes) { jobs.save_artifact(id, key, bytes); }};
+          [&jobs, id](const std::string& key, std::string_view bytes) { jobs.save_artifact(id, key, bytes); }};
 }
 
 // One kept map per measure; the names changed when the report moved from
@@ -124,17 +124,23 @@ std::shared_ptr<const DenseVolume<float>> job_thickness_map(const BitVolume& vol
   const char* key = thickness_map_key(measure);
   const auto lock = key_lock(artifacts, key);
   std::lock_guard guard(*lock);
-  auto map = std::make_shared<DenseVolume<float>>(volume.grid(), 0.0f);
-  if (auto kept = artifacts.load(key); kept && kept->size() == map->values().size() * sizeof(float)) {
+  if (auto kept = artifacts.load(key);
+      kept && kept->size() == static_cast<std::size_t>(volume.grid().voxel_count()) * sizeof(float)) {
+    auto map = std::make_shared<DenseVolume<float>>(volume.grid(), 0.0f);
     std::memcpy(map->values().data(), kept->data(), kept->size());
     return map;
   }
   const auto t0 = std::chrono::steady_clock::now();
-  *map = measure == api::ThicknessMeasure::wall ? wall_thickness(volume, 0, control) : local_thickness(volume, 0, control);
+  // Made by the computation itself: a map allocated beforehand would sit
+  // beside the computation's own volumes at its peak (4 bytes a voxel).
+  const auto map = std::make_shared<const DenseVolume<float>>(
+      measure == api::ThicknessMeasure::wall ? wall_thickness(volume, 0, control) : local_thickness(volume, 0, control));
   spdlog::info("job {}: {} thickness computed in {:.3f} s", artifacts.scope, to_string(measure),
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  artifacts.save(key, std::string(reinterpret_cast<const char*>(map->values().data()),
-                                  map->values().size() * sizeof(float)));
+  // Kept from the map's own memory: a copy of 4 bytes a voxel would be the
+  // report's largest allocation after the map.
+  artifacts.save(key, std::string_view(reinterpret_cast<const char*>(map->values().data()),
+                                       map->values().size() * sizeof(float)));
   return map;
 }
 

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -31,7 +32,7 @@ class JobStore;    // server/jobs/job_store.h
 struct ArtifactAccess {
   std::string scope;
   std::function<std::optional<std::string>(const std::string& key)> load;
-  std::function<void(const std::string& key, const std::string& bytes)> save;
+  std::function<void(const std::string& key, std::string_view bytes)> save;
   // The job's wall-thickness map when the caller already holds it (the
   // CLI): used as it is, neither loaded nor copied.
   std::shared_ptr<const DenseVolume<float>> wall_map = nullptr;

@@ -19,6 +19,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "server/pipeline/job_pipeline.h"
@@ -119,7 +120,7 @@ class JobBackend {
     (void)id;
     return RemoveResult::not_found;
   }
-  virtual void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) {
+  virtual void save_artifact(const std::string& id, const std::string& key, std::string_view bytes) {
     (void)id;
     (void)key;
     (void)bytes;

@@ -124,7 +124,7 @@ nlohmann::json JobEngine::prepare_analyses(Job& job, JobStore& store, const std:
   const std::string id = view.id;
   const ArtifactAccess artifacts{
       id, [&store, id](const std::string& key) { return store.load_artifact(id, key); },
-      [&store, &job, id](const std::string& key, const std::string& bytes) {
+      [&store, &job, id](const std::string& key, std::string_view bytes) {
         std::lock_guard guard(job.store_mutex);
         if (job.removed) return;
         try {

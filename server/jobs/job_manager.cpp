@@ -95,7 +95,7 @@ std::optional<std::string> JobManager::load_artifact(const std::string& id, cons
   return impl_->backend->store()->load_artifact(id, key);
 }
 
-void JobManager::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) {
+void JobManager::save_artifact(const std::string& id, const std::string& key, std::string_view bytes) {
   impl_->backend->save_artifact(id, key, bytes);
 }
 

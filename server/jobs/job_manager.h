@@ -14,6 +14,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -123,7 +124,7 @@ class JobManager {
   // its volume so they are computed once and expire with it. `key` is a file
   // name made by the caller from the request ([A-Za-z0-9._-]).
   std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const;
-  void save_artifact(const std::string& id, const std::string& key, const std::string& bytes);
+  void save_artifact(const std::string& id, const std::string& key, std::string_view bytes);
 
   JobCounts counts() const;
   bool accepting() const;

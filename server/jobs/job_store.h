@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "server/jobs/job.h"
@@ -65,7 +66,7 @@ class JobStore {
   // Writes (replaces) a job's record. Throws StorageFull.
   virtual void save(const JobSnapshot& job) const = 0;
   virtual std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const = 0;
-  virtual void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const = 0;
+  virtual void save_artifact(const std::string& id, const std::string& key, std::string_view bytes) const = 0;
   virtual void save_volume(const std::string& id, const BitVolume& volume) const = 0;
   virtual std::shared_ptr<const BitVolume> load_volume(const std::string& id) const = 0;
   // A volume made slab by slab: `write` writes its RLE (the bytes

@@ -110,7 +110,7 @@ std::optional<std::string> LocalJobStore::load_artifact(const std::string& id, c
   return text.str();
 }
 
-void LocalJobStore::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const {
+void LocalJobStore::save_artifact(const std::string& id, const std::string& key, std::string_view bytes) const {
   make_dirs(job_dir(id) / "artifacts");
   write_atomically(job_dir(id) / "artifacts" / key, [&](ByteSink& sink) { sink.write(bytes.data(), bytes.size()); });
 }

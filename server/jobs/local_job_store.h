@@ -20,7 +20,7 @@ class LocalJobStore final : public JobStore {
   std::vector<JobSnapshot> load_all() const override;
   void save(const JobSnapshot& job) const override;
   std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const override;
-  void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) const override;
+  void save_artifact(const std::string& id, const std::string& key, std::string_view bytes) const override;
   void save_volume(const std::string& id, const BitVolume& volume) const override;
   std::shared_ptr<const BitVolume> load_volume(const std::string& id) const override;
   void write_volume(const std::string& id, const std::function<void(ByteSink&)>& write) const override;

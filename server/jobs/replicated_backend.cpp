@@ -341,7 +341,7 @@ RemoveResult ReplicatedJobBackend::cancel_or_delete(const std::string& id) {
   return RemoveResult::deleted;
 }
 
-void ReplicatedJobBackend::save_artifact(const std::string& id, const std::string& key, const std::string& bytes) {
+void ReplicatedJobBackend::save_artifact(const std::string& id, const std::string& key, std::string_view bytes) {
   // The store keeps it only while the job's record is there.
   try {
     parts_.store->save_artifact(id, key, bytes);

@@ -16,6 +16,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <thread>
 
 #include "server/jobs/job_backend.h"
@@ -72,7 +73,7 @@ class ReplicatedJobBackend final : public JobBackend {
                                 const JobFilter& filter) const override;
   TenantUsage usage(const std::string& tenant) const override;
   RemoveResult cancel_or_delete(const std::string& id) override;
-  void save_artifact(const std::string& id, const std::string& key, const std::string& bytes) override;
+  void save_artifact(const std::string& id, const std::string& key, std::string_view bytes) override;
   JobCounts counts() const override;
   bool reachable() const override;
   std::size_t expire() override;

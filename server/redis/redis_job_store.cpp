@@ -558,7 +558,7 @@ std::optional<std::string> RedisJobStore::load_artifact(const std::string& id, c
   return std::string(bytes->begin(), bytes->end());
 }
 
-void RedisJobStore::save_artifact(const std::string& id, const std::string& key_name, const std::string& bytes) const {
+void RedisJobStore::save_artifact(const std::string& id, const std::string& key_name, std::string_view bytes) const {
   write_blob(id, "artifact:" + key_name, [&](ByteSink& sink) { sink.write(bytes.data(), bytes.size()); });
 }
 
