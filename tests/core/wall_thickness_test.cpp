@@ -17,6 +17,7 @@
 #include "voxd/analysis/surface_thickness.h"
 #include "voxd/analysis/wall_thickness.h"
 #include "voxd/mesh_report.h"
+#include "voxd/detail/bit_window.h"
 #include "voxd/detail/nearest_empty.h"
 #include "voxd/voxelize/voxelize.h"
 
@@ -81,6 +82,33 @@ TEST(PaddedIndex, DecodesEveryIndexItMakesUpToThe32BitLimit) {
                         static_cast<std::int64_t>(rng() % (dims.y + 2)) - 1,
                         static_cast<std::int64_t>(rng() % (dims.z + 2)) - 1});
     for (const glm::i64vec3& p : points) ASSERT_EQ(padded.at(padded.of(p.x, p.y, p.z)), p) << dims.x << " " << p.x;
+  }
+}
+
+TEST(BitWindow5, IsTheVolumesBitsAroundEveryVoxelAndNothingOutside) {
+  // Rows of 61 to 131 voxels: windows inside one word, across two (the
+  // window's first bit at 60 to 63 of a word), and by both edges of x, y, z.
+  std::mt19937 rng(5);
+  for (std::int64_t nx : {61, 64, 67, 126, 131}) {
+    const Grid g = test::unit_grid(nx, 6, 5);
+    BitVolume v(g);
+    std::bernoulli_distribution fill(0.5);
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i) v.set(i, j, k, fill(rng));
+    for (std::int64_t k = -1; k <= g.dims.z; ++k)
+      for (std::int64_t j = -1; j <= g.dims.y; ++j)
+        for (std::int64_t i = -1; i <= g.dims.x; ++i) {
+          const detail::BitWindow5 w(v, {i, j, k});
+          for (int z = -2; z <= 2; ++z)
+            for (int y = -2; y <= 2; ++y)
+              for (int x = -2; x <= 2; ++x) {
+                const std::int64_t a = i + x, b = j + y, c = k + z;
+                const bool inside = a >= 0 && b >= 0 && c >= 0 && a < g.dims.x && b < g.dims.y && c < g.dims.z;
+                ASSERT_EQ(w.get(x, y, z), inside && v.get(a, b, c)) << nx << ": " << i << " " << j << " " << k << " + "
+                                                                    << x << " " << y << " " << z;
+              }
+        }
   }
 }
 

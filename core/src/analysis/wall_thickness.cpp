@@ -13,6 +13,7 @@
 #include "analysis/ball_painting.h"
 #include "analysis/progress_span.h"
 #include "analysis/row_runs.h"
+#include "voxd/detail/bit_window.h"
 #include "voxd/detail/nearest_empty.h"
 #include "voxd/parallel.h"
 
@@ -46,23 +47,52 @@ struct SurfaceFit {
   bool valid = false;
 };
 
+// The offsets of the fits' windows, in the order the fits visit them (z,
+// then y, then x): those within 2 voxels of the centre with the unit
+// direction to each (for the normal), and those within sqrt(6) (the slab's
+// window: a voxel more than 1.5 along the normal or 2 across it is more
+// than sqrt(1.5^2 + 2^2) = 2.5 away, and the squared lengths are integers).
+// Tables of the same doubles the loops computed, so the same sums.
+struct WindowOffset {
+  glm::i64vec3 o{0};
+  glm::dvec3 d{0.0};  // o, or o / |o| in the ball's table
+  int row = 0, bit = 0;  // where BitWindow5 reads it
+};
+
+struct FitWindows {
+  std::vector<WindowOffset> ball, slab;
+  FitWindows() {
+    for (int z = -2; z <= 2; ++z)
+      for (int y = -2; y <= 2; ++y)
+        for (int x = -2; x <= 2; ++x) {
+          const int r2 = x * x + y * y + z * z;
+          const int row = (z + 2) * 5 + (y + 2), bit = x + 2;
+          if (r2 > 0 && r2 <= 4)
+            ball.push_back({{x, y, z}, glm::dvec3(x, y, z) / std::sqrt(static_cast<double>(r2)), row, bit});
+          if (r2 <= 6) slab.push_back({{x, y, z}, glm::dvec3(x, y, z), row, bit});
+        }
+  }
+};
+
+const FitWindows& fit_windows() {
+  static const FitWindows windows;
+  return windows;
+}
+
 // The plane's offset from f along `normal` (inward), where the window's
 // filled voxels end (see SurfaceFit).
-double plane_offset(const BitVolume& solid, const glm::i64vec3& f, const glm::dvec3& normal) {
-  auto filled = [&](const glm::i64vec3& p) { return filled_at(solid, p); };
+double plane_offset(const detail::BitWindow5& window, const glm::dvec3& normal) {
   double offset = 0.5;
   double projections[125];
   int n = 0, k = 0;
-  for (int z = -2; z <= 2; ++z)
-    for (int y = -2; y <= 2; ++y)
-      for (int x = -2; x <= 2; ++x) {
-        const glm::dvec3 o(x, y, z);
-        const double along = o.x * normal.x + o.y * normal.y + o.z * normal.z;
-        const glm::dvec3 across = o - along * normal;
-        if (std::abs(along) > 1.5 || across.x * across.x + across.y * across.y + across.z * across.z > 4.0) continue;
-        projections[n++] = along;
-        k += filled(f + glm::i64vec3{x, y, z}) ? 1 : 0;
-      }
+  for (const WindowOffset& w : fit_windows().slab) {
+    const glm::dvec3& o = w.d;
+    const double along = o.x * normal.x + o.y * normal.y + o.z * normal.z;
+    const glm::dvec3 across = o - along * normal;
+    if (std::abs(along) > 1.5 || across.x * across.x + across.y * across.y + across.z * across.z > 4.0) continue;
+    projections[n++] = along;
+    k += window.get(w.row, w.bit) ? 1 : 0;
+  }
   if (k > 0 && k < n) {
     std::nth_element(projections, projections + (n - k), projections + n);
     const double lowest_filled = projections[n - k];
@@ -74,18 +104,14 @@ double plane_offset(const BitVolume& solid, const glm::i64vec3& f, const glm::dv
 
 SurfaceFit fit_surface(const BitVolume& solid, const glm::i64vec3& f) {
   SurfaceFit fit;
+  const detail::BitWindow5 window(solid, f);
   glm::dvec3 g{0.0};
-  for (int z = -2; z <= 2; ++z)
-    for (int y = -2; y <= 2; ++y)
-      for (int x = -2; x <= 2; ++x) {
-        const int r2 = x * x + y * y + z * z;
-        if (r2 == 0 || r2 > 4 || !filled_at(solid, f + glm::i64vec3{x, y, z})) continue;
-        g += glm::dvec3(x, y, z) / std::sqrt(static_cast<double>(r2));
-      }
+  for (const WindowOffset& w : fit_windows().ball)
+    if (window.get(w.row, w.bit)) g += w.d;
   const double len = std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
   if (len < 1e-9) return fit;
   fit.normal = g / len;
-  fit.offset = plane_offset(solid, f, fit.normal);
+  fit.offset = plane_offset(window, fit.normal);
   fit.valid = true;
   return fit;
 }
@@ -109,7 +135,7 @@ class FitCache {
   }
 
  private:
-  static constexpr int kBits = 14;
+  static constexpr int kBits = 16;
   static constexpr std::size_t kSlots = std::size_t{1} << kBits;
   static constexpr std::uint32_t kEmpty = 0xFFFFFFFFu;  // no padded index is this (see nearest_empty.h)
   const BitVolume& solid_;
@@ -153,7 +179,7 @@ std::pair<SurfaceFit, SurfaceFit> along_chord(const BitVolume& solid, const Surf
   if (parallel < std::cos(30.0 * kPi / 180.0) || lean >= std::cos(std::max(8.0 * kPi / 180.0, std::atan(2.0 / length))))
     return {a, b};
   n = m;
-  return {SurfaceFit{m, plane_offset(solid, fp, m), true}, SurfaceFit{-m, plane_offset(solid, fq, -m), true}};
+  return {SurfaceFit{m, plane_offset(detail::BitWindow5(solid, fp), m), true}, SurfaceFit{-m, plane_offset(detail::BitWindow5(solid, fq), -m), true}};
 }
 
 // The wall between the empty voxels fp and fq on its two sides, seen from
