@@ -336,13 +336,22 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
   parallel_for(0, d.z, grain, threads, [&](std::int64_t k0, std::int64_t k1) {
     std::vector<Medial> found;
     FitCache fits(solid);
+    // A voxel's six neighbours: their offsets in `nearest`, and the bit rows
+    // that say whether they are filled (null outside the grid).
+    const std::uint32_t* sites = nearest.values().data();
+    const std::int64_t stride[3] = {1, d.x, d.x * d.y};
     for (std::int64_t k = k0; k < k1; ++k) {
       progress.check_cancelled();
       for (std::int64_t j = 0; j < d.y; ++j) {
+        const std::uint64_t* rows[3][2] = {
+            {solid.row(j, k), solid.row(j, k)},
+            {j > 0 ? solid.row(j - 1, k) : nullptr, j + 1 < d.y ? solid.row(j + 1, k) : nullptr},
+            {k > 0 ? solid.row(j, k - 1) : nullptr, k + 1 < d.z ? solid.row(j, k + 1) : nullptr}};
+        const std::uint32_t* row_sites = sites + static_cast<std::size_t>(d.x * (j + d.y * k));
         detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
           for (std::int64_t i = a; i < b; ++i) {
             const glm::i64vec3 p{i, j, k};
-            const std::uint32_t fp_index = nearest.at(i, j, k);
+            const std::uint32_t fp_index = row_sites[i];
             const glm::i64vec3 fp = padded.at(fp_index);
             const glm::i64vec3 u = fp - p;
             const std::int64_t u2 = norm2(u);
@@ -359,17 +368,19 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
             for (int axis = 0; axis < 3; ++axis) {
               bool empty_both = true;
               for (int side = -1; side <= 1; side += 2) {
+                // Neighbour q's row of bits, and its x (along x, this row).
+                const std::uint64_t* q_row = rows[axis][side > 0];
+                const std::int64_t qx = axis == 0 ? i + side : i;
+                if (!q_row || qx < 0 || qx >= d.x || !((q_row[qx >> 6] >> (qx & 63)) & 1u)) continue;
+                empty_both = false;
+                const std::uint32_t fq_index = row_sites[i + side * stride[axis]];
+                if (fq_index == fp_index) continue;
                 glm::i64vec3 q = p;
                 q[axis] += side;
-                if (q[axis] < 0 || q[axis] >= d[axis] || !solid.get(q.x, q.y, q.z)) continue;
-                empty_both = false;
-                const std::uint32_t fq_index = nearest.at(q.x, q.y, q.z);
-                if (fq_index == fp_index) continue;
                 const glm::i64vec3 fq = padded.at(fq_index);
                 const glm::i64vec3 w = fq - q;
                 // Cheap first test on the directions to the two voxels.
-                const auto dot = static_cast<double>(u.x * w.x + u.y * w.y + u.z * w.z);
-                if (dot > 0.0) continue;
+                if (u.x * w.x + u.y * w.y + u.z * w.z > 0) continue;
                 add(q, fp, fq);
               }
               if (empty_both) {
