@@ -53,7 +53,7 @@ void install_analysis_routes(RouteTable& routes, JobManager& jobs) {
         return;
       }
       const JobSnapshot job = succeeded_job(jobs, id, "volume", "its analyses exist");
-      const AnalysisResult result = analyse_succeeded_job(jobs, job, request);
+      AnalysisResult result = analyse_succeeded_job(jobs, job, request);  // its bytes are moved into the answer
       for (const auto& [name, value] : analysis_headers(request, job.grid)) res.set_header(name, value);
       res.set_header("X-Voxd-Cache", result.kept ? "hit" : "miss");
       res.set_content(std::move(result.bytes), request.content_type());

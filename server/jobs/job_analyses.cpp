@@ -107,7 +107,9 @@ std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& gri
 
 ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id) {
   return {id, [&jobs, id](const std::string& key) { return jobs.load_artifact(id, key); },
-          [&jobs, id](const std::string& key, std::string_view bytes) { jobs.save_artifact(id, key, bytes); }};
+          [&jobs, id](const std::string& key, std::string_view bytes) { jobs.save_artifact(id, key, bytes); },
+          nullptr,
+          [&jobs, id](const std::string& key, std::span<char> out) { return jobs.load_artifact_into(id, key, out); }};
 }
 
 // One kept map per measure; the names changed when the report moved from
@@ -124,11 +126,16 @@ std::shared_ptr<const DenseVolume<float>> job_thickness_map(const BitVolume& vol
   const char* key = thickness_map_key(measure);
   const auto lock = key_lock(artifacts, key);
   std::lock_guard guard(*lock);
-  if (auto kept = artifacts.load(key);
-      kept && kept->size() == static_cast<std::size_t>(volume.grid().voxel_count()) * sizeof(float)) {
+  {
+    // Read into the map itself where the store can.
     auto map = std::make_shared<DenseVolume<float>>(volume.grid(), 0.0f);
-    std::memcpy(map->values().data(), kept->data(), kept->size());
-    return map;
+    const std::span<char> bytes(reinterpret_cast<char*>(map->values().data()), map->values().size() * sizeof(float));
+    if (artifacts.load_into) {
+      if (artifacts.load_into(key, bytes)) return map;
+    } else if (auto kept = artifacts.load(key); kept && kept->size() == bytes.size()) {
+      std::memcpy(bytes.data(), kept->data(), bytes.size());
+      return map;
+    }
   }
   const auto t0 = std::chrono::steady_clock::now();
   // Made by the computation itself: a map allocated beforehand would sit

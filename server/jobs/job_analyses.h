@@ -6,6 +6,7 @@
 // gets identical bytes either way.
 #include <functional>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -36,6 +37,9 @@ struct ArtifactAccess {
   // The job's wall-thickness map when the caller already holds it (the
   // CLI): used as it is, neither loaded nor copied.
   std::shared_ptr<const DenseVolume<float>> wall_map = nullptr;
+  // Reads an artifact of exactly out.size() bytes into `out` (false if
+  // there is none of that size); when not given, `load` and a copy.
+  std::function<bool(const std::string& key, std::span<char> out)> load_into = nullptr;
 };
 ArtifactAccess artifacts_of(JobManager& jobs, const std::string& id);
 

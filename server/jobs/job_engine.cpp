@@ -132,7 +132,9 @@ nlohmann::json JobEngine::prepare_analyses(Job& job, JobStore& store, const std:
         } catch (const std::exception& e) {
           spdlog::warn("job {}: cannot keep artifact {}: {}", id, key, e.what());
         }
-      }};
+      },
+      nullptr,
+      [&store, id](const std::string& key, std::span<char> out) { return store.load_artifact_into(id, key, out); }};
   // Each entry is shown as soon as it is ready (or failed), not at the end.
   auto publish = [&] {
     std::lock_guard lock(mutex);

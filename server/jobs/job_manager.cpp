@@ -95,6 +95,10 @@ std::optional<std::string> JobManager::load_artifact(const std::string& id, cons
   return impl_->backend->store()->load_artifact(id, key);
 }
 
+bool JobManager::load_artifact_into(const std::string& id, const std::string& key, std::span<char> out) const {
+  return impl_->backend->store()->load_artifact_into(id, key, out);
+}
+
 void JobManager::save_artifact(const std::string& id, const std::string& key, std::string_view bytes) {
   impl_->backend->save_artifact(id, key, bytes);
 }

@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -124,6 +125,7 @@ class JobManager {
   // its volume so they are computed once and expire with it. `key` is a file
   // name made by the caller from the request ([A-Za-z0-9._-]).
   std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const;
+  bool load_artifact_into(const std::string& id, const std::string& key, std::span<char> out) const;
   void save_artifact(const std::string& id, const std::string& key, std::string_view bytes);
 
   JobCounts counts() const;

@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -66,6 +67,10 @@ class JobStore {
   // Writes (replaces) a job's record. Throws StorageFull.
   virtual void save(const JobSnapshot& job) const = 0;
   virtual std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const = 0;
+  // An artifact of exactly out.size() bytes read into `out` (a kept
+  // thickness map into its volume: no second copy of hundreds of
+  // megabytes). False, `out` unspecified, when there is none of that size.
+  virtual bool load_artifact_into(const std::string& id, const std::string& key, std::span<char> out) const;
   virtual void save_artifact(const std::string& id, const std::string& key, std::string_view bytes) const = 0;
   virtual void save_volume(const std::string& id, const BitVolume& volume) const = 0;
   virtual std::shared_ptr<const BitVolume> load_volume(const std::string& id) const = 0;

@@ -2,7 +2,6 @@
 
 #include "server/jobs/kept_mesh.h"
 
-#include <sstream>
 
 #include <fcntl.h>
 #include <sys/statvfs.h>
@@ -102,12 +101,25 @@ void LocalJobStore::save(const JobSnapshot& job) const {
   write_atomically(job_dir(job.id) / "record.json", [&](ByteSink& sink) { sink.write(text.data(), text.size()); });
 }
 
+// Read straight into a string of the file's size: a kept thickness map or
+// volume is hundreds of megabytes, and a string stream grew by doubling and
+// copied it once more at the end (over 1 GB moved for a 400 MB map).
 std::optional<std::string> LocalJobStore::load_artifact(const std::string& id, const std::string& key) const {
-  std::ifstream in(job_dir(id) / "artifacts" / key, std::ios::binary);
+  std::ifstream in(job_dir(id) / "artifacts" / key, std::ios::binary | std::ios::ate);
   if (!in) return std::nullopt;
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  const std::streamoff size = in.tellg();
+  if (size < 0) return std::nullopt;
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  in.seekg(0);
+  if (!in.read(bytes.data(), size)) return std::nullopt;
+  return bytes;
+}
+
+bool LocalJobStore::load_artifact_into(const std::string& id, const std::string& key, std::span<char> out) const {
+  std::ifstream in(job_dir(id) / "artifacts" / key, std::ios::binary | std::ios::ate);
+  if (!in || in.tellg() != static_cast<std::streamoff>(out.size())) return false;
+  in.seekg(0);
+  return static_cast<bool>(in.read(out.data(), static_cast<std::streamsize>(out.size())));
 }
 
 void LocalJobStore::save_artifact(const std::string& id, const std::string& key, std::string_view bytes) const {

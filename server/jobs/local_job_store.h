@@ -20,6 +20,7 @@ class LocalJobStore final : public JobStore {
   std::vector<JobSnapshot> load_all() const override;
   void save(const JobSnapshot& job) const override;
   std::optional<std::string> load_artifact(const std::string& id, const std::string& key) const override;
+  bool load_artifact_into(const std::string& id, const std::string& key, std::span<char> out) const override;
   void save_artifact(const std::string& id, const std::string& key, std::string_view bytes) const override;
   void save_volume(const std::string& id, const BitVolume& volume) const override;
   std::shared_ptr<const BitVolume> load_volume(const std::string& id) const override;
