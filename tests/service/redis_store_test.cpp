@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "server/jobs/job_record.h"
+#include "server/jobs/local_job_store.h"
 #include "server/redis/redis_job_queue.h"
 #include "server/redis/redis_job_store.h"
 #include "voxd/error.h"
@@ -111,6 +112,38 @@ TEST_F(RedisStoreTest, BlobsAreChunkedReadBackWholeAndWrittenOnce) {
     std::vector<std::uint8_t> rest(100000);
     EXPECT_THROW({ while (source->read(rest.data(), rest.size()) > 0) {} }, voxd::Error);
   }
+}
+
+// Kept results read back whole, or straight into a buffer of their size
+// (a kept thickness map into its volume), from either store: the same
+// bytes, and nothing for a missing key or a buffer of another size.
+void expect_artifacts_read_back(const JobStore& store, const std::string& id) {
+  std::string bytes(3 << 20, '\0');  // larger than any stream's buffer, zeros included
+  for (std::size_t i = 0; i < bytes.size(); i += 3) bytes[i] = static_cast<char>(i * 31 + 7);
+  bytes.back() = 'z';
+  store.save_artifact(id, "map.f32", bytes);
+  const auto whole = store.load_artifact(id, "map.f32");
+  ASSERT_TRUE(whole);
+  EXPECT_TRUE(*whole == bytes);
+  std::string into(bytes.size(), 'x');
+  EXPECT_TRUE(store.load_artifact_into(id, "map.f32", into));
+  EXPECT_TRUE(into == bytes);
+  std::string shorter(bytes.size() - 1, 'x'), longer(bytes.size() + 1, 'x');
+  EXPECT_FALSE(store.load_artifact_into(id, "map.f32", shorter));
+  EXPECT_FALSE(store.load_artifact_into(id, "map.f32", longer));
+  EXPECT_FALSE(store.load_artifact(id, "none.f32"));
+  EXPECT_FALSE(store.load_artifact_into(id, "none.f32", into));
+  store.save_artifact(id, "empty", "");
+  ASSERT_TRUE(store.load_artifact(id, "empty"));
+  EXPECT_TRUE(store.load_artifact(id, "empty")->empty());
+}
+
+TEST_F(RedisStoreTest, ArtifactsReadBackWholeOrIntoABufferOfTheirSize) {
+  store_->save(record("j1", JobState::succeeded));
+  expect_artifacts_read_back(*store_, "j1");
+  const LocalJobStore local(dir_ + "/local");
+  local.save(record("j2", JobState::succeeded));
+  expect_artifacts_read_back(local, "j2");
 }
 
 TEST_F(RedisStoreTest, TransitionsAreCompareAndSetAndRemovalReachesEveryKey) {
