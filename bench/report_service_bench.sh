@@ -24,15 +24,8 @@ trap cleanup EXIT
 "$build/bench/write_bench_mesh" "$work/mesh.stl"
 threads=()
 [[ -n "${THREADS:-}" ]] && threads=(--threads "$THREADS")
-"$voxd" serve --host 127.0.0.1 --port 0 --data-dir "$work/data" "${threads[@]}" > "$work/log" 2>&1 &
-server=$!
-for _ in $(seq 100); do
-  port=$(grep -o 'listening on [^ ]*:[0-9]*' "$work/log" | grep -o '[0-9]*$' || true)
-  [[ -n "$port" ]] && break
-  sleep 0.1
-done
-[[ -n "$port" ]] || { cat "$work/log"; exit 1; }
-url="http://127.0.0.1:$port"
+source "$(dirname "$0")/service_lib.sh"
+start_voxd "$voxd" "${threads[@]}"
 voxels=1
 peak() { awk '/VmHWM/ {print $2 * 1024}' "/proc/$server/status"; }
 now() { date +%s.%N; }
@@ -44,15 +37,7 @@ step() {  # name, seconds since $1
 }
 
 t0=$(now)
-id=$(curl -sf -F "mesh=@$work/mesh.stl" -F "params={\"grid\":{\"resolution\":$res,\"padding\":2}}" "$url/v1/jobs" |
-  python3 -c 'import json,sys; print(json.load(sys.stdin)["id"])')
-while :; do
-  status=$(curl -sf "$url/v1/jobs/$id")
-  state=$(python3 -c 'import json,sys; print(json.loads(sys.argv[1])["state"])' "$status")
-  [[ $state == succeeded || $state == failed || $state == cancelled ]] && break
-  sleep 0.2
-done
-[[ $state == succeeded ]] || { echo "job $state: $status"; exit 1; }
+run_job "$work/mesh.stl" "{\"grid\":{\"resolution\":$res,\"padding\":2}}"
 voxels=$(python3 -c 'import json,sys; d=json.loads(sys.argv[1])["grid"]["dims"]; print(d[0]*d[1]*d[2])' "$status")
 python3 -c 'import json,sys; s=json.loads(sys.argv[1]); print("job: grid", s["grid"]["dims"], "filled", s["filled_voxels"])' "$status"
 step "job (upload to succeeded)" "$t0"
