@@ -63,4 +63,41 @@ void lower_envelope(const G* g, int m, int* s, int* t, std::int64_t far, Won&& w
   }
 }
 
+// The same envelope over a line holding only the sites k < count, at
+// ascending positions pos[k] in [0, m) with g[k] (none of them far): the
+// same comparisons on the same numbers, so the same winners, in time for
+// the sites and the positions asked for rather than the whole line. Calls
+// won(u, k) for every u in [from, to), from to - 1 down, with the site k
+// lowest at u; nothing when count is 0. Scratch s and t hold count entries.
+template <typename Won>
+void lower_envelope_of_sites(const std::int64_t* pos, const std::int64_t* g, int count, std::int64_t m, int* s,
+                             std::int64_t* t, std::int64_t from, std::int64_t to, Won&& won) {
+  auto f = [&](std::int64_t x, int k) { return (x - pos[k]) * (x - pos[k]) + g[k]; };
+  auto sep = [&](int i, int k) {
+    return floor_div(pos[k] * pos[k] - pos[i] * pos[i] + g[k] - g[i], 2 * (pos[k] - pos[i]));
+  };
+  int q = -1;
+  for (int k = 0; k < count; ++k) {
+    while (q >= 0 && f(t[q], s[q]) > f(t[q], k)) --q;
+    if (q < 0) {
+      q = 0;
+      s[0] = k;
+      t[0] = 0;
+    } else {
+      const std::int64_t w = 1 + sep(s[q], k);
+      if (w < m) {
+        ++q;
+        s[q] = k;
+        t[q] = w;
+      }
+    }
+  }
+  if (q < 0) return;
+  while (t[q] >= to) --q;  // t[0] = 0: the segment holding to - 1
+  for (std::int64_t u = to - 1; u >= from; --u) {
+    won(u, s[q]);
+    if (u == t[q]) --q;
+  }
+}
+
 }  // namespace voxd::detail

@@ -14,8 +14,15 @@
 // a block's lines are read from just before their first filled voxel to
 // just after their last: the empty voxels beyond are their own sites and
 // are left as pass x wrote them (on a part in its padded grid, half the
-// grid or more). For the nearest marked voxel, pass z skips the blocks with
-// no voxel whose answer is wanted.
+// grid or more). For the nearest marked voxel (a wall's medial voxels: a
+// sheet, or on a torus a ring in a few layers), only the layers holding a
+// mark have sites after passes x and y, so those passes skip the others,
+// and pass z reads only those layers and, with `wanted`, writes only from
+// the lines' first wanted voxel to their last, skipping blocks with none.
+//
+// Every pass keeps the earlier of two equally near sites along its axis,
+// so a voxel's answer is, of its nearest sites, the first in memory order
+// (lowest z, then y, then x), however the passes are cut.
 #include "voxd/detail/nearest_empty.h"
 
 #include <algorithm>
@@ -117,12 +124,35 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
   const std::size_t slab = out.slab_size();
   auto grain_for = [&](std::int64_t items) { return std::max<std::int64_t>(1, items / (nthreads * 32)); };
 
+  // Sites set in the bits (marked voxels, not outside): after pass x only
+  // the rows holding one have sites, and after pass y only the layers
+  // holding one, so passes x and y read only those rows and pass z only
+  // those layers.
+  const bool listed_sites = sites_are_set && !outside_is_site;
+  auto has_bits = [&](const std::uint64_t* row) {
+    for (std::int64_t w = 0; w < solid.row_words(); ++w)
+      if (row[w] != 0) return true;
+    return false;
+  };
+  std::vector<std::vector<std::int64_t>> site_rows(listed_sites ? static_cast<std::size_t>(nz) : 0);
+  std::vector<std::int64_t> site_layers;
+  if (listed_sites) {
+    parallel_for(0, nz, std::max<std::int64_t>(1, nz / (nthreads * 8)), nthreads, [&](std::int64_t k0, std::int64_t k1) {
+      for (std::int64_t k = k0; k < k1; ++k)
+        for (std::int64_t j = 0; j < ny; ++j)
+          if (has_bits(solid.row(j, k))) site_rows[static_cast<std::size_t>(k)].push_back(j);
+    });
+    for (std::int64_t k = 0; k < nz; ++k)
+      if (!site_rows[static_cast<std::size_t>(k)].empty()) site_layers.push_back(k);
+  }
+
   // Pass x.
   const std::int64_t rows = ny * nz;
   parallel_for(0, rows, grain_for(rows), nthreads, [&](std::int64_t r0, std::int64_t r1) {
     progress.check_cancelled();
     for (std::int64_t r = r0; r < r1; ++r) {
       const std::int64_t j = r % ny, k = r / ny;
+      if (listed_sites && !has_bits(solid.row(j, k))) continue;  // read by no pass
       std::uint32_t* line = data + static_cast<std::size_t>(k) * slab + static_cast<std::size_t>(j * nx);
       for (std::int64_t i = 0; i < nx; ++i) line[i] = padded.of(i, j, k);
       for_each_row_run(solid.row(j, k), solid.row_words(), nx, sites_are_set, [&](std::int64_t a, std::int64_t b) {
@@ -136,23 +166,26 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
   });
   progress.report(1.0 / 3.0);
 
-  // Which part [lo, hi) of a block's lines a pass reads and writes (none
-  // when lo >= hi). The nearest empty voxel: from the empty voxel before
-  // the lines' first filled one to the one after their last (the runs of
+  // Which part [lo, hi) of a block's lines a pass writes (none when
+  // lo >= hi). The nearest empty voxel: from the empty voxel before the
+  // lines' first filled one to the one after their last (the runs of
   // filled voxels and the empty voxels bounding them; outside, the grid's
-  // edge bounds them). The nearest marked voxel: whole lines, in pass z
-  // only where a voxel is wanted.
+  // edge bounds them), also all it reads. The nearest marked voxel: in pass
+  // y the whole lines of layers with sites; in pass z from the first
+  // wanted voxel to the last (without `wanted`, whole lines), reading the
+  // layers with sites.
   const std::int64_t blocks = (nx + kBlock - 1) / kBlock;
   const bool sites_are_empty = !sites_are_set && outside_is_site;
   const BitVolume* extents_of = sites_are_empty ? &solid : wanted;
   const SetExtents extents = extents_of ? set_extents(*extents_of, nthreads) : SetExtents{};
   auto part_of = [&](int axis, std::int64_t n, std::int64_t line_index,
                      std::int64_t block) -> std::pair<std::int64_t, std::int64_t> {
+    if (listed_sites && axis == 1 && site_rows[static_cast<std::size_t>(line_index)].empty()) return {0, 0};
     if (!sites_are_empty && (axis == 1 || !wanted)) return {0, n};
     const SetExtents::Span& span =
         (axis == 1 ? extents.y : extents.z)[static_cast<std::size_t>(line_index * extents.blocks + block)];
     if (span.first > span.last) return {0, 0};
-    if (!sites_are_empty) return {0, n};
+    if (!sites_are_empty) return {span.first, span.last + 1};
     return {std::max<std::int64_t>(0, span.first - 1), std::min<std::int64_t>(n, span.last + 2)};
   };
 
@@ -169,6 +202,8 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
       std::vector<int> site(static_cast<std::size_t>(len)), s(static_cast<std::size_t>(len)),
           t(static_cast<std::size_t>(len));
       std::vector<std::uint32_t> won(static_cast<std::size_t>(len));
+      std::vector<std::int64_t> site_at(static_cast<std::size_t>(len)), site_g(static_cast<std::size_t>(len)),
+          site_t(static_cast<std::size_t>(len));
       for (std::int64_t item = i0; item < i1; ++item) {
         const std::int64_t line_index = item / blocks;
         const auto [lo, hi] = part_of(axis, n, line_index, item % blocks);
@@ -176,9 +211,18 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
         const std::int64_t x0 = (item % blocks) * kBlock;
         const std::int64_t width = std::min(kBlock, nx - x0);
         std::uint32_t* base = data + base_of(line_index) + static_cast<std::size_t>(x0);
-        for (std::int64_t p = lo; p < hi; ++p) {
+        // Listed sites: only the rows (pass y) or layers (pass z) holding
+        // them are read; the others hold none and may not have been written.
+        const std::vector<std::int64_t>* listed =
+            !listed_sites ? nullptr : axis == 1 ? &site_rows[static_cast<std::size_t>(line_index)] : &site_layers;
+        auto gather = [&](std::int64_t p) {
           const std::uint32_t* src = base + static_cast<std::size_t>(p) * stride;
           for (std::int64_t c = 0; c < width; ++c) buf[static_cast<std::size_t>(c * len + p + 1)] = src[c];
+        };
+        if (listed) {
+          for (std::int64_t p : *listed) gather(p);
+        } else {
+          for (std::int64_t p = lo; p < hi; ++p) gather(p);
         }
         for (std::int64_t c = 0; c < width; ++c) {
           std::uint32_t* line = buf.data() + c * len;
@@ -198,33 +242,50 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
           g[static_cast<std::size_t>(n + 1)] = g[0];
           // A voxel that is its own site costs no decode; a line with no
           // site anywhere (outside or in) stays as it is.
-          const glm::i64vec3 first = point(lo);
+          const glm::i64vec3 origin = point(0);
           const std::int64_t step = axis == 1 ? padded.px : padded.px * padded.py;
-          std::int64_t own = padded.of(first.x, first.y, first.z);
-          const std::int64_t own_row_first = own / padded.px - lo * padded.py;  // the row of p = 0's voxel
+          const std::int64_t own0 = padded.of(origin.x, origin.y, origin.z);
+          const std::int64_t own_row0 = own0 / padded.px;  // the row of p = 0's voxel
           bool any_site = outside_is_site;
-          for (std::int64_t p = lo; p < hi; ++p, own += step) {
+          auto solve_g = [&](std::int64_t p) {
             const std::uint32_t at = line[p + 1];
             if (at == kNoNearestVoxel) {
               g[static_cast<std::size_t>(p + 1)] = kNoSite;
-              continue;
+              return;
             }
             any_site = true;
+            const std::int64_t own = own0 + p * step;
             if (at == static_cast<std::uint32_t>(own)) {
               g[static_cast<std::size_t>(p + 1)] = 0;
-              continue;
+              return;
             }
             // Pass x found sites along the voxel's row, pass y within its
             // layer: the offset along x is the indices' difference, and
             // across a layer one division tells the row apart.
             std::int64_t dx = static_cast<std::int64_t>(at) - own, dy = 0;
             if (axis == 2) {
-              const std::int64_t row = padded.row_of(at), own_row = own_row_first + p * padded.py;
-              dy = row - own_row;
+              dy = padded.row_of(at) - (own_row0 + p * padded.py);
               dx -= dy * padded.px;
             }
             g[static_cast<std::size_t>(p + 1)] = dx * dx + dy * dy;
+          };
+          if (listed) {
+            // The listed sites, then the envelope of those alone, read only
+            // where it is written.
+            int count = 0;
+            for (std::int64_t p : *listed) {
+              solve_g(p);
+              if (g[static_cast<std::size_t>(p + 1)] == kNoSite) continue;
+              site_at[static_cast<std::size_t>(count)] = p;
+              site_g[static_cast<std::size_t>(count)] = g[static_cast<std::size_t>(p + 1)];
+              won[static_cast<std::size_t>(count++)] = line[p + 1];
+            }
+            if (count == 0) std::fill(line + lo + 1, line + hi + 1, kNoNearestVoxel);
+            lower_envelope_of_sites(site_at.data(), site_g.data(), count, n, s.data(), site_t.data(), lo, hi,
+                                    [&](std::int64_t u, int k) { line[u + 1] = won[static_cast<std::size_t>(k)]; });
+            continue;
           }
+          for (std::int64_t p = lo; p < hi; ++p) solve_g(p);
           if (!any_site) continue;
           // Line positions p + 1 for p in [lo, hi); a run of filled voxels
           // ends inside them or at the outside entry n + 1.
