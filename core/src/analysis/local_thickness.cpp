@@ -14,6 +14,7 @@
 
 #include "analysis/ball_painting.h"
 #include "analysis/distance_transform_impl.h"
+#include "analysis/zero_skip.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 
@@ -166,17 +167,31 @@ ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, in
     std::vector<std::uint64_t> histogram;
   };
   std::vector<Layer> layers(static_cast<std::size_t>(nz));
+  // Sums kept in locals (a store to the layer's fields each voxel is most
+  // of the time otherwise) and blocks of empty voxels skipped: the same
+  // values added in the same order.
+  const auto n = static_cast<std::int64_t>(layer);
   parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k) {
-      Layer& l = layers[static_cast<std::size_t>(k)];
       const float* v = thickness.slab(k);
-      for (std::size_t i = 0; i < layer; ++i) {
-        if (v[i] <= 0.0f) continue;
-        if (l.count++ == 0) l.min = l.max = v[i];
-        l.min = std::min(l.min, v[i]);
-        l.max = std::max(l.max, v[i]);
-        l.sum += v[i];
+      std::uint64_t count = 0;
+      float lo = 0.0f, hi = 0.0f;
+      double sum = 0.0;
+      for (std::int64_t i = 0; i < n;) {
+        i = detail::skip_zero_blocks(v, i, n);
+        for (const std::int64_t end = std::min(n, i + 8); i < end; ++i) {
+          if (v[i] <= 0.0f) continue;
+          if (count++ == 0) lo = hi = v[i];
+          lo = std::min(lo, v[i]);
+          hi = std::max(hi, v[i]);
+          sum += v[i];
+        }
       }
+      Layer& l = layers[static_cast<std::size_t>(k)];
+      l.count = count;
+      l.min = lo;
+      l.max = hi;
+      l.sum = sum;
     }
   });
   ThicknessStatistics st;
@@ -196,16 +211,22 @@ ThicknessStatistics thickness_statistics(const DenseVolume<float>& thickness, in
     for (std::int64_t k = k0; k < k1; ++k) {
       Layer& l = layers[static_cast<std::size_t>(k)];
       if (l.count == 0) continue;
-      l.sum = 0.0;
       l.histogram.assign(static_cast<std::size_t>(bins), 0);
+      std::uint64_t* histogram = l.histogram.data();
       const float* v = thickness.slab(k);
-      for (std::size_t i = 0; i < layer; ++i) {
-        if (v[i] <= 0.0f) continue;
-        l.sum += (v[i] - st.mean) * (v[i] - st.mean);
-        std::int64_t b = range > 0.0 ? static_cast<std::int64_t>((v[i] - st.min) / range * bins) : 0;
-        b = std::clamp<std::int64_t>(b, 0, bins - 1);
-        ++l.histogram[static_cast<std::size_t>(b)];
+      const double mean = st.mean, min = st.min;
+      double sum = 0.0;
+      for (std::int64_t i = 0; i < n;) {
+        i = detail::skip_zero_blocks(v, i, n);
+        for (const std::int64_t end = std::min(n, i + 8); i < end; ++i) {
+          if (v[i] <= 0.0f) continue;
+          sum += (v[i] - mean) * (v[i] - mean);
+          std::int64_t b = range > 0.0 ? static_cast<std::int64_t>((v[i] - min) / range * bins) : 0;
+          b = std::clamp<std::int64_t>(b, 0, bins - 1);
+          ++histogram[b];
+        }
       }
+      l.sum = sum;
     }
   });
   st.histogram.assign(static_cast<std::size_t>(bins), 0);

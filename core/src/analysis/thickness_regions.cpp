@@ -22,6 +22,7 @@
 
 #include <glm/common.hpp>
 
+#include "analysis/zero_skip.h"
 #include "union_find.h"
 #include "voxd/parallel.h"
 
@@ -94,9 +95,9 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
       for (std::int64_t j = 0; j < d.y; ++j) {
         const float* row = thickness.slab(k) + j * d.x;
         std::uint32_t n = 0;
-        for (std::int64_t i = 0; i < d.x;) {
+        for (std::int64_t i = detail::skip_zero_blocks(row, 0, d.x); i < d.x;) {
           if (!selected(row[i])) {
-            ++i;
+            i = detail::skip_zero_blocks(row, i + 1, d.x);
             continue;
           }
           const std::int64_t begin = i;
