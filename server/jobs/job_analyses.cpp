@@ -119,36 +119,37 @@ const char* thickness_map_key(api::ThicknessMeasure m) {
   return m == api::ThicknessMeasure::wall ? "wall-thickness-map.f32" : "local-thickness-map.f32";
 }
 
-std::shared_ptr<const DenseVolume<float>> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts,
-                                                            JobControl* control, api::ThicknessMeasure measure) {
+JobThicknessMap job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control,
+                                  api::ThicknessMeasure measure) {
   if (measure == api::ThicknessMeasure::wall && artifacts.wall_map && artifacts.wall_map->grid().dims == volume.grid().dims)
-    return artifacts.wall_map;
+    return {artifacts.wall_map, {}};
   const char* key = thickness_map_key(measure);
-  const auto lock = key_lock(artifacts, key);
-  std::lock_guard guard(*lock);
+  auto mutex = key_lock(artifacts, key);
+  std::unique_lock lock(*mutex);
   {
     // Read into the map itself where the store can.
     auto map = std::make_shared<DenseVolume<float>>(volume.grid(), 0.0f);
     const std::span<char> bytes(reinterpret_cast<char*>(map->values().data()), map->values().size() * sizeof(float));
     if (artifacts.load_into) {
-      if (artifacts.load_into(key, bytes)) return map;
+      if (artifacts.load_into(key, bytes)) return {map, {}};
     } else if (auto kept = artifacts.load(key); kept && kept->size() == bytes.size()) {
       std::memcpy(bytes.data(), kept->data(), bytes.size());
-      return map;
+      return {map, {}};
     }
   }
   const auto t0 = std::chrono::steady_clock::now();
   // Made by the computation itself: a map allocated beforehand would sit
   // beside the computation's own volumes at its peak (4 bytes a voxel).
-  const auto map = std::make_shared<const DenseVolume<float>>(
+  std::shared_ptr<const DenseVolume<float>> map = std::make_shared<const DenseVolume<float>>(
       measure == api::ThicknessMeasure::wall ? wall_thickness(volume, 0, control) : local_thickness(volume, 0, control));
   spdlog::info("job {}: {} thickness computed in {:.3f} s", artifacts.scope, to_string(measure),
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  // Kept from the map's own memory: a copy of 4 bytes a voxel would be the
-  // report's largest allocation after the map.
-  artifacts.save(key, std::string_view(reinterpret_cast<const char*>(map->values().data()),
-                                       map->values().size() * sizeof(float)));
-  return map;
+  // Kept from the map's own memory (a copy of 4 bytes a voxel would be the
+  // report's largest allocation after the map), while the caller uses it.
+  auto save = [save = artifacts.save, key = std::string(key), map] {
+    save(key, std::string_view(reinterpret_cast<const char*>(map->values().data()), map->values().size() * sizeof(float)));
+  };
+  return {map, BackgroundSave(std::move(mutex), std::move(lock), "job " + artifacts.scope + ": " + key, std::move(save))};
 }
 
 AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "api/analysis_request.h"
+#include "server/jobs/background_save.h"
 #include "server/jobs/job.h"
 #include "voxd/analysis/analysis_images.h"
 #include "voxd/bit_volume.h"
@@ -114,10 +115,20 @@ nlohmann::json analyses_status(const std::vector<api::AnalysisRequest>& requests
 // The artifact key a job's thickness map of `measure` is kept under.
 const char* thickness_map_key(api::ThicknessMeasure measure);
 
+// A job's thickness map, and its keeping: a map just computed is written to
+// the store while the caller goes on with it, and waited for when this goes
+// (server/jobs/background_save.h). Hold it, on the thread that asked for
+// it, for as long as the map is used.
+struct JobThicknessMap {
+  std::shared_ptr<const DenseVolume<float>> map;
+  BackgroundSave keeping;
+  const DenseVolume<float>& operator*() const { return *map; }
+  const DenseVolume<float>* operator->() const { return map.get(); }
+};
+
 // The job's thickness map (voxels) of `measure`, computed once and kept: the
 // wall thickness for the report, sections and previews.
-std::shared_ptr<const DenseVolume<float>> job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts,
-                                                            JobControl* control,
-                                                            api::ThicknessMeasure measure = api::ThicknessMeasure::wall);
+JobThicknessMap job_thickness_map(const BitVolume& volume, const ArtifactAccess& artifacts, JobControl* control,
+                                  api::ThicknessMeasure measure = api::ThicknessMeasure::wall);
 
 }  // namespace voxd::server

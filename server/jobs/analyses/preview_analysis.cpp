@@ -29,9 +29,9 @@ class PreviewAnalysis final : public JobAnalysisKind {
     if (values && std::holds_alternative<DenseVolume<Rgba8>>(*values) && r.colour == "none")
       return to_bytes(colour_preview_png(volume, std::get<DenseVolume<Rgba8>>(*values), view, image_text(in), 0,
                                          max_side(r)));
-    std::shared_ptr<const DenseVolume<float>> map;
+    JobThicknessMap map;
     if (r.colour == "thickness") map = job_thickness_map(volume, in.artifacts, in.control);
-    return to_bytes(preview_png(volume, view, map.get(), image_text(in), 0, max_side(r)));
+    return to_bytes(preview_png(volume, view, map.map.get(), image_text(in), 0, max_side(r)));
   }
 
   bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.colour == "none"; }

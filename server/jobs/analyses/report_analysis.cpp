@@ -36,13 +36,14 @@ class ReportAnalysis final : public JobAnalysisKind {
     options.peel = r.peel_metric;
     options.min_wall_voxels = r.min_wall.value_or(0) / job.grid.voxel_size;
     options.max_wall_voxels = r.max_wall.value_or(0) / job.grid.voxel_size;
-    std::shared_ptr<const DenseVolume<float>> map;
+    // Kept while the rest of the report is computed.
+    JobThicknessMap map;
     const bool map_first = r.thickness && !options.cleanup;
     if (map_first) {
       // The thickness map takes most of the time: most of the bar.
       const NestedSpan map_share(in.control, 0.0, 0.8);
       map = job_thickness_map(volume, in.artifacts, in.control);
-      options.thickness_map = map.get();
+      options.thickness_map = map.map.get();
     }
     const NestedSpan report_share(in.control, map_first ? 0.8 : 0.0, 1.0);
     const AnalysisReport report = analyze_volume(volume, options, in.control);

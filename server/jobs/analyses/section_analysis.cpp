@@ -55,10 +55,10 @@ class SectionAnalysis final : public JobAnalysisKind {
     const api::AnalysisRequest& r = in.request;
     const std::int64_t layer = section_layer(r, in.job.grid);
     if (auto values = value_job_section(in, layer)) return std::move(*values);
-    std::shared_ptr<const DenseVolume<float>> map;
+    JobThicknessMap map;
     if (r.colour == "thickness") map = job_thickness_map(volume, in.artifacts, in.control);
     const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
-    return to_bytes(section_png(peeled_model ? *peeled_model : volume, r.axis, layer, map.get(), image_text(in, true)));
+    return to_bytes(section_png(peeled_model ? *peeled_model : volume, r.axis, layer, map.map.get(), image_text(in, true)));
   }
 
   bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.peel == 0 && r.colour == "none"; }
