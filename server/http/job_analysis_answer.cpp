@@ -43,7 +43,8 @@ api::AnalysisRequest analysis_request_of(api::AnalysisKind kind, const api::Fiel
   }
 }
 
-AnalysisResult analyse_succeeded_job(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request) {
+AnalysisAnswer analyse_succeeded_job(JobManager& jobs, const JobSnapshot& job, const api::AnalysisRequest& request,
+                                     std::size_t keep_while_sent_from) {
   // Computing (or even serving a kept result, read whole) takes memory
   // beside the job's volumes: held from the budget meanwhile. A streamed
   // job's volume is loaded only for this request, so it counts too.
@@ -52,7 +53,7 @@ AnalysisResult analyse_succeeded_job(JobManager& jobs, const JobSnapshot& job, c
       "this analysis");
   const JobOutput output = output_for(jobs, job, request);
   try {
-    return job_analysis(request, job, output, artifacts_of(jobs, job.id));
+    return job_analysis_answer(request, job, output, artifacts_of(jobs, job.id), keep_while_sent_from);
   } catch (const AnalysisRejected& e) {
     throw invalid_query(e.what());
   }

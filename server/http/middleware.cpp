@@ -155,14 +155,16 @@ void install_middleware(httplib::Server& server, const ServeConfig& config, Metr
   server.set_logger([&config, &metrics](const Request& req, const Response& res) {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - current_request.start).count();
     metrics.count_request(req.method, route_label(req.path), res.status);
-    metrics.add_bytes_out(res.body.size());
+    // A body sent from a provider of known length has it there.
+    const std::size_t bytes = res.body.empty() ? res.content_length_ : res.body.size();
+    metrics.add_bytes_out(bytes);
     if (config.log_format == "json")
       spdlog::info(json{{"event", "request"}, {"method", req.method}, {"path", req.path}, {"status", res.status},
-                        {"bytes", res.body.size()}, {"duration_ms", ms}, {"request_id", current_request.request_id}}
+                        {"bytes", bytes}, {"duration_ms", ms}, {"request_id", current_request.request_id}}
                        // Paths are not always UTF-8: replace, never throw.
                        .dump(-1, ' ', false, json::error_handler_t::replace));
     else
-      spdlog::info("{} {} {} {}B {:.1f}ms id={}", log_safe(req.method), log_safe(req.path), res.status, res.body.size(), ms,
+      spdlog::info("{} {} {} {}B {:.1f}ms id={}", log_safe(req.method), log_safe(req.path), res.status, bytes, ms,
                    current_request.request_id);
   });
 }

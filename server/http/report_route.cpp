@@ -45,13 +45,13 @@ void install_report_route(RouteTable& routes, JobManager& jobs) {
   routes.get(kJobPath + "/report", [&jobs](const httplib::Request& req, httplib::Response& res) {
     const JobSnapshot job = succeeded_job(jobs, req.matches[1], "report", "its report exists");
     const api::AnalysisRequest analysis = analysis_request_of(api::AnalysisKind::analysis, limits_of(req, job));
-    const nlohmann::json report = nlohmann::json::parse(analyse_succeeded_job(jobs, job, analysis).bytes);
+    const nlohmann::json report = nlohmann::json::parse(*analyse_succeeded_job(jobs, job, analysis).bytes);
     std::vector<ReportPicture> pictures;
     for (const char* view : {"+z", "-y", "+x"}) {
       const api::AnalysisRequest preview =
           analysis_request_of(api::AnalysisKind::preview, {{"view", view}, {"colour", report.value("thickness", nlohmann::json()).is_object() ? "thickness" : "none"}});
       pictures.push_back({std::string("from ") + view + (preview.colour == "thickness" ? ", coloured by wall thickness" : ""),
-                          analyse_succeeded_job(jobs, job, preview).bytes});
+                          std::move(*analyse_succeeded_job(jobs, job, preview).bytes)});
     }
     // The file's name without its extension, in characters safe in a header.
     std::string stem = job.labels.name.empty() ? job.id : job.labels.name.substr(0, job.labels.name.rfind('.'));

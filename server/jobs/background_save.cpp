@@ -8,12 +8,12 @@
 
 namespace voxd::server {
 
-BackgroundSave::BackgroundSave(std::shared_ptr<std::mutex> mutex, std::unique_lock<std::mutex> lock, std::string what,
-                               std::function<void()> save)
-    : mutex_(std::move(mutex)), lock_(std::move(lock)) {
+BackgroundSave::BackgroundSave(std::shared_ptr<KeyLock> key, std::unique_lock<KeyLock> lock, std::string what,
+                               std::function<void()> save) {
+  auto held = std::make_shared<std::unique_lock<KeyLock>>(std::move(lock));
   // An exception must not leave the thread (that ends the process): the
   // result is only not kept.
-  auto run = [what = std::move(what), save = std::move(save)] {
+  auto run = [key = std::move(key), held, what = std::move(what), save = std::move(save)] {
     try {
       save();
     } catch (const std::exception& e) {
@@ -21,11 +21,12 @@ BackgroundSave::BackgroundSave(std::shared_ptr<std::mutex> mutex, std::unique_lo
     } catch (...) {
       spdlog::warn("{}: not kept", what);
     }
+    if (held->owns_lock()) held->unlock();
   };
   try {
     thread_ = std::thread(run);
   } catch (const std::system_error&) {
-    run();  // no thread to be had: written now, as before
+    run();  // no thread to be had: written now
   }
 }
 
@@ -33,8 +34,6 @@ BackgroundSave& BackgroundSave::operator=(BackgroundSave&& other) noexcept {
   if (this == &other) return *this;
   if (thread_.joinable()) thread_.join();
   thread_ = std::move(other.thread_);
-  lock_ = std::move(other.lock_);  // unlocks this one's
-  mutex_ = std::move(other.mutex_);
   return *this;
 }
 

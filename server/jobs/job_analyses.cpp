@@ -23,15 +23,16 @@ namespace {
 using nlohmann::json;
 using api::AnalysisRequest;
 
-// One mutex per (scope, key) being computed, dropped when nobody holds it.
+// One lock per (scope, key) being computed or written, dropped when nobody
+// holds it.
 class KeyLocks {
  public:
-  std::shared_ptr<std::mutex> get(const std::string& name) {
+  std::shared_ptr<KeyLock> get(const std::string& name) {
     std::lock_guard guard(mutex_);
     for (auto it = locks_.begin(); it != locks_.end();) it = it->second.expired() ? locks_.erase(it) : std::next(it);
-    std::shared_ptr<std::mutex> lock = locks_[name].lock();
+    std::shared_ptr<KeyLock> lock = locks_[name].lock();
     if (!lock) {
-      lock = std::make_shared<std::mutex>();
+      lock = std::make_shared<KeyLock>();
       locks_[name] = lock;
     }
     return lock;
@@ -39,12 +40,21 @@ class KeyLocks {
 
  private:
   std::mutex mutex_;
-  std::map<std::string, std::weak_ptr<std::mutex>> locks_;
+  std::map<std::string, std::weak_ptr<KeyLock>> locks_;
 };
 
-std::shared_ptr<std::mutex> key_lock(const ArtifactAccess& artifacts, const std::string& key) {
+std::shared_ptr<KeyLock> key_lock(const ArtifactAccess& artifacts, const std::string& key) {
   static KeyLocks locks;
   return locks.get(artifacts.scope + "/" + key);
+}
+
+// The bytes a request's kind makes from the job's volumes in memory, or
+// from a streamed job's slabs (the same bytes) where it streams.
+std::string computed(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
+                     const ArtifactAccess& artifacts, JobControl* control) {
+  const JobAnalysisKind& kind = job_analysis_kind(r.kind);
+  const AnalysisInput in{r, job, output, artifacts, control};
+  return output.solid ? kind.compute(in, *output.solid) : kind.over_slabs(in);
 }
 
 }  // namespace
@@ -125,7 +135,7 @@ JobThicknessMap job_thickness_map(const BitVolume& volume, const ArtifactAccess&
     return {artifacts.wall_map, {}};
   const char* key = thickness_map_key(measure);
   auto mutex = key_lock(artifacts, key);
-  std::unique_lock lock(*mutex);
+  std::unique_lock<KeyLock> lock(*mutex);
   {
     // Read into the map itself where the store can.
     auto map = std::make_shared<DenseVolume<float>>(volume.grid(), 0.0f);
@@ -159,13 +169,27 @@ AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, co
   const auto lock = key_lock(artifacts, key);
   std::lock_guard guard(*lock);
   if (auto kept = artifacts.load(key)) return {std::move(*kept), true};  // computed while we waited
-  const JobAnalysisKind& kind = job_analysis_kind(r.kind);
-  const AnalysisInput in{r, job, output, artifacts, control};
-  // A streamed job's request that streams, answered from its slabs with the
-  // bytes the in-memory path gives.
-  std::string bytes = output.solid ? kind.compute(in, *output.solid) : kind.over_slabs(in);
+  std::string bytes = computed(r, job, output, artifacts, control);
   artifacts.save(key, bytes);
   return {std::move(bytes), false};
+}
+
+AnalysisAnswer job_analysis_answer(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
+                                   const ArtifactAccess& artifacts, std::size_t keep_while_sent_from) {
+  const std::string key = r.artifact_key();
+  if (auto kept = artifacts.load(key)) return {std::make_shared<std::string>(std::move(*kept)), true, nullptr};
+  auto mutex = key_lock(artifacts, key);
+  std::unique_lock<KeyLock> lock(*mutex);
+  if (auto kept = artifacts.load(key)) return {std::make_shared<std::string>(std::move(*kept)), true, nullptr};
+  auto bytes = std::make_shared<std::string>(computed(r, job, output, artifacts, nullptr));
+  if (bytes->size() < keep_while_sent_from) {
+    artifacts.save(key, *bytes);
+    return {bytes, false, nullptr};
+  }
+  auto save = [save = artifacts.save, key, bytes] { save(key, *bytes); };
+  return {bytes, false,
+          std::make_shared<BackgroundSave>(std::move(mutex), std::move(lock), "job " + artifacts.scope + ": " + key,
+                                           std::move(save))};
 }
 
 nlohmann::json analyses_status(const std::vector<AnalysisRequest>& requests, const char* state) {

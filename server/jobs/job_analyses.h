@@ -5,6 +5,7 @@
 // and both keep the result under the request's artifact key, so a client
 // gets identical bytes either way.
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -64,6 +65,19 @@ struct AnalysisResult {
 // carries progress and cancellation.
 AnalysisResult job_analysis(const api::AnalysisRequest& request, const JobSnapshot& job, const JobOutput& output,
                             const ArtifactAccess& artifacts, JobControl* control = nullptr);
+
+// A result as a route sends it: a large one computed just now (from
+// `keep_while_sent_from` bytes) is kept while it is sent, by `keeping`, which
+// the answer holds until it has been sent (its write holds the request's key
+// until it ends: a second request waits, then reads the kept result).
+struct AnalysisAnswer {
+  std::shared_ptr<std::string> bytes;
+  bool kept = false;  // answered from the kept artifact
+  std::shared_ptr<BackgroundSave> keeping;
+};
+AnalysisAnswer job_analysis_answer(const api::AnalysisRequest& request, const JobSnapshot& job,
+                                   const JobOutput& output, const ArtifactAccess& artifacts,
+                                   std::size_t keep_while_sent_from);
 
 // Bytes a request may take at its peak, beyond the job's volumes, for the
 // memory budget. Measured (docs/security.md): local thickness and the

@@ -717,6 +717,40 @@ TEST_F(HttpApiTest, RadiographyAndSectionImagesCarryExactValuesAndTheirScale) {
   http().Delete(("/v1/jobs/" + slow.at("id").get<std::string>()).c_str());
 }
 
+// A large answer computed just now is sent while it is written (the write
+// and its sync take as long as computing it): the client gets every byte,
+// the service logs their count, and a second request, which waits for the
+// write, is answered from the kept result with the same bytes.
+TEST_F(HttpApiTest, ALargeThicknessVolumeIsSentWhileItIsKeptAndThenServedKept) {
+  start();
+  // A plate 4 voxels thick (z voxels 1..4) over x, y voxels 1..256: a raw
+  // volume of 258 x 258 x 34 floats, 9 MB, over the 8 MiB from which
+  // answers are kept while they are sent.
+  const json job = submit(to_binary_stl(make_box({0.5, 0.5, 0.5}, {128.5, 128.5, 2.5})),
+                          R"({"grid":{"voxel_size":0.5,"origin":[0,0,0],"dims":[258,258,34]}})");
+  const std::string id = job.at("id");
+  ASSERT_EQ(wait_for_job(http(), id).at("state"), "succeeded");
+  const std::string path = "/v1/jobs/" + id + "/thickness?format=raw&unit=voxels";
+  auto first = http().Get(path.c_str());
+  ASSERT_EQ(first->status, 200) << first->body;
+  EXPECT_EQ(first->get_header_value("X-Voxd-Cache"), "miss");
+  const std::size_t voxels = 258u * 258u * 34u;
+  ASSERT_EQ(first->body.size(), voxels * 4);
+  EXPECT_EQ(first->get_header_value("Content-Length"), std::to_string(voxels * 4));
+  const std::vector<float> values = floats_of(first->body);
+  for (std::size_t k = 0; k < 34; ++k)
+    for (std::size_t j = 0; j < 258; ++j)
+      for (std::size_t i = 0; i < 258; ++i) {
+        const bool in = i >= 1 && i <= 256 && j >= 1 && j <= 256 && k >= 1 && k <= 4;
+        ASSERT_EQ(values[i + 258 * (j + 258 * k)], in ? 4.0f : 0.0f) << i << "," << j << "," << k;
+      }
+  auto again = http().Get(path.c_str());
+  ASSERT_EQ(again->status, 200);
+  EXPECT_EQ(again->get_header_value("X-Voxd-Cache"), "hit");
+  EXPECT_TRUE(again->body == first->body);
+  EXPECT_NE(server_->log().find("/thickness 200 " + std::to_string(voxels * 4) + "B"), std::string::npos);
+}
+
 TEST_F(HttpApiTest, PreviewThicknessVolumeAndThicknessSectionsDescribeThePart) {
   start();
   // A plate 4 voxels thick (z voxels 1..4) over x, y voxels 1..18, voxel 0.5
