@@ -10,6 +10,7 @@
 #   THREADS  the server's --threads (default: its own default, every core)
 #   KEEP     a folder to copy analysis.json and thickness.nrrd into (to
 #            compare two builds' bytes)
+#   LOG      a file to copy the server's log into (its stage timings)
 set -euo pipefail
 build="${1:-build}"
 res="${2:-512}"
@@ -18,6 +19,7 @@ work="$(mktemp -d)"
 server=""
 cleanup() {
   [[ -n "$server" ]] && kill "$server" 2> /dev/null && wait "$server" 2> /dev/null || true
+  [[ -n "${LOG:-}" ]] && cp "$work/log" "$LOG"
   rm -rf "$work"
 }
 trap cleanup EXIT
