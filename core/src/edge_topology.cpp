@@ -65,35 +65,47 @@ double for_each_edge(const Mesh& mesh, std::int64_t t0, std::int64_t t1, glm::dv
 
 // One bucket's edges counted in an open-addressing table: each slot holds
 // an edge's hash (the key less its direction bit, never 0 once set: the
-// table stores it with bit 0 set), its uses and its forward uses.
+// table stores it with bit 0 set), its uses and its forward uses. The
+// table is cleared once and then only where a bucket wrote (a small job's
+// hundred buckets would clear it a hundred times), and the edges are
+// classified from the slots they took rather than a scan of every slot.
 struct Counter {
-  std::vector<std::uint64_t> edge;
-  std::vector<std::uint32_t> uses, forward;
+  struct Slot {
+    std::uint64_t edge = 0;
+    std::uint32_t uses = 0, forward = 0;
+  };
+  std::vector<Slot> slots;
+  std::vector<std::uint32_t> taken;
 
   void count(const std::uint64_t* first, const std::uint64_t* last, std::uint64_t& boundary, std::uint64_t& nonmanifold,
              std::uint64_t& inconsistent) {
     const std::size_t n = static_cast<std::size_t>(last - first);
     if (n == 0) return;
     const std::size_t size = std::bit_ceil(2 * n);
-    edge.assign(size, 0);
-    uses.assign(size, 0);
-    forward.assign(size, 0);
+    if (slots.size() < size) slots.assign(size, Slot{});
     const std::size_t mask = size - 1;
+    taken.clear();
     for (const std::uint64_t* k = first; k < last; ++k) {
       const std::uint64_t id = *k | 1u;
       for (std::size_t i = static_cast<std::size_t>(*k >> 1) & mask;; i = (i + 1) & mask) {
-        if (edge[i] == 0) edge[i] = id;
-        if (edge[i] != id) continue;
-        ++uses[i];
-        forward[i] += static_cast<std::uint32_t>(*k & 1);
+        Slot& slot = slots[i];
+        if (slot.edge == 0) {
+          slot.edge = id;
+          taken.push_back(static_cast<std::uint32_t>(i));
+        } else if (slot.edge != id) {
+          continue;
+        }
+        ++slot.uses;
+        slot.forward += static_cast<std::uint32_t>(*k & 1);
         break;
       }
     }
-    for (std::size_t i = 0; i < size; ++i) {
-      if (uses[i] == 0) continue;
-      if (uses[i] == 1) ++boundary;
-      else if (uses[i] > 2) ++nonmanifold;
-      else if (forward[i] != 1) ++inconsistent;
+    for (const std::uint32_t i : taken) {
+      Slot& slot = slots[i];
+      boundary += slot.uses == 1;
+      nonmanifold += slot.uses > 2;
+      inconsistent += slot.uses == 2 && slot.forward != 1;
+      slot = Slot{};
     }
   }
 };
