@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <memory>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -127,20 +128,26 @@ EdgeTopology count_edge_topology(const Mesh& mesh, int threads) {
 
   // Pass 1: each chunk's keys (hashed once), its count per bucket, and its
   // share of the volume.
+  // The keys go to plain arrays through a pointer (a vector's push_back
+  // reloads its end from memory after every counted key), left
+  // uninitialized until written.
   std::vector<std::uint32_t> counts(static_cast<std::size_t>(chunks) * buckets, 0);
   std::vector<double> volumes(static_cast<std::size_t>(chunks), 0.0);
-  std::vector<std::vector<std::uint64_t>> chunk_keys(static_cast<std::size_t>(chunks));
+  std::vector<std::unique_ptr<std::uint64_t[]>> chunk_keys(static_cast<std::size_t>(chunks));
+  std::vector<std::size_t> chunk_size(static_cast<std::size_t>(chunks), 0);
   const glm::dvec3 origin(mesh.vertices[mesh.triangles[0][0]]);
   parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
     for (std::int64_t c = c0; c < c1; ++c) {
       std::uint32_t* count = counts.data() + static_cast<std::size_t>(c) * buckets;
-      std::vector<std::uint64_t>& mine = chunk_keys[static_cast<std::size_t>(c)];
-      mine.reserve(static_cast<std::size_t>(3 * (std::min(n, (c + 1) * kGrain) - c * kGrain)));
-      volumes[static_cast<std::size_t>(c)] =
-          for_each_edge(mesh, c * kGrain, std::min(n, (c + 1) * kGrain), origin, [&](std::uint64_t key) {
-            ++count[bucket_of(key)];
-            mine.push_back(key);
-          });
+      const std::int64_t t0 = c * kGrain, t1 = std::min(n, (c + 1) * kGrain);
+      auto& mine = chunk_keys[static_cast<std::size_t>(c)];
+      mine.reset(new std::uint64_t[static_cast<std::size_t>(3 * (t1 - t0))]);
+      std::uint64_t* out = mine.get();
+      volumes[static_cast<std::size_t>(c)] = for_each_edge(mesh, t0, t1, origin, [&](std::uint64_t key) {
+        ++count[bucket_of(key)];
+        *out++ = key;
+      });
+      chunk_size[static_cast<std::size_t>(c)] = static_cast<std::size_t>(out - mine.get());
     }
   });
   for (double v : volumes) out.six_volume += v;
@@ -160,13 +167,16 @@ EdgeTopology count_edge_topology(const Mesh& mesh, int threads) {
   bucket_start[buckets] = total;
 
   // Pass 2: the keys, each chunk into its own ranges.
-  std::vector<std::uint64_t> keys(total);
+  const std::unique_ptr<std::uint64_t[]> keys(new std::uint64_t[std::max<std::size_t>(total, 1)]);
   parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
     for (std::int64_t c = c0; c < c1; ++c) {
       std::size_t* cursor = at.data() + static_cast<std::size_t>(c) * buckets;
-      std::vector<std::uint64_t>& mine = chunk_keys[static_cast<std::size_t>(c)];
-      for (std::uint64_t key : mine) keys[cursor[bucket_of(key)]++] = key;
-      mine = {};
+      auto& mine = chunk_keys[static_cast<std::size_t>(c)];
+      for (std::size_t i = 0; i < chunk_size[static_cast<std::size_t>(c)]; ++i) {
+        const std::uint64_t key = mine[i];
+        keys[cursor[bucket_of(key)]++] = key;
+      }
+      mine.reset();
     }
   });
 
@@ -181,8 +191,8 @@ EdgeTopology count_edge_topology(const Mesh& mesh, int threads) {
     std::uint64_t bd = 0, nm = 0, ic = 0;
     Counter counter;
     for (std::int64_t b = b0; b < b1; ++b)
-      counter.count(keys.data() + bucket_start[static_cast<std::size_t>(b)],
-                    keys.data() + bucket_start[static_cast<std::size_t>(b) + 1], bd, nm, ic);
+      counter.count(keys.get() + bucket_start[static_cast<std::size_t>(b)],
+                    keys.get() + bucket_start[static_cast<std::size_t>(b) + 1], bd, nm, ic);
     boundary += bd;
     nonmanifold += nm;
     inconsistent += ic;
