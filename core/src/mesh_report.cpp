@@ -115,10 +115,14 @@ std::uint64_t count_referenced(const Mesh& mesh) {
 }  // namespace
 
 MeshReport make_mesh_report(const Mesh& mesh) {
+  if (mesh.triangles.empty()) return {};  // nothing is closed, nothing has volume
+  return mesh_report_of_welded(weld_vertices(mesh));
+}
+
+MeshReport mesh_report_of_welded(const Mesh& welded) {
   MeshReport report;
-  report.triangles = mesh.triangles.size();
-  if (mesh.triangles.empty()) return report;  // nothing is closed, nothing has volume
-  const Mesh welded = weld_vertices(mesh);
+  report.triangles = welded.triangles.size();  // welding keeps every triangle
+  if (welded.triangles.empty()) return report;
   // Unreferenced vertices (some formats keep them) are not part of the surface.
   report.vertices = count_referenced(welded);
   report.bbox = bounds(welded);

@@ -97,7 +97,8 @@ int analyze_command(int argc, char** argv) {
   // The mesh the thickness on the part is painted on, kept as the service
   // keeps a job's (before the voxelizer turns it).
   std::map<std::string, std::string> kept;
-  kept[server::kKeptMeshKey] = server::encode_kept_mesh(weld_vertices(prepared.mesh), prepared.rotation);
+  prepared.welded = std::make_shared<const Mesh>(weld_vertices(prepared.mesh));  // the mesh report reads it too
+  kept[server::kKeptMeshKey] = server::encode_kept_mesh(*prepared.welded, prepared.rotation);
   VoxelJobResult result = execute_voxel_job(std::move(prepared), /*with_report=*/true, nullptr, threads);
 
   auto positive = [&](const char* flag) -> double {

@@ -15,8 +15,10 @@
 
 namespace voxd::server {
 
-void keep_job_mesh(const JobStore& store, const std::string& id, const PreparedVoxelJob& prepared) {
-  store.save_artifact(id, kKeptMeshKey, encode_kept_mesh(weld_vertices(prepared.mesh), prepared.rotation));
+std::shared_ptr<const Mesh> keep_job_mesh(const JobStore& store, const std::string& id, const PreparedVoxelJob& prepared) {
+  auto welded = std::make_shared<const Mesh>(weld_vertices(prepared.mesh));
+  store.save_artifact(id, kKeptMeshKey, encode_kept_mesh(*welded, prepared.rotation));
+  return welded;
 }
 
 void JobEngine::work(JobBackend& backend) {
@@ -104,7 +106,7 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
     VoxelJobResult r;
     // The mesh the thickness on the part is painted on, kept first: the
     // worker is about to hand it to the voxelizer, which turns it.
-    if (store) keep_job_mesh(*store, id, prepared);
+    if (store) prepared.welded = keep_job_mesh(*store, id, prepared);
     if (prepared.path != ExecutionPath::memory) {
       // Slab by slab straight into the stored RLE: the grid is never whole
       // (only a job with a store streams: job_limits).

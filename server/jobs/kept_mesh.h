@@ -6,6 +6,7 @@
 // rotation the job applied before voxelizing, so it is read in the grid's
 // frame and written back in the user's.
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include <glm/mat3x3.hpp>
@@ -33,8 +34,9 @@ KeptMesh decode_kept_mesh(const std::string& bytes);
 std::uint64_t kept_mesh_bytes(std::uint64_t triangles);
 
 class JobStore;
-// Keeps the prepared job's mesh (welded) as the job's artifact. Throws what
-// the store's save_artifact throws.
-void keep_job_mesh(const JobStore& store, const std::string& id, const PreparedVoxelJob& prepared);
+// Keeps the prepared job's mesh (welded) as the job's artifact, and returns
+// the welded mesh (its mesh report reads it: PreparedVoxelJob::welded).
+// Throws what the store's save_artifact throws.
+std::shared_ptr<const Mesh> keep_job_mesh(const JobStore& store, const std::string& id, const PreparedVoxelJob& prepared);
 
 }  // namespace voxd::server

@@ -231,7 +231,8 @@ VoxelJobResult begin_voxel_job(PreparedVoxelJob& job, bool with_report, JobContr
   if (control) control->check_cancelled();
   if (with_report) {
     if (control) control->set_stage("mesh report");
-    result.report = make_mesh_report(job.mesh);
+    result.report = job.welded ? mesh_report_of_welded(*job.welded) : make_mesh_report(job.mesh);
+    job.welded.reset();
     result.report->warnings = job.decode_warnings;
     result.report->orientation = job.orientation;
     // Parity asked for by name is not oriented, so only the report sees whether it leaks.

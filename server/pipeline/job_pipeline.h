@@ -3,6 +3,7 @@
 // rotate/orient, resolve the grid, check limits, voxelize. Shared by the CLI
 // and the service's workers so both produce byte-identical results.
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -87,6 +88,9 @@ struct StageTimings {
 struct PreparedVoxelJob {
   api::JobParams params;
   Mesh mesh;  // as uploaded; execute_voxel_job rotates it
+  // weld_vertices(mesh), when it was made for the kept mesh: the mesh report
+  // reads it too rather than welding again.
+  std::shared_ptr<const Mesh> welded;
   MeshFormat format = MeshFormat::unknown;
   DecodeWarnings decode_warnings;  // for the mesh report
   std::uint64_t triangles = 0;

@@ -37,5 +37,7 @@ Mesh weld_vertices(const Mesh& mesh);
 
 // Welds internally, so a triangle soup gives the same report as its indexed twin.
 MeshReport make_mesh_report(const Mesh& mesh);
+// The same report from weld_vertices(mesh), for a caller that has it.
+MeshReport mesh_report_of_welded(const Mesh& welded);
 
 }  // namespace voxd
