@@ -48,15 +48,6 @@ std::shared_ptr<KeyLock> key_lock(const ArtifactAccess& artifacts, const std::st
   return locks.get(artifacts.scope + "/" + key);
 }
 
-// The bytes a request's kind makes from the job's volumes in memory, or
-// from a streamed job's slabs (the same bytes) where it streams.
-std::string computed(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
-                     const ArtifactAccess& artifacts, JobControl* control) {
-  const JobAnalysisKind& kind = job_analysis_kind(r.kind);
-  const AnalysisInput in{r, job, output, artifacts, control};
-  return output.solid ? kind.compute(in, *output.solid) : kind.over_slabs(in);
-}
-
 }  // namespace
 
 PngScale radiography_scale(const AnalysisRequest& r, const Grid& g) {
@@ -164,24 +155,25 @@ JobThicknessMap job_thickness_map(const BitVolume& volume, const ArtifactAccess&
 
 AnalysisResult job_analysis(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
                             const ArtifactAccess& artifacts, JobControl* control) {
-  const std::string key = r.artifact_key();
-  if (auto kept = artifacts.load(key)) return {std::move(*kept), true};
-  const auto lock = key_lock(artifacts, key);
-  std::lock_guard guard(*lock);
-  if (auto kept = artifacts.load(key)) return {std::move(*kept), true};  // computed while we waited
-  std::string bytes = computed(r, job, output, artifacts, control);
-  artifacts.save(key, bytes);
-  return {std::move(bytes), false};
+  // Kept before it returns: the answer's bytes are its own to move.
+  AnalysisAnswer answer = job_analysis_answer(r, job, output, artifacts, SIZE_MAX, control);
+  return {std::move(*answer.bytes), answer.kept};
 }
 
 AnalysisAnswer job_analysis_answer(const AnalysisRequest& r, const JobSnapshot& job, const JobOutput& output,
-                                   const ArtifactAccess& artifacts, std::size_t keep_while_sent_from) {
+                                   const ArtifactAccess& artifacts, std::size_t keep_while_sent_from,
+                                   JobControl* control) {
   const std::string key = r.artifact_key();
   if (auto kept = artifacts.load(key)) return {std::make_shared<std::string>(std::move(*kept)), true, nullptr};
   auto mutex = key_lock(artifacts, key);
   std::unique_lock<KeyLock> lock(*mutex);
-  if (auto kept = artifacts.load(key)) return {std::make_shared<std::string>(std::move(*kept)), true, nullptr};
-  auto bytes = std::make_shared<std::string>(computed(r, job, output, artifacts, nullptr));
+  if (auto kept = artifacts.load(key))  // computed while we waited
+    return {std::make_shared<std::string>(std::move(*kept)), true, nullptr};
+  // A streamed job's request that streams is answered from its slabs with
+  // the bytes the in-memory path gives.
+  const JobAnalysisKind& kind = job_analysis_kind(r.kind);
+  const AnalysisInput in{r, job, output, artifacts, control};
+  auto bytes = std::make_shared<std::string>(output.solid ? kind.compute(in, *output.solid) : kind.over_slabs(in));
   if (bytes->size() < keep_while_sent_from) {
     artifacts.save(key, *bytes);
     return {bytes, false, nullptr};

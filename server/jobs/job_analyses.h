@@ -77,7 +77,7 @@ struct AnalysisAnswer {
 };
 AnalysisAnswer job_analysis_answer(const api::AnalysisRequest& request, const JobSnapshot& job,
                                    const JobOutput& output, const ArtifactAccess& artifacts,
-                                   std::size_t keep_while_sent_from);
+                                   std::size_t keep_while_sent_from, JobControl* control = nullptr);
 
 // Bytes a request may take at its peak, beyond the job's volumes, for the
 // memory budget. Measured (docs/security.md): local thickness and the

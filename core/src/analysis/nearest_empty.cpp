@@ -14,11 +14,13 @@
 // a block's lines are read from just before their first filled voxel to
 // just after their last: the empty voxels beyond are their own sites and
 // are left as pass x wrote them (on a part in its padded grid, half the
-// grid or more). For the nearest marked voxel (a wall's medial voxels: a
-// sheet, or on a torus a ring in a few layers), only the layers holding a
-// mark have sites after passes x and y, so those passes skip the others,
-// and pass z reads only those layers and, with `wanted`, writes only from
-// the lines' first wanted voxel to their last, skipping blocks with none.
+// grid or more). For the nearest marked voxel (a wall's medial voxels, a
+// sheet or a ring: a few rows of a layer), only the rows holding a mark
+// have sites after pass x and only the layers holding one after pass y, so
+// pass y reads only those rows and pass z only those layers, each solving
+// the envelope of those sites alone; pass z writes, with `wanted`, only
+// from the lines' first wanted voxel to their last, skipping blocks with
+// none.
 //
 // Every pass keeps the earlier of two equally near sites along its axis,
 // so a voxel's answer is, of its nearest sites, the first in memory order
