@@ -23,7 +23,7 @@ cmake --build "$out" -j"$(nproc)" >/dev/null
 corpus="$out/corpus"
 seeds="$out/seeds"
 rm -rf "$seeds"
-mkdir -p "$seeds"/{stl_binary,stl_ascii,obj,ply,draco,auto,job_params,analysis_query,rle,http,tenant_config} "$out/findings"
+mkdir -p "$seeds"/{stl_binary,stl_ascii,obj,ply,draco,auto,job_params,analysis_query,rle,http,tenant_config,multipart} "$out/findings"
 cp tests/fuzz/seeds/stl_ascii/* "$seeds/stl_ascii/"
 cp tests/fuzz/seeds/obj/* "$seeds/obj/"
 cp tests/fuzz/seeds/ply/* "$seeds/ply/"
@@ -31,6 +31,7 @@ cp tests/fuzz/seeds/job_params/* "$seeds/job_params/"
 cp tests/fuzz/seeds/analysis_query/* "$seeds/analysis_query/"
 cp tests/fuzz/seeds/http/* "$seeds/http/"
 cp tests/fuzz/seeds/tenant_config/* "$seeds/tenant_config/"
+cp tests/fuzz/seeds/multipart/* "$seeds/multipart/"
 # Meshes small enough for a fuzzer's input length: the parts the main build
 # writes (else the committed PLY box), and assimp's corpus of real files.
 shopt -s nullglob
@@ -71,15 +72,15 @@ for f in "$seeds"/{stl_binary,stl_ascii,obj,ply,draco}/*; do cp "$f" "$seeds/aut
 declare -A dict=(
   [fuzz_decode_stl_ascii]=stl_ascii [fuzz_decode_obj]=obj [fuzz_decode_ply]=ply [fuzz_decode_draco]=draco
   [fuzz_job_params]=json [fuzz_analysis_query]=query [fuzz_rle_reader]=rle [fuzz_http_connection]=http
-  [fuzz_tenant_config]=json
+  [fuzz_tenant_config]=json [fuzz_multipart_reader]=multipart
 )
 declare -A seed_dir=(
   [fuzz_decode_stl_binary]=stl_binary [fuzz_decode_stl_ascii]=stl_ascii [fuzz_decode_obj]=obj
   [fuzz_decode_ply]=ply [fuzz_decode_draco]=draco [fuzz_decode_auto]=auto [fuzz_job_params]=job_params
   [fuzz_analysis_query]=analysis_query [fuzz_rle_reader]=rle [fuzz_http_connection]=http
-  [fuzz_tenant_config]=tenant_config
+  [fuzz_tenant_config]=tenant_config [fuzz_multipart_reader]=multipart
 )
-fuzzers="${FUZZERS:-fuzz_decode_stl_binary fuzz_decode_stl_ascii fuzz_decode_obj fuzz_decode_ply fuzz_decode_draco fuzz_decode_auto fuzz_job_params fuzz_analysis_query fuzz_rle_reader fuzz_http_connection fuzz_tenant_config}"
+fuzzers="${FUZZERS:-fuzz_decode_stl_binary fuzz_decode_stl_ascii fuzz_decode_obj fuzz_decode_ply fuzz_decode_draco fuzz_decode_auto fuzz_job_params fuzz_analysis_query fuzz_rle_reader fuzz_http_connection fuzz_tenant_config fuzz_multipart_reader}"
 
 run_one() {
   local f="$1" log="$out/findings/$1.log"

@@ -1,6 +1,9 @@
 #include "server/http/submission.h"
 
+#include <utility>
+
 #include "server/http/metrics.h"
+#include "server/http/multipart_reader.h"
 #include "server/http/route_table.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/error.h"
@@ -35,6 +38,26 @@ ProblemError unsupported_media_type() {
                                    "request body (e.g. application/octet-stream) with params in the query string"));
 }
 
+// Reads the body as it was sent, multipart or not. httplib 0.11 reads a
+// body whose Content-Type says multipart/form-data with its own parser
+// whatever the handler asks for, a byte at a time (MultipartReader says
+// what that cost); only a body it does not take for multipart reaches the
+// handler's receiver as sent. The request is httplib's own object, not a
+// const one (handlers get a const reference to it), so its Content-Type is
+// set aside for the read and put back after it.
+bool read_body_as_sent(const Request& req, const httplib::ContentReader& reader,
+                       const httplib::ContentReceiver& receive) {
+  auto& headers = const_cast<Request&>(req).headers;
+  const auto type = headers.find("Content-Type");
+  if (type == headers.end()) return reader(receive);
+  struct PutBack {
+    std::string& value;
+    std::string original;
+    ~PutBack() { value = std::move(original); }
+  } put_back{type->second, std::exchange(type->second, "application/octet-stream")};
+  return reader(receive);
+}
+
 }  // namespace
 
 std::optional<std::uint64_t> declared_length(const httplib::Request& req) {
@@ -63,17 +86,28 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
   };
   bool read_ok = true;
   if (req.is_multipart_form_data()) {
+    const std::optional<std::string> boundary = multipart_boundary(type);
+    if (!boundary) {
+      set_body_consumed(false);
+      throw ProblemError(make_problem(400, "bad-request", "Bad request",
+                                      "the multipart/form-data Content-Type has no boundary parameter (1 to 70 "
+                                      "characters), so its parts cannot be found"));
+    }
     enum class Part { mesh, params, label, other } part = Part::other;
     std::string params_text;
     std::optional<std::string>* label = nullptr;
     bool has_mesh = false, has_params = false, params_over_limit = false, label_over_limit = false;
-    read_ok = reader(
-        [&](const httplib::MultipartFormData& header) {
+    MultipartReader parts(
+        *boundary,
+        [&](const MultipartReader::Part& header) {
           if (header.name == "mesh") {
             part = Part::mesh;
             has_mesh = true;
             s.filename = header.filename;
             s.mesh.clear();
+            // The mesh is most of the body: one buffer of its size, not a
+            // doubling series of copies.
+            if (!req.has_header("Content-Encoding")) s.mesh.reserve(declared_length(req).value_or(0));
           } else if (header.name == "params") {
             part = Part::params;
             has_params = true;
@@ -88,7 +122,6 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
           return true;
         },
         [&](const char* data, std::size_t n) {
-          if (!count(n)) return false;
           if (part == Part::mesh) {
             s.mesh.insert(s.mesh.end(), data, data + n);
           } else if (part == Part::params) {
@@ -108,6 +141,9 @@ Submission read_submission(const httplib::Request& req, const httplib::ContentRe
           }
           return true;
         });
+    read_ok = read_body_as_sent(req, reader, [&](const char* data, std::size_t n) {
+      return count(n) && parts.feed(data, n);
+    }) && parts.complete();
     if (read_ok && !has_mesh)
       throw ProblemError(make_problem(400, "missing-mesh", "No mesh uploaded",
                                       "the multipart body has no part named \"mesh\"; send the mesh file in it"));

@@ -259,5 +259,45 @@ TEST_F(HttpEdge, ASecondServerOnAPortInUseFailsToStart) {
   std::filesystem::remove_all(other);
 }
 
+// Multipart bodies are read by the service's own reader (httplib's copied
+// them a byte at a time): a mesh whose bytes hold the boundary's start, in
+// a body with a quoted boundary, a preamble and the parts in another order,
+// voxelizes to the same bytes as the raw upload of the same mesh; a body
+// with no boundary, or none that closes it, is a 400 that says so.
+TEST_F(HttpEdge, AMultipartBodyIsReadAsSentWhateverItsBytesLookLike) {
+  start();
+  const std::string boundary = "voxd boundary";
+  std::vector<std::uint8_t> mesh = to_binary_stl(make_box({0, 0, 0}, {3, 2, 1}));
+  // In the STL's header: the delimiter less its last byte, and the boundary
+  // with no CRLF right before it.
+  const std::string header = "\r\n--voxd boundar\r\n---voxd boundary\r\n";
+  std::copy(header.begin(), header.end(), mesh.begin());
+  const std::string params = R"({"grid": {"resolution": 32}})";
+  const std::string body = "a preamble\r\n--" + boundary + "\r\nContent-Disposition: form-data; name=\"params\"\r\n\r\n" +
+                           params + "\r\n--" + boundary +
+                           "\r\nContent-Disposition: form-data; name=\"mesh\"; filename=\"box.stl\"\r\n"
+                           "Content-Type: application/octet-stream\r\n\r\n" +
+                           std::string(mesh.begin(), mesh.end()) + "\r\n--" + boundary + "--\r\n";
+  auto multipart = http().Post("/v1/voxelize", body, "multipart/form-data; boundary=\"" + boundary + "\"");
+  ASSERT_TRUE(multipart);
+  ASSERT_EQ(multipart->status, 200) << multipart->body.substr(0, 500);
+  auto raw = post_raw(http(), "/v1/voxelize", mesh, params, "application/octet-stream");
+  ASSERT_TRUE(raw);
+  ASSERT_EQ(raw->status, 200) << raw->body.substr(0, 500);
+  EXPECT_EQ(multipart->body, raw->body);
+  EXPECT_GT(multipart->body.size(), 100u);
+
+  const json no_boundary = expect_problem(http().Post("/v1/voxelize", body, "multipart/form-data"), 400, "bad-request");
+  EXPECT_NE(no_boundary.at("detail").get<std::string>().find("no boundary parameter"), std::string::npos) << no_boundary;
+  const std::string unclosed = body.substr(0, body.rfind("\r\n--"));
+  const json truncated =
+      expect_problem(http().Post("/v1/voxelize", unclosed, "multipart/form-data; boundary=\"" + boundary + "\""), 400,
+                     "bad-request");
+  EXPECT_NE(truncated.at("detail").get<std::string>().find("malformed multipart"), std::string::npos) << truncated;
+  auto healthy = make_client(server_->port(), 5)->Get("/healthz");
+  ASSERT_TRUE(healthy);
+  EXPECT_EQ(healthy->status, 200);
+}
+
 }  // namespace
 }  // namespace voxd::test
