@@ -1,8 +1,11 @@
 // The fast edge count (count_edge_topology, hashing without welding)
-// against the mesh report's, which welds and groups edges by vertex: the
-// same boundary, non-manifold and inconsistent edges on CAD parts, parts
-// with holes punched and triangles flipped, soups, and real open files of
-// assimp-testmodels, on one thread and several.
+// against the count of the welded mesh (edge_topology_of_welded, which the
+// mesh report reads: vertex indices grouped by vertex, no hash): the same
+// edges, boundary, non-manifold and inconsistent edges, and the same volume
+// summed in the same order, on CAD parts, parts with holes punched and
+// triangles flipped, soups, a mesh of several chunks, and real open files of
+// assimp-testmodels, on one thread and several; and edge counts known by
+// hand.
 #include <string>
 
 #include <gtest/gtest.h>
@@ -19,8 +22,14 @@ namespace {
 
 void expect_same_as_report(const Mesh& mesh, const std::string& what) {
   const MeshReport report = make_mesh_report(mesh);
+  const EdgeTopology welded = edge_topology_of_welded(weld_vertices(mesh));
+  EXPECT_EQ(welded.boundary_edges, report.boundary_edges) << what;
+  EXPECT_EQ(welded.nonmanifold_edges, report.nonmanifold_edges) << what;
+  EXPECT_EQ(welded.inconsistent_edges, report.inconsistent_edges) << what;
   for (int threads : {1, 3}) {
     const EdgeTopology t = count_edge_topology(mesh, threads);
+    EXPECT_EQ(t.edges, welded.edges) << what << " threads " << threads;
+    EXPECT_EQ(t.six_volume, welded.six_volume) << what << " threads " << threads;
     EXPECT_EQ(t.boundary_edges, report.boundary_edges) << what << " threads " << threads;
     EXPECT_EQ(t.nonmanifold_edges, report.nonmanifold_edges) << what;
     EXPECT_EQ(t.inconsistent_edges, report.inconsistent_edges) << what;
@@ -49,10 +58,32 @@ TEST(EdgeTopology, CountsAsTheMeshReportDoesOnPartsWholeOpenAndFlipped) {
 
 TEST(EdgeTopology, AnInsideOutClosedMeshHasANegativeVolume) {
   const Mesh box = test::flipped(test::make_box({1, 2, 3}, {5, 5, 5}));
-  const EdgeTopology t = count_edge_topology(box);
-  EXPECT_TRUE(t.closed());
-  EXPECT_EQ(t.inconsistent_edges, 0u);
-  EXPECT_DOUBLE_EQ(t.six_volume, -6.0 * 24.0);
+  for (const EdgeTopology& t : {count_edge_topology(box), edge_topology_of_welded(weld_vertices(box))}) {
+    EXPECT_TRUE(t.closed());
+    EXPECT_EQ(t.edges, 18u);  // a box's 12 triangles: 12 * 3 / 2
+    EXPECT_EQ(t.inconsistent_edges, 0u);
+    EXPECT_DOUBLE_EQ(t.six_volume, -6.0 * 24.0);
+  }
+}
+
+TEST(EdgeTopology, ASingleTriangleHasThreeBoundaryEdges) {
+  Mesh triangle;
+  triangle.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  triangle.triangles = {{0, 1, 2}};
+  for (const EdgeTopology& t : {count_edge_topology(triangle), edge_topology_of_welded(triangle)}) {
+    EXPECT_EQ(t.edges, 3u);
+    EXPECT_EQ(t.boundary_edges, 3u);
+    EXPECT_FALSE(t.closed());
+  }
+}
+
+// More triangles than one chunk of the volume's sum (16,384): the welded
+// count adds the chunks as the parallel one does.
+TEST(EdgeTopology, AMeshOfSeveralChunksCountsAlike) {
+  const Mesh torus = test::make_torus({0.3f, -0.2f, 0.1f}, 40, 10, 200, 120);
+  ASSERT_GT(torus.triangles.size(), 2u * 16384u);
+  expect_same_as_report(torus, "torus");
+  expect_same_as_report(soup_of(test::punched(torus, 97)), "torus punched, as a soup");
 }
 
 TEST(EdgeTopology, SkipsTrianglesWithTwoCornersAtOnePositionAsTheReportDoes) {
@@ -74,9 +105,10 @@ TEST(EdgeTopology, CountsAsTheMeshReportDoesOnRealOpenFiles) {
 }
 
 TEST(EdgeTopology, AnEmptyMeshHasNoEdges) {
-  const EdgeTopology t = count_edge_topology(Mesh{});
-  EXPECT_EQ(t.boundary_edges + t.nonmanifold_edges + t.inconsistent_edges, 0u);
-  EXPECT_EQ(t.six_volume, 0.0);
+  for (const EdgeTopology& t : {count_edge_topology(Mesh{}), edge_topology_of_welded(Mesh{})}) {
+    EXPECT_EQ(t.edges + t.boundary_edges + t.nonmanifold_edges + t.inconsistent_edges, 0u);
+    EXPECT_EQ(t.six_volume, 0.0);
+  }
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 namespace voxd {
 
 struct EdgeTopology {
+  std::uint64_t edges = 0;               // distinct edges of the triangles with three distinct corners
   std::uint64_t boundary_edges = 0;      // used by one triangle
   std::uint64_t nonmanifold_edges = 0;   // used by more than two
   std::uint64_t inconsistent_edges = 0;  // two triangles traversing it the same way
@@ -28,5 +29,13 @@ struct EdgeTopology {
 // Triangles with two corners at one position take no part, as in the mesh
 // report. `threads` 0 = all cores.
 EdgeTopology count_edge_topology(const Mesh& mesh, int threads = 0);
+
+// The same counts, exactly (no hash), from weld_vertices(mesh): the edges
+// are grouped by a counting sort on their smaller vertex, each in its
+// vertex's short bucket, so the pass is two linear sweeps and tiny sorts,
+// on one thread. A caller that welds anyway (a job that keeps its mesh, the
+// mesh report) pays this instead of the hashing. The volume is summed about
+// the same point and in the same order as count_edge_topology's.
+EdgeTopology edge_topology_of_welded(const Mesh& welded);
 
 }  // namespace voxd

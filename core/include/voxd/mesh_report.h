@@ -7,6 +7,7 @@
 
 #include <optional>
 
+#include "voxd/edge_topology.h"
 #include "voxd/mesh.h"
 #include "voxd/mesh_orientation.h"
 
@@ -37,7 +38,8 @@ Mesh weld_vertices(const Mesh& mesh);
 
 // Welds internally, so a triangle soup gives the same report as its indexed twin.
 MeshReport make_mesh_report(const Mesh& mesh);
-// The same report from weld_vertices(mesh), for a caller that has it.
-MeshReport mesh_report_of_welded(const Mesh& welded);
+// The same report from weld_vertices(mesh), for a caller that has it, and
+// its edge_topology_of_welded when the caller has that too.
+MeshReport mesh_report_of_welded(const Mesh& welded, const EdgeTopology* topology = nullptr);
 
 }  // namespace voxd
