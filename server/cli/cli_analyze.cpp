@@ -93,11 +93,12 @@ int analyze_command(int argc, char** argv) {
   MappedFile file(mesh_path);
   JobLimits limits;
   limits.max_voxels = std::uint64_t{1} << 33;
+  limits.welds_mesh = true;  // for the kept mesh below
   PreparedVoxelJob prepared = prepare_voxel_job(file.bytes(), mesh_path, params, limits);
   // The mesh the thickness on the part is painted on, kept as the service
   // keeps a job's (before the voxelizer turns it).
   std::map<std::string, std::string> kept;
-  prepared.welded = std::make_shared<const Mesh>(weld_vertices(prepared.mesh));  // the mesh report reads it too
+  if (!prepared.welded) prepared.welded = std::make_shared<const Mesh>(weld_vertices(prepared.mesh));  // the mesh report reads it too
   kept[server::kKeptMeshKey] = server::encode_kept_mesh(*prepared.welded, prepared.rotation);
   VoxelJobResult result = execute_voxel_job(std::move(prepared), /*with_report=*/true, nullptr, threads);
 

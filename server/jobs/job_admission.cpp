@@ -110,7 +110,7 @@ std::shared_ptr<Job> JobEngine::admit(JobBackend& backend, std::vector<std::uint
                       std::to_string(config.max_result_bytes >> 20) +
                       " MiB a result; use a lower resolution or a larger voxel_size");
   }
-  const std::uint64_t memory = mesh_memory(prepared.mesh) + prepared.memory_estimate + analyses_memory(params, prepared);
+  const std::uint64_t memory = prepared_mesh_memory(prepared) + prepared.memory_estimate + analyses_memory(params, prepared);
 
   auto job = std::make_shared<Job>();
   job->backend = &backend;

@@ -84,6 +84,7 @@ JobLimits JobEngine::job_limits(bool stored) const {
   // (cached, analysed, answered from), so a job of bits is made as runs
   // only when it streams (JobOutputKind's defaults).
   limits.stream_slab_bytes = std::min(limits.stream_slab_bytes, config.max_job_memory / 4);
+  limits.welds_mesh = stored;  // it keeps its mesh (kept_mesh.h)
   return limits;
 }
 

@@ -16,7 +16,7 @@
 namespace voxd::server {
 
 std::shared_ptr<const Mesh> keep_job_mesh(const JobStore& store, const std::string& id, const PreparedVoxelJob& prepared) {
-  auto welded = std::make_shared<const Mesh>(weld_vertices(prepared.mesh));
+  auto welded = prepared.welded ? prepared.welded : std::make_shared<const Mesh>(weld_vertices(prepared.mesh));
   store.save_artifact(id, kKeptMeshKey, encode_kept_mesh(*welded, prepared.rotation));
   return welded;
 }

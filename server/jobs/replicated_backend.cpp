@@ -167,7 +167,7 @@ std::shared_ptr<Job> ReplicatedJobBackend::adopt(const TakenJob& taken, Prepared
   try {
     prepared = prepare_voxel_job(input->bytes, input->name_hint, *record->job, engine_.job_limits(true));
     const std::uint64_t need =
-        mesh_memory(prepared.mesh) + prepared.memory_estimate + engine_.analyses_memory(*record->job, prepared);
+        prepared_mesh_memory(prepared) + prepared.memory_estimate + engine_.analyses_memory(*record->job, prepared);
     input.reset();
     if (!reserve(*job, need, taken.id)) return nullptr;
   } catch (const Error& e) {

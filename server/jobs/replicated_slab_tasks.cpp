@@ -133,7 +133,7 @@ std::optional<PreparedVoxelJob> ReplicatedJobBackend::prepare_again(const std::s
   input.reset();
   if (prepared.slab_layers < 1)  // this replica would make it in memory: its tasks stream all the same
     prepared.slab_layers = streamed_job_slab_layers(prepared.grid, prepared.params, limits.stream_slab_bytes);
-  std::uint64_t need = mesh_memory(prepared.mesh);
+  std::uint64_t need = prepared_mesh_memory(prepared);
   need += with_analyses ? engine_.analyses_memory(*record.job, prepared)
                         : estimate_streamed_job_memory(prepared.grid, prepared.slab_layers, prepared.triangles);
   if (!reserve(*job, need, qid)) return std::nullopt;

@@ -83,6 +83,10 @@ std::uint64_t mesh_memory(const Mesh& mesh) {
   return mesh.vertices.capacity() * sizeof(mesh.vertices[0]) + mesh.triangles.capacity() * sizeof(mesh.triangles[0]);
 }
 
+std::uint64_t prepared_mesh_memory(const PreparedVoxelJob& job) {
+  return mesh_memory(job.mesh) + (job.welded ? mesh_memory(*job.welded) : 0);
+}
+
 void check_voxel_limit(const Grid& grid, std::uint64_t max_voxels, std::string_view hint) {
   if (grid.voxel_count() <= max_voxels) return;
   throw Error(ErrorCode::limit_exceeded,
@@ -130,14 +134,21 @@ PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uin
     const double scale = api::millimetres_per(params.units);
     for (glm::vec3& v : job.mesh.vertices) v = glm::vec3(glm::dvec3(v) * scale);
   }
-  // "auto" chooses from the mesh's edges (counted in parallel, without
-  // welding). The winding number reads a triangle's side, so its mesh is
-  // turned outward first; so is a closed mesh that is inside out or has
-  // flipped triangles (rare), for the report, the kept mesh and the
-  // warnings. A closed, outward mesh pays only the edge count.
+  // "auto" chooses from the mesh's edges: of the welded mesh when the job
+  // welds it anyway (then kept for the kept mesh and the report), else
+  // counted in parallel without welding. The winding number reads a
+  // triangle's side, so its mesh is turned outward first; so is a closed
+  // mesh that is inside out or has flipped triangles (rare), for the report,
+  // the kept mesh and the warnings. A closed, outward mesh pays only the
+  // edge count.
   std::optional<EdgeTopology> topology;
   if (api::needs_topology(params)) {
-    topology = count_edge_topology(job.mesh);
+    if (limits.welds_mesh) {
+      job.welded = std::make_shared<const Mesh>(weld_vertices(job.mesh));
+      topology = job.welded_topology = edge_topology_of_welded(*job.welded);
+    } else {
+      topology = count_edge_topology(job.mesh);
+    }
     job.timings.add("topology", clock.lap());
   }
   job.inside = api::choose_inside_test(params, topology ? &*topology : nullptr);
@@ -146,6 +157,10 @@ PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uin
   const bool suspect = topology && (topology->inconsistent_edges > 0 || topology->six_volume < 0.0);
   if (reads_sides || suspect) {
     job.orientation = orient_outward(job.mesh);
+    if (job.orientation->flipped_triangles > 0) {  // the kept mesh and the report are of the mesh as oriented
+      job.welded.reset();
+      job.welded_topology.reset();
+    }
     job.timings.add("orient", clock.lap());
   }
   const api::JobParams& resolved = job.params;
@@ -231,8 +246,10 @@ VoxelJobResult begin_voxel_job(PreparedVoxelJob& job, bool with_report, JobContr
   if (control) control->check_cancelled();
   if (with_report) {
     if (control) control->set_stage("mesh report");
-    result.report = job.welded ? mesh_report_of_welded(*job.welded) : make_mesh_report(job.mesh);
+    result.report = job.welded ? mesh_report_of_welded(*job.welded, job.welded_topology ? &*job.welded_topology : nullptr)
+                               : make_mesh_report(job.mesh);
     job.welded.reset();
+    job.welded_topology.reset();
     result.report->warnings = job.decode_warnings;
     result.report->orientation = job.orientation;
     // Parity asked for by name is not oriented, so only the report sees whether it leaks.

@@ -73,6 +73,10 @@ struct JobLimits {
   std::uint64_t stream_above_bytes = std::uint64_t{512} << 20;
   // About this many bytes of bits per slab of a streamed job.
   std::uint64_t stream_slab_bytes = kStreamSlabBytes;
+  // The job welds its mesh anyway (it keeps it, and reports on it): "auto"
+  // then counts the edges of the welded mesh, exactly and once, rather
+  // than hashing them in parallel (the choice for a job that never welds).
+  bool welds_mesh = false;
 };
 
 struct StageTimings {
@@ -88,9 +92,12 @@ struct StageTimings {
 struct PreparedVoxelJob {
   api::JobParams params;
   Mesh mesh;  // as uploaded; execute_voxel_job rotates it
-  // weld_vertices(mesh), when it was made for the kept mesh: the mesh report
-  // reads it too rather than welding again.
+  // weld_vertices(mesh), when it was made (for "auto" with
+  // JobLimits::welds_mesh, or for the kept mesh): the kept mesh and the mesh
+  // report read it rather than welding again; and its edge topology when
+  // that was counted, which the report reads too.
   std::shared_ptr<const Mesh> welded;
+  std::optional<EdgeTopology> welded_topology;
   MeshFormat format = MeshFormat::unknown;
   DecodeWarnings decode_warnings;  // for the mesh report
   std::uint64_t triangles = 0;
@@ -158,6 +165,8 @@ std::uint64_t decode_memory_estimate(std::uint64_t bytes, MeshFormat format, con
 std::uint64_t draco_child_memory(std::uint64_t bytes);
 // Bytes a decoded mesh holds.
 std::uint64_t mesh_memory(const Mesh& mesh);
+// The prepared job's mesh, and its welded copy when it holds one.
+std::uint64_t prepared_mesh_memory(const PreparedVoxelJob& job);
 
 struct ExecutionPlan {
   ExecutionPath path = ExecutionPath::memory;

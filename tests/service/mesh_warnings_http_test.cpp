@@ -36,6 +36,14 @@ TEST_F(MeshWarnings, AnOpenPartWrittenInsideOutIsTurnedRoundFilledAndSaidSo) {
   EXPECT_EQ(closed.at("warnings"), json::array());
   EXPECT_EQ(closed.at("units"), json({{"mesh", "mm"}, {"lengths", "mm"}}));
 
+  // Closed and inside out: turned round, and its report (volume, edges) is
+  // of the mesh as turned, the same as the part written outward.
+  const json turned = status_of(finished(submit(to_binary_stl(flipped(nut)), params)));
+  EXPECT_EQ(turned.at("mesh").at("orientation").at("inverted_components"), 1);
+  EXPECT_EQ(turned.at("mesh").at("volume"), closed.at("mesh").at("volume"));
+  EXPECT_GT(turned.at("mesh").at("volume").get<double>(), 0.0);
+  EXPECT_EQ(turned.at("filled_voxels"), closed.at("filled_voxels"));
+
   const std::vector<std::uint8_t> inverted = to_binary_stl(flipped(punched(nut, 41)));
   const json accepted = submit(inverted, params);
   // The choice and the preparing's warnings are there from the start.
