@@ -2,6 +2,7 @@
 // OS pages for large ones; zeroed when asked, writable to the last byte, and
 // dense volumes built on it behave as vectors do.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -78,6 +79,35 @@ TEST(VolumeMemory, DenseVolumesFillCopyAndCompareAsVectors) {
   // A bit volume larger than the heap limit starts empty.
   const BitVolume bits(Grid{glm::dvec3(0.0), 1.0, glm::i64vec3(1024, 1024, 16)});
   EXPECT_EQ(bits.count(), 0u);
+}
+
+// A dense volume of zeros asks for zeroed memory rather than writing it:
+// on a reused block (which held another volume) it is zero everywhere, on
+// the heap too, and on fresh pages nothing is written (they stay unmapped
+// until a writer touches them: mincore says which pages are resident). Any
+// other fill, -0.0 included, is written.
+TEST(VolumeMemory, ZeroFilledDenseVolumesAreZeroWithoutBeingWritten) {
+  const Grid g{glm::dvec3(0.0), 1.0, glm::i64vec3(512, 256, 176)};  // 88 MiB of floats: OS pages
+  { DenseVolume<float> first(g, 3.0f); }
+  const DenseVolume<float> reused(g);  // the kept block of `first`
+  EXPECT_TRUE(std::all_of(reused.values().begin(), reused.values().end(), [](float v) { return v == 0.0f; }));
+  const DenseVolume<std::uint16_t> small(Grid{glm::dvec3(0.0), 1.0, glm::i64vec3(7, 5, 3)});
+  EXPECT_EQ(small.values(), VolumeVector<std::uint16_t>(105, 0));
+
+  const Grid other{glm::dvec3(0.0), 1.0, glm::i64vec3(512, 256, 184)};  // a size nothing kept
+  DenseVolume<std::uint32_t> fresh(other);
+  const std::size_t bytes = fresh.values().size() * sizeof(std::uint32_t);
+  std::vector<unsigned char> pages((bytes + 4095) / 4096);
+  ASSERT_EQ(::mincore(fresh.values().data(), bytes, pages.data()), 0);
+  const auto resident = std::count_if(pages.begin(), pages.end(), [](unsigned char c) { return c & 1; });
+  EXPECT_LT(resident, static_cast<std::ptrdiff_t>(pages.size() / 10)) << "the zero volume was written";
+  EXPECT_TRUE(std::all_of(fresh.values().begin(), fresh.values().end(), [](std::uint32_t v) { return v == 0; }));
+
+  const DenseVolume<float> negative_zero(Grid{glm::dvec3(0.0), 1.0, glm::i64vec3(64, 64, 64)}, -0.0f);
+  EXPECT_TRUE(std::all_of(negative_zero.values().begin(), negative_zero.values().end(),
+                          [](float v) { return std::signbit(v); }));
+  const DenseVolume<float> copy = reused;  // a copy holds the same values
+  EXPECT_TRUE(copy.values() == reused.values());
 }
 
 // A host that shares its memory turns keeping off: freed blocks then go back

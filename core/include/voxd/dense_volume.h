@@ -3,7 +3,9 @@
 // indices, colours), x fastest, then y, then z, no row padding. Large
 // volumes live on huge pages (voxd/volume_memory.h).
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 #include "voxd/grid.h"
@@ -20,8 +22,14 @@ template <typename T>
 class DenseVolume {
  public:
   DenseVolume() = default;
-  explicit DenseVolume(const Grid& grid, T fill = T{})
-      : grid_(grid), values_(grid.voxel_count(), fill) {}
+  // Filled with `fill`; a fill of zero bytes (the default) asks for zeroed
+  // memory instead of writing it (VolumeAllocator): fresh pages are zero.
+  explicit DenseVolume(const Grid& grid, T fill = T{}) : grid_(grid), values_(VolumeAllocator<T>(all_zero(fill))) {
+    if (values_.get_allocator().zeroed)
+      values_.resize(grid.voxel_count());
+    else
+      values_.assign(grid.voxel_count(), fill);
+  }
 
   const Grid& grid() const { return grid_; }
   // The same values placed on another grid of the same dims (a reused slab
@@ -42,6 +50,18 @@ class DenseVolume {
   const VolumeVector<T>& values() const { return values_; }
 
  private:
+  static bool all_zero(const T& value) {
+    if constexpr (!std::is_trivially_copyable_v<T>) {
+      return false;
+    } else {
+      unsigned char bytes[sizeof(T)];
+      std::memcpy(bytes, &value, sizeof(T));
+      for (unsigned char b : bytes)
+        if (b != 0) return false;
+      return true;
+    }
+  }
+
   Grid grid_;
   VolumeVector<T> values_;
 };

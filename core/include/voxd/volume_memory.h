@@ -7,11 +7,13 @@
 // volume costs system calls and cross-core TLB flushes. The last few large
 // blocks given back (64 MiB to 1 GiB in all) are kept for the next volume of
 // exactly their size, which then skips the kernel's page faults and
-// clearing; mapping any other new block returns them first. A host that
+// clearing (one asked zeroed gets the block's pages dropped, so it starts
+// as fresh zero pages do); mapping any other new block returns them first. A host that
 // would rather have every block returned at once (a plugin inside a CAD
 // program sharing its memory) turns that off: set_keep_freed_volumes(false).
 #include <cstddef>
 #include <new>
+#include <utility>
 #include <vector>
 
 namespace voxd {
@@ -27,23 +29,45 @@ void free_volume_memory(void* p, std::size_t bytes) noexcept;
 void set_keep_freed_volumes(bool keep) noexcept;
 bool keeps_freed_volumes() noexcept;
 
-// A stateless allocator over allocate_volume_memory, for the values of
-// dense volumes (voxd/dense_volume.h).
+// An allocator over allocate_volume_memory, for the values of dense
+// volumes (voxd/dense_volume.h). One made `zeroed` asks for zeroed memory
+// and then leaves the elements a vector value-initializes as they are (they
+// are zero already): a fresh volume of zeros costs no pass over it, and its
+// fresh pages are faulted in and cleared by whichever threads first write
+// them, not by one thread filling the whole volume before the work starts.
+// Such a vector must not grow within its capacity after shrinking (the
+// elements it would value-initialize there hold old values); dense volumes
+// never do.
 template <class T>
 struct VolumeAllocator {
   using value_type = T;
+  bool zeroed = false;
   VolumeAllocator() = default;
+  explicit VolumeAllocator(bool zeroed_memory) noexcept : zeroed(zeroed_memory) {}
   template <class U>
-  VolumeAllocator(const VolumeAllocator<U>&) noexcept {}
+  VolumeAllocator(const VolumeAllocator<U>& other) noexcept : zeroed(other.zeroed) {}
   T* allocate(std::size_t n) {
     if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_alloc();
-    return static_cast<T*>(allocate_volume_memory(n * sizeof(T), false));
+    return static_cast<T*>(allocate_volume_memory(n * sizeof(T), zeroed));
   }
   void deallocate(T* p, std::size_t n) noexcept { free_volume_memory(p, n * sizeof(T)); }
+  template <class U>
+  void construct(U* p) {
+    if (zeroed)
+      ::new (static_cast<void*>(p)) U;  // default-initialized: the zero memory stays as it is
+    else
+      ::new (static_cast<void*>(p)) U();
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+  // A copy writes every element anyway.
+  VolumeAllocator select_on_container_copy_construction() const noexcept { return {}; }
 };
 template <class T, class U>
 bool operator==(const VolumeAllocator<T>&, const VolumeAllocator<U>&) noexcept {
-  return true;
+  return true;  // any of them frees what any other allocated
 }
 
 template <class T>
