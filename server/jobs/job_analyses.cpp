@@ -128,8 +128,10 @@ JobThicknessMap job_thickness_map(const BitVolume& volume, const ArtifactAccess&
   auto mutex = key_lock(artifacts, key);
   std::unique_lock<KeyLock> lock(*mutex);
   {
-    // Read into the map itself where the store can.
-    auto map = std::make_shared<DenseVolume<float>>(volume.grid(), 0.0f);
+    // Read into the map itself where the store can: every byte is read, so
+    // its memory is neither cleared nor faulted in before (a miss leaves
+    // fresh pages untouched for the computation's own volumes).
+    auto map = std::make_shared<DenseVolume<float>>(volume.grid(), DenseVolume<float>::Uninitialized{});
     const std::span<char> bytes(reinterpret_cast<char*>(map->values().data()), map->values().size() * sizeof(float));
     if (artifacts.load_into) {
       if (artifacts.load_into(key, bytes)) return {map, {}};

@@ -110,6 +110,24 @@ TEST(VolumeMemory, ZeroFilledDenseVolumesAreZeroWithoutBeingWritten) {
   EXPECT_TRUE(copy.values() == reused.values());
 }
 
+// A volume made Uninitialized (to be read into) writes and clears nothing:
+// on a reused block it holds the last volume's values, on fresh pages it
+// leaves them untouched.
+TEST(VolumeMemory, AnUninitializedDenseVolumeTouchesNothing) {
+  const Grid g{glm::dvec3(0.0), 1.0, glm::i64vec3(512, 256, 168)};  // 84 MiB of floats
+  { DenseVolume<float> first(g, 6.5f); }
+  const DenseVolume<float> reused(g, DenseVolume<float>::Uninitialized{});
+  EXPECT_EQ(reused.values().size(), g.voxel_count());
+  EXPECT_EQ(reused.at(511, 255, 167), 6.5f);  // the kept block, as it was
+  const Grid other{glm::dvec3(0.0), 1.0, glm::i64vec3(512, 256, 172)};
+  const DenseVolume<float> fresh(other, DenseVolume<float>::Uninitialized{});
+  const std::size_t bytes = fresh.values().size() * sizeof(float);
+  std::vector<unsigned char> pages((bytes + 4095) / 4096);
+  ASSERT_EQ(::mincore(const_cast<float*>(fresh.values().data()), bytes, pages.data()), 0);
+  EXPECT_LT(std::count_if(pages.begin(), pages.end(), [](unsigned char c) { return c & 1; }),
+            static_cast<std::ptrdiff_t>(pages.size() / 10));
+}
+
 // A host that shares its memory turns keeping off: freed blocks then go back
 // to the OS at once, and so do those kept when it turns it off. mincore()
 // fails with ENOMEM on pages no longer mapped.

@@ -23,12 +23,19 @@ class DenseVolume {
  public:
   DenseVolume() = default;
   // Filled with `fill`; a fill of zero bytes (the default) asks for zeroed
-  // memory instead of writing it (VolumeAllocator): fresh pages are zero.
-  explicit DenseVolume(const Grid& grid, T fill = T{}) : grid_(grid), values_(VolumeAllocator<T>(all_zero(fill))) {
-    if (values_.get_allocator().zeroed)
+  // memory instead of writing it (VolumeInit::zeroed): fresh pages are zero.
+  explicit DenseVolume(const Grid& grid, T fill = T{})
+      : grid_(grid), values_(VolumeAllocator<T>(all_zero(fill) ? VolumeInit::zeroed : VolumeInit::values)) {
+    if (values_.get_allocator().init == VolumeInit::zeroed)
       values_.resize(grid.voxel_count());
     else
       values_.assign(grid.voxel_count(), fill);
+  }
+  // Values left as the memory held them, for a volume about to be
+  // overwritten whole (read from a file): nothing is written or cleared.
+  struct Uninitialized {};
+  DenseVolume(const Grid& grid, Uninitialized) : grid_(grid), values_(VolumeAllocator<T>(VolumeInit::none)) {
+    values_.resize(grid.voxel_count());
   }
 
   const Grid& grid() const { return grid_; }

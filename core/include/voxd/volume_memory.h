@@ -29,34 +29,41 @@ void free_volume_memory(void* p, std::size_t bytes) noexcept;
 void set_keep_freed_volumes(bool keep) noexcept;
 bool keeps_freed_volumes() noexcept;
 
+// How a VolumeAllocator's vector initializes the elements it creates
+// without a value (resize, a count alone).
+enum class VolumeInit {
+  values,  // value-initialized (zeros), written as std::allocator does
+  zeroed,  // asks allocate_volume_memory for zeroed memory and writes nothing
+  none,    // writes nothing: the elements hold what the memory held
+};
+
 // An allocator over allocate_volume_memory, for the values of dense
-// volumes (voxd/dense_volume.h). One made `zeroed` asks for zeroed memory
-// and then leaves the elements a vector value-initializes as they are (they
-// are zero already): a fresh volume of zeros costs no pass over it, and its
-// fresh pages are faulted in and cleared by whichever threads first write
-// them, not by one thread filling the whole volume before the work starts.
-// Such a vector must not grow within its capacity after shrinking (the
-// elements it would value-initialize there hold old values); dense volumes
-// never do.
+// volumes (voxd/dense_volume.h). VolumeInit::zeroed makes a fresh volume of
+// zeros cost no pass over it: its fresh pages are faulted in and cleared by
+// whichever threads first write them, not by one thread filling the whole
+// volume before the work starts. VolumeInit::none is for a volume about to
+// be overwritten whole (read from a file). Either way the vector must not
+// grow within its capacity after shrinking (the elements it would
+// value-initialize there hold old values); dense volumes never do.
 template <class T>
 struct VolumeAllocator {
   using value_type = T;
-  bool zeroed = false;
+  VolumeInit init = VolumeInit::values;
   VolumeAllocator() = default;
-  explicit VolumeAllocator(bool zeroed_memory) noexcept : zeroed(zeroed_memory) {}
+  explicit VolumeAllocator(VolumeInit how) noexcept : init(how) {}
   template <class U>
-  VolumeAllocator(const VolumeAllocator<U>& other) noexcept : zeroed(other.zeroed) {}
+  VolumeAllocator(const VolumeAllocator<U>& other) noexcept : init(other.init) {}
   T* allocate(std::size_t n) {
     if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_alloc();
-    return static_cast<T*>(allocate_volume_memory(n * sizeof(T), zeroed));
+    return static_cast<T*>(allocate_volume_memory(n * sizeof(T), init == VolumeInit::zeroed));
   }
   void deallocate(T* p, std::size_t n) noexcept { free_volume_memory(p, n * sizeof(T)); }
   template <class U>
   void construct(U* p) {
-    if (zeroed)
-      ::new (static_cast<void*>(p)) U;  // default-initialized: the zero memory stays as it is
-    else
+    if (init == VolumeInit::values)
       ::new (static_cast<void*>(p)) U();
+    else
+      ::new (static_cast<void*>(p)) U;  // default-initialized: the memory stays as it is
   }
   template <class U, class... Args>
   void construct(U* p, Args&&... args) {
