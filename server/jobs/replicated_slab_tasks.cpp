@@ -128,7 +128,10 @@ std::optional<PreparedVoxelJob> ReplicatedJobBackend::prepare_again(const std::s
     fail(record, input_expired(), qid);
     return std::nullopt;
   }
-  const JobLimits limits = engine_.job_limits(true);
+  JobLimits limits = engine_.job_limits(true);
+  // A slab task only voxelizes its layers: the mesh is welded (for the
+  // report) only by the task that finishes the job.
+  limits.welds_mesh = with_analyses;
   PreparedVoxelJob prepared = prepare_voxel_job(input->bytes, input->name_hint, *record.job, limits);
   input.reset();
   if (prepared.slab_layers < 1)  // this replica would make it in memory: its tasks stream all the same
