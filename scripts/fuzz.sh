@@ -93,7 +93,13 @@ run_one() {
     echo "fuzz: $f ok: $(grep -m1 -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$') runs in ${seconds} s, corpus $(ls "$corpus/$f" | wc -l)"
   else
     echo "fuzz: $f FAILED (log $log):"
-    grep -E "ERROR|SUMMARY|Test unit written|==[0-9]+==" "$log" | head -20
+    # What the harness said before it stopped (its own check's message, or
+    # the sanitizer's report), and the input itself where libFuzzer prints
+    # it: a CI log is all there is of a clean clone's run.
+    local first
+    first=$(grep -n -m1 -E "deadly signal|ERROR: |runtime error|==[0-9]+==" "$log" | cut -d: -f1 || true)
+    if [[ -n "$first" ]]; then sed -n "$((first > 12 ? first - 12 : 1)),$((first + 40))p" "$log"; else tail -n 40 "$log"; fi
+    grep -E "^Base64: |Test unit written" "$log" | head -2
     return 1
   fi
 }

@@ -242,6 +242,11 @@ const char* head_syntax_error(std::string_view data) {
       // be routed as "/v1/jobs/..." where a proxy sees no such path.
       const std::string_view target = line.substr(sp1 + 1, sp2 - sp1 - 1);
       if (target.front() != '/' && target != "*") return "the request target is not a path starting with /";
+      // A fragment is never sent (RFC 9112, 3.2: a path and a query only),
+      // and httplib drops one before routing, where a proxy may not: the
+      // same line would name two resources.
+      if (target.find('#') != std::string_view::npos)
+        return "the request target holds a fragment ('#'): send the path and query only";
       continue;
     }
     if (line.empty()) {  // the end of the head

@@ -12,7 +12,7 @@ bool is_event_stream_request(std::string_view request_line) {
   // Split as httplib splits it (on spaces, each word trimmed of spaces and
   // tabs, empty ones dropped), and decode the path as httplib does before
   // routing: the route is matched on what httplib makes of the line, so
-  // "/v1/jobs/%61bc.../events" is a stream too.
+  // "/v1/jobs/%61bc.../events" and ".../events#x" are streams too.
   std::vector<std::string_view> words;
   for (std::size_t start = 0; start < request_line.size() && words.size() < 3;) {
     const std::size_t end = std::min(request_line.find(' ', start), request_line.size());
@@ -24,7 +24,8 @@ bool is_event_stream_request(std::string_view request_line) {
   }
   // HEAD runs GET's handlers in httplib, without a body: never long-lived.
   if (words.size() < 2 || words[0] != "GET") return false;
-  const std::string_view target = words[1].substr(0, words[1].find('?'));
+  // httplib cuts the target at its query or fragment before decoding it.
+  const std::string_view target = words[1].substr(0, words[1].find_first_of("?#"));
   const std::string path = httplib::detail::decode_url(std::string(target), false);
   constexpr std::string_view kJobs = "/v1/jobs/", kEvents = "/events";
   const std::string_view p = path;

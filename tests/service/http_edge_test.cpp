@@ -10,6 +10,7 @@
 #include <regex>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "support/http_fixture.h"
@@ -165,12 +166,17 @@ TEST_F(HttpEdge, EventStreamsInAnySpellingLeaveTheHttpThreadsFree) {
   EXPECT_EQ(first.rfind("HTTP/1.1 200", 0), 0u) << first;
   // A line that is not strict HTTP/1.1 (httplib would read runs of spaces as
   // one) is refused before any thread takes it.
-  // Nor a target that is not a path (httplib routes "?/v1/..." as "/v1/...").
-  for (const std::string& line : {"GET  /v1/jobs/" + id + "/events  HTTP/1.1", "GET ?/v1/jobs/" + id + "/events HTTP/1.1"}) {
+  // Nor a target that is not a path (httplib routes "?/v1/..." as "/v1/..."),
+  // nor one with a fragment (httplib drops "#..." before routing).
+  for (const auto& [line, why] : std::vector<std::pair<std::string, std::string>>{
+           {"GET  /v1/jobs/" + id + "/events  HTTP/1.1", "the request line is not METHOD SP TARGET SP HTTP/1.1"},
+           {"GET ?/v1/jobs/" + id + "/events HTTP/1.1", "the request target is not a path starting with /"},
+           {"GET /v1/jobs/" + id + "/events#x HTTP/1.1", "the request target holds a fragment ('#')"}}) {
     RawSocket odd(server_->port());
     odd.send(line + "\r\nHost: t\r\n\r\n");
     const std::string refused = odd.read_until_closed(5s);
     EXPECT_EQ(refused.rfind("HTTP/1.1 400", 0), 0u) << line << ": " << refused;
+    EXPECT_NE(refused.find(why), std::string::npos) << line << ": " << refused;
   }
   // Pipelined behind a plain request: both answers come, the stream stays.
   streams.push_back(open_stream(server_->port(),
