@@ -580,6 +580,53 @@ TEST(ThicknessRegions, RunsFindTheFloodFillsRegionsForAnyThreadCount) {
   }
 }
 
+// The report's four queries from one pass: each query's regions are the
+// flood fill's, and bit for bit what a query alone finds.
+TEST(ThicknessRegions, OnePassOfManyQueriesFindsEachQuerysFloodRegions) {
+  DenseVolume<float> t = random_walls({41, 27, 23}, 0.3, 11);
+  // Values no query selects, amid the walls: NaN and a negative.
+  t.at(5, 5, 5) = std::numeric_limits<float>::quiet_NaN();
+  t.at(6, 5, 5) = -2.0f;
+  const std::vector<ThicknessRegionQuery> queries{{ThicknessRegionKind::thin, 3.0f},
+                                                  {ThicknessRegionKind::thin, 4.5f},
+                                                  {ThicknessRegionKind::thick, 5.5f},
+                                                  {ThicknessRegionKind::thick, 2.0f},
+                                                  {ThicknessRegionKind::thin, 0.1f}};
+  const std::uint64_t min_voxels = 2;
+  for (const int threads : {1, 3}) {
+    const auto got = find_thickness_regions(t, queries, min_voxels, threads);
+    ASSERT_EQ(got.size(), queries.size());
+    for (std::size_t q = 0; q < queries.size(); ++q) {
+      const ThicknessRegionKind kind = queries[q].kind;
+      std::vector<ReferenceRegion> want = flood_regions(t, kind, queries[q].threshold_voxels);
+      std::erase_if(want, [&](const ReferenceRegion& r) { return r.region.voxel_count < min_voxels; });
+      std::stable_sort(want.begin(), want.end(), [&](const ReferenceRegion& a, const ReferenceRegion& b) {
+        if (a.region.extreme_thickness != b.region.extreme_thickness)
+          return kind == ThicknessRegionKind::thin ? a.region.extreme_thickness < b.region.extreme_thickness
+                                                   : a.region.extreme_thickness > b.region.extreme_thickness;
+        return a.region.voxel_count > b.region.voxel_count;
+      });
+      if (q < 4) {
+        ASSERT_GT(want.size(), 3u) << q;
+      }
+      const auto alone = find_thickness_regions(t, kind, queries[q].threshold_voxels, min_voxels, nullptr, nullptr, threads);
+      ASSERT_EQ(got[q].size(), want.size()) << "query " << q << ", threads " << threads;
+      ASSERT_EQ(alone.size(), want.size()) << q;
+      for (std::size_t r = 0; r < want.size(); ++r) {
+        const ThicknessRegion &g = got[q][r], &w = want[r].region;
+        ASSERT_EQ(g.voxel_count, w.voxel_count) << q << " " << r;
+        EXPECT_EQ(g.bbox_min, w.bbox_min) << q << " " << r;
+        EXPECT_EQ(g.bbox_max, w.bbox_max) << q << " " << r;
+        EXPECT_EQ(g.centroid, w.centroid) << q << " " << r;
+        EXPECT_EQ(g.extreme_thickness, w.extreme_thickness) << q << " " << r;
+        EXPECT_FLOAT_EQ(g.mean_thickness, w.mean_thickness) << q << " " << r;
+        EXPECT_EQ(g.mean_thickness, alone[r].mean_thickness) << q << " " << r;
+      }
+    }
+  }
+  EXPECT_TRUE(find_thickness_regions(t, std::vector<ThicknessRegionQuery>{}, 1).empty());
+}
+
 TEST(ThicknessRegions, HugeAndInfiniteValuesCountAtTheCap) {
   // 2^30 voxels and more (and infinity) add 2^30 to a region's mean; the
   // extreme is the value itself.

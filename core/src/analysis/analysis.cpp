@@ -40,31 +40,33 @@ AnalysisReport analyze_volume(const BitVolume& volume, const AnalysisOptions& op
     t.min_wall_voxels = options.min_wall_voxels;
     t.max_wall_voxels = options.max_wall_voxels;
     // Beyond the thresholds by more than the reading's noise (see
-    // kWallReportTolerance).
-    if (options.min_wall_voxels > 0)
-      t.thin_regions = find_thickness_regions(
-          map, ThicknessRegionKind::thin, static_cast<float>(options.min_wall_voxels - kWallReportTolerance),
-          options.min_region_voxels, nullptr, nullptr, options.threads);
-    if (options.max_wall_voxels > 0)
-      t.thick_regions = find_thickness_regions(
-          map, ThicknessRegionKind::thick, static_cast<float>(options.max_wall_voxels + kWallReportTolerance),
-          options.min_region_voxels, nullptr, nullptr, options.threads);
-    // Within the bound on the good side: found with the threshold moved a
-    // bound further, less those holding a region beyond it (listed above).
+    // kWallReportTolerance); and within the error bound on the good side:
+    // found with the threshold moved a bound further, less those holding a
+    // region beyond it (listed above). All from one pass over the map.
     const ThicknessErrorBound bound = wall_thickness_error_bound();
+    const double thin_at = options.min_wall_voxels - kWallReportTolerance;
+    const double thick_at = options.max_wall_voxels + kWallReportTolerance;
+    std::vector<ThicknessRegionQuery> queries;
     if (options.min_wall_voxels > 0) {
-      const double at = options.min_wall_voxels - kWallReportTolerance;
-      for (ThicknessRegion& r : find_thickness_regions(map, ThicknessRegionKind::thin,
-                                                       static_cast<float>(at + bound.below_voxels), options.min_region_voxels,
-                                                       nullptr, nullptr, options.threads))
-        if (r.extreme_thickness >= static_cast<float>(at)) t.near_min_wall.push_back(r);
+      queries.push_back({ThicknessRegionKind::thin, static_cast<float>(thin_at)});
+      queries.push_back({ThicknessRegionKind::thin, static_cast<float>(thin_at + bound.below_voxels)});
     }
     if (options.max_wall_voxels > 0) {
-      const double at = options.max_wall_voxels + kWallReportTolerance;
-      for (ThicknessRegion& r : find_thickness_regions(map, ThicknessRegionKind::thick,
-                                                       static_cast<float>(at - bound.above_voxels), options.min_region_voxels,
-                                                       nullptr, nullptr, options.threads))
-        if (r.extreme_thickness <= static_cast<float>(at)) t.near_max_wall.push_back(r);
+      queries.push_back({ThicknessRegionKind::thick, static_cast<float>(thick_at)});
+      queries.push_back({ThicknessRegionKind::thick, static_cast<float>(thick_at - bound.above_voxels)});
+    }
+    std::vector<std::vector<ThicknessRegion>> found =
+        find_thickness_regions(map, queries, options.min_region_voxels, options.threads);
+    std::size_t next = 0;
+    if (options.min_wall_voxels > 0) {
+      t.thin_regions = std::move(found[next++]);
+      for (ThicknessRegion& r : found[next++])
+        if (r.extreme_thickness >= static_cast<float>(thin_at)) t.near_min_wall.push_back(r);
+    }
+    if (options.max_wall_voxels > 0) {
+      t.thick_regions = std::move(found[next++]);
+      for (ThicknessRegion& r : found[next++])
+        if (r.extreme_thickness <= static_cast<float>(thick_at)) t.near_max_wall.push_back(r);
     }
     report.thickness = std::move(t);
   }

@@ -1,6 +1,8 @@
 // Connected thin / thick regions by runs, as parts and voids are found
 // (components.cpp): one parallel pass over the map finds each row's runs of
-// selected voxels with their sums; a union-find over the runs joins each
+// selected voxels with their sums, for every query at once (the report asks
+// four of a map of hundreds of megabytes); a union-find over a query's runs
+// joins each
 // run to the runs it touches (26-connectivity: in the row before in its
 // layer, and in the three rows round it in the layer before); each
 // region's sums are then gathered from its runs.
@@ -15,6 +17,7 @@
 #include "voxd/analysis/thickness_regions.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -51,6 +54,44 @@ Int128 fixed_point(float v) {
 
 double from_fixed_point(Int128 sum) { return std::ldexp(static_cast<double>(sum), -kFixedBits); }
 
+// A sum of fixed_point(v) over positive floats, exact as theirs, with one
+// integer add a value: the significands of a stretch of values with the
+// same exponent (a wall's voxels mostly read the same) are added first and
+// shifted once. That is exact where fixed_point only shifts left and does
+// not cap (exponents 86 to 156, 2^-41 to 2^30 voxels); other values are
+// added one at a time.
+class ExactSum {
+ public:
+  void add(float v) {
+    const auto bits = std::bit_cast<std::uint32_t>(v);
+    const std::uint32_t e = bits >> 23;
+    if (e < kLowest || e > kHighest) {
+      sum_ += fixed_point(v);
+      return;
+    }
+    if (e != exponent_) {
+      flush();
+      exponent_ = e;
+    }
+    significands_ += (bits & 0x7fffffu) | 0x800000u;  // < 2^24 each, < 2^31 a row: no overflow
+  }
+  Int128 total() {
+    flush();
+    return sum_;
+  }
+
+ private:
+  static constexpr std::uint32_t kLowest = 150 - kFixedBits;             // shift 0
+  static constexpr std::uint32_t kHighest = 30 - 24 + 150;               // the last exponent not capped
+  void flush() {
+    if (significands_) sum_ += static_cast<Int128>(significands_) << (exponent_ - 150 + kFixedBits);
+    significands_ = 0;
+  }
+  Int128 sum_ = 0;
+  std::uint32_t exponent_ = 0;
+  std::uint64_t significands_ = 0;
+};
+
 // A run of selected voxels [begin, end) of one row, and what it holds.
 struct Run {
   std::int32_t begin, end;
@@ -71,69 +112,161 @@ struct RegionSums {
   Int128 thickness = 0;
 };
 
-}  // namespace
+// One query's runs in scan order: row r's are [row_start[r], row_start[r + 1]).
+struct QueryRuns {
+  std::vector<Run> runs;
+  std::vector<RunSums> sums;
+  std::vector<std::uint64_t> row_start;
+};
 
-std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
-                                                    float threshold_voxels, std::uint64_t min_voxels,
-                                                    const std::vector<std::size_t>* probes,
-                                                    std::vector<std::uint32_t>* probe_regions, int threads) {
+// Each query's runs, from one parallel pass over the map, layer by layer;
+// row r = j + ny k. A voxel is read once whatever the number of queries: its
+// selection mask (bit q: query q selects it) is computed, and a stretch of
+// voxels with the same mask (a wall's interior) gathers its minimum,
+// maximum and fixed-point sum once for every query open over it.
+std::vector<QueryRuns> scan_runs(const DenseVolume<float>& thickness, const std::vector<ThicknessRegionQuery>& queries,
+                                 int threads) {
   const glm::i64vec3 d = thickness.grid().dims;
-  const bool thin = kind == ThicknessRegionKind::thin;
-  auto selected = [&](float v) { return v > 0.0f && (thin ? v < threshold_voxels : v > threshold_voxels); };
   if (d.x > std::numeric_limits<std::int32_t>::max())
     throw std::length_error("find_thickness_regions: rows longer than 2^31 voxels");
-
-  // Each row's runs, found layer by layer in parallel; row r = j + ny k.
+  constexpr std::size_t kMaxQueries = 32;  // bits of a mask
+  if (queries.size() > kMaxQueries) throw std::length_error("find_thickness_regions: more than 32 queries at once");
+  const std::size_t nq = queries.size();
   const std::int64_t rows = d.y * d.z;
-  std::vector<std::vector<Run>> layer_runs(static_cast<std::size_t>(d.z));
-  std::vector<std::vector<RunSums>> layer_sums(layer_runs.size());
-  std::vector<std::uint32_t> row_count(static_cast<std::size_t>(rows), 0);
+  // A query's selection, as the bits of a mask: thin ones below their
+  // threshold, thick ones above (in locals, not vectors the compiler must
+  // reload after every store).
+  struct Selection {
+    std::array<float, kMaxQueries> below{}, above{};
+    std::array<std::uint32_t, kMaxQueries> below_bit{}, above_bit{};
+    std::size_t n_below = 0, n_above = 0;
+    std::uint32_t mask_of(float v) const {
+      std::uint32_t m = 0;
+      for (std::size_t t = 0; t < n_below; ++t) m |= v < below[t] ? below_bit[t] : 0u;
+      for (std::size_t t = 0; t < n_above; ++t) m |= v > above[t] ? above_bit[t] : 0u;
+      return m;
+    }
+  };
+  Selection selection;
+  for (std::size_t q = 0; q < nq; ++q) {
+    if (queries[q].kind == ThicknessRegionKind::thin) {
+      selection.below_bit[selection.n_below] = std::uint32_t{1} << q;
+      selection.below[selection.n_below++] = queries[q].threshold_voxels;
+    } else {
+      selection.above_bit[selection.n_above] = std::uint32_t{1} << q;
+      selection.above[selection.n_above++] = queries[q].threshold_voxels;
+    }
+  }
+  // [query][layer]
+  std::vector<std::vector<std::vector<Run>>> layer_runs(nq, std::vector<std::vector<Run>>(static_cast<std::size_t>(d.z)));
+  std::vector<std::vector<std::vector<RunSums>>> layer_sums(nq, std::vector<std::vector<RunSums>>(static_cast<std::size_t>(d.z)));
+  std::vector<std::vector<std::uint32_t>> row_count(nq, std::vector<std::uint32_t>(static_cast<std::size_t>(rows), 0));
   parallel_for(0, d.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    // The run each query has open in the row (its bit set in `open`).
+    struct Open {
+      std::int32_t begin = 0;
+      float extreme = 0.0f;
+      Int128 sum = 0;
+      std::uint32_t count = 0;  // the row's runs so far
+    };
+    const Selection select = selection;
+    std::vector<Open> at(nq);
+    std::vector<bool> thin(nq);
+    for (std::size_t q = 0; q < nq; ++q) thin[q] = queries[q].kind == ThicknessRegionKind::thin;
     for (std::int64_t k = k0; k < k1; ++k) {
-      auto& runs = layer_runs[static_cast<std::size_t>(k)];
-      auto& sums = layer_sums[static_cast<std::size_t>(k)];
+      const auto layer = static_cast<std::size_t>(k);
       for (std::int64_t j = 0; j < d.y; ++j) {
         const float* row = thickness.slab(k) + j * d.x;
-        std::uint32_t n = 0;
+        // The open runs, and the stretch of voxels since the mask last changed.
+        std::uint32_t open = 0;
+        float low = 0.0f, high = 0.0f;
+        ExactSum sum;
+        // The stretch ends before voxel `end`, where the mask becomes `next`:
+        // its voxels join every open run, those not in `next` close, and
+        // those new in `next` open.
+        auto change = [&](std::int64_t end, std::uint32_t next) {
+          const Int128 stretch_sum = open ? sum.total() : 0;
+          for (std::uint32_t m = open; m;) {
+            const auto q = static_cast<std::size_t>(std::countr_zero(m));
+            m &= m - 1;
+            Open& o = at[q];
+            o.extreme = thin[q] ? std::min(o.extreme, low) : std::max(o.extreme, high);
+            o.sum += stretch_sum;
+            if (!(next >> q & 1u)) {
+              layer_runs[q][layer].push_back({o.begin, static_cast<std::int32_t>(end)});
+              layer_sums[q][layer].push_back({o.extreme, o.sum});
+              ++o.count;
+            }
+          }
+          for (std::uint32_t m = next & ~open; m;) {
+            const auto q = static_cast<std::size_t>(std::countr_zero(m));
+            m &= m - 1;
+            at[q].begin = static_cast<std::int32_t>(end);
+            at[q].extreme = thin[q] ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
+            at[q].sum = 0;
+          }
+          open = next;
+          low = std::numeric_limits<float>::infinity();
+          high = -std::numeric_limits<float>::infinity();
+          sum = ExactSum{};
+        };
         for (std::int64_t i = detail::skip_zero_blocks(row, 0, d.x); i < d.x;) {
-          if (!selected(row[i])) {
+          const float v = row[i];
+          if (!(v > 0.0f)) {  // selected by none (NaN neither)
+            if (open) change(i, 0);
             i = detail::skip_zero_blocks(row, i + 1, d.x);
             continue;
           }
-          const std::int64_t begin = i;
-          float extreme = row[i];
-          Int128 sum = 0;
-          for (; i < d.x && selected(row[i]); ++i) {
-            extreme = thin ? std::min(extreme, row[i]) : std::max(extreme, row[i]);
-            sum += fixed_point(row[i]);
+          const std::uint32_t m = select.mask_of(v);
+          if (m != open) change(i, m);
+          if (m) {
+            low = std::min(low, v);
+            high = std::max(high, v);
+            sum.add(v);
           }
-          runs.push_back({static_cast<std::int32_t>(begin), static_cast<std::int32_t>(i)});
-          sums.push_back({extreme, sum});
-          ++n;
+          ++i;
         }
-        row_count[static_cast<std::size_t>(j + d.y * k)] = n;
+        if (open) change(d.x, 0);
+        for (std::size_t q = 0; q < nq; ++q) {
+          row_count[q][static_cast<std::size_t>(j + d.y * k)] = at[q].count;
+          at[q].count = 0;
+        }
       }
     }
   });
-  // The runs numbered in scan order: row r's are [row_start[r], row_start[r + 1]).
-  std::vector<std::uint64_t> row_start(static_cast<std::size_t>(rows) + 1, 0);
-  for (std::int64_t r = 0; r < rows; ++r)
-    row_start[static_cast<std::size_t>(r) + 1] = row_start[static_cast<std::size_t>(r)] + row_count[static_cast<std::size_t>(r)];
-  const std::uint64_t total = row_start.back();
-  if (total > std::numeric_limits<std::uint32_t>::max())
-    throw std::length_error("find_thickness_regions: more than 2^32 runs");
-  std::vector<Run> runs;
-  std::vector<RunSums> sums;
-  runs.reserve(static_cast<std::size_t>(total));
-  sums.reserve(static_cast<std::size_t>(total));
-  for (std::size_t k = 0; k < layer_runs.size(); ++k) {
-    runs.insert(runs.end(), layer_runs[k].begin(), layer_runs[k].end());
-    sums.insert(sums.end(), layer_sums[k].begin(), layer_sums[k].end());
-    std::vector<Run>().swap(layer_runs[k]);
-    std::vector<RunSums>().swap(layer_sums[k]);
+  std::vector<QueryRuns> out(nq);
+  for (std::size_t q = 0; q < nq; ++q) {
+    QueryRuns& r = out[q];
+    r.row_start.assign(static_cast<std::size_t>(rows) + 1, 0);
+    for (std::int64_t row = 0; row < rows; ++row)
+      r.row_start[static_cast<std::size_t>(row) + 1] = r.row_start[static_cast<std::size_t>(row)] + row_count[q][static_cast<std::size_t>(row)];
+    const std::uint64_t total = r.row_start.back();
+    if (total > std::numeric_limits<std::uint32_t>::max())
+      throw std::length_error("find_thickness_regions: more than 2^32 runs");
+    r.runs.reserve(static_cast<std::size_t>(total));
+    r.sums.reserve(static_cast<std::size_t>(total));
+    for (std::size_t k = 0; k < static_cast<std::size_t>(d.z); ++k) {
+      r.runs.insert(r.runs.end(), layer_runs[q][k].begin(), layer_runs[q][k].end());
+      r.sums.insert(r.sums.end(), layer_sums[q][k].begin(), layer_sums[q][k].end());
+      std::vector<Run>().swap(layer_runs[q][k]);
+      std::vector<RunSums>().swap(layer_sums[q][k]);
+    }
+    std::vector<std::uint32_t>().swap(row_count[q]);
   }
-  row_count = {};
+  return out;
+}
 
+// One query's regions from its runs (and its probes' answers).
+std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::i64vec3& d, ThicknessRegionKind kind,
+                                        std::uint64_t min_voxels, std::size_t voxel_count,
+                                        const std::vector<std::size_t>* probes,
+                                        std::vector<std::uint32_t>* probe_regions) {
+  const bool thin = kind == ThicknessRegionKind::thin;
+  const std::int64_t rows = d.y * d.z;
+  const std::vector<Run>& runs = found_runs.runs;
+  const std::vector<RunSums>& sums = found_runs.sums;
+  const std::vector<std::uint64_t>& row_start = found_runs.row_start;
+  const std::uint64_t total = row_start.back();
   // Join each run with the runs it touches in rows already seen: runs of a
   // row are sorted, and touch when they overlap [begin - 1, end + 1).
   detail::UnionFind regions(static_cast<std::size_t>(total));
@@ -216,7 +349,7 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
     probe_regions->assign(probes->size(), 0);
     for (std::size_t p = 0; p < probes->size(); ++p) {
       const std::size_t idx = (*probes)[p];
-      if (idx >= thickness.values().size()) continue;
+      if (idx >= voxel_count) continue;
       const auto row = static_cast<std::int64_t>(idx / static_cast<std::size_t>(d.x));
       const auto i = static_cast<std::int32_t>(idx % static_cast<std::size_t>(d.x));
       const auto first = runs.begin() + static_cast<std::ptrdiff_t>(row_start[static_cast<std::size_t>(row)]);
@@ -224,6 +357,30 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
       const auto it = std::upper_bound(first, last, i, [](std::int32_t x, const Run& a) { return x < a.end; });
       if (it != last && it->begin <= i) (*probe_regions)[p] = rank[region_of[static_cast<std::size_t>(it - runs.begin())]];
     }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& thickness, ThicknessRegionKind kind,
+                                                    float threshold_voxels, std::uint64_t min_voxels,
+                                                    const std::vector<std::size_t>* probes,
+                                                    std::vector<std::uint32_t>* probe_regions, int threads) {
+  const std::vector<QueryRuns> runs = scan_runs(thickness, {{kind, threshold_voxels}}, threads);
+  return regions_of(runs[0], thickness.grid().dims, kind, min_voxels, thickness.values().size(), probes, probe_regions);
+}
+
+std::vector<std::vector<ThicknessRegion>> find_thickness_regions(const DenseVolume<float>& thickness,
+                                                                 const std::vector<ThicknessRegionQuery>& queries,
+                                                                 std::uint64_t min_voxels, int threads) {
+  std::vector<QueryRuns> runs = scan_runs(thickness, queries, threads);
+  std::vector<std::vector<ThicknessRegion>> out;
+  out.reserve(queries.size());
+  for (std::size_t q = 0; q < queries.size(); ++q) {
+    out.push_back(regions_of(runs[q], thickness.grid().dims, queries[q].kind, min_voxels, thickness.values().size(),
+                             nullptr, nullptr));
+    runs[q] = QueryRuns{};
   }
   return out;
 }

@@ -53,4 +53,17 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
                                                     std::vector<std::uint32_t>* probe_regions = nullptr,
                                                     int threads = 0);
 
+// One selection of the map: its kind and threshold, in voxels.
+struct ThicknessRegionQuery {
+  ThicknessRegionKind kind = ThicknessRegionKind::thin;
+  float threshold_voxels = 0.0f;
+};
+
+// Each query's regions, exactly as find_thickness_regions finds them one at
+// a time, from one pass over the map (the report asks four queries of a map
+// of hundreds of megabytes).
+std::vector<std::vector<ThicknessRegion>> find_thickness_regions(const DenseVolume<float>& thickness,
+                                                                 const std::vector<ThicknessRegionQuery>& queries,
+                                                                 std::uint64_t min_voxels, int threads = 0);
+
 }  // namespace voxd
