@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cerrno>
 #include <cstring>
 
 #include <sys/mman.h>
@@ -57,6 +58,31 @@ TEST(VolumeMemory, LargeBlocksAreReusedForTheSameSizeAndZeroedWhenAsked) {
   { DenseVolume<float> first(g, -7.0f); }
   const DenseVolume<float> second(g, 2.5f);
   EXPECT_TRUE(std::all_of(second.values().begin(), second.values().end(), [](float v) { return v == 2.5f; }));
+}
+
+// A report frees its 4-byte feature transform before it makes its 2-byte
+// peel depths: the smaller volume takes the kept block's first pages, as
+// they are (or cleared when asked), and the tail goes back to the OS.
+TEST(VolumeMemory, ASmallerVolumeTakesAKeptLargerBlocksPages) {
+  const std::size_t bytes = std::size_t{96} << 20, smaller = (std::size_t{70} << 20) + 123;
+  auto* a = static_cast<std::uint8_t*>(allocate_volume_memory(bytes, false));
+  std::memset(a, 0x5a, bytes);
+  free_volume_memory(a, bytes);
+  auto* b = static_cast<std::uint8_t*>(allocate_volume_memory(smaller, false));
+  EXPECT_EQ(b, a);
+  EXPECT_TRUE(std::all_of(b, b + smaller, [](std::uint8_t x) { return x == 0x5a; }));  // not cleared: not asked
+  // The tail past the smaller size's last page is unmapped.
+  const std::size_t page = 4096, tail = (smaller + page - 1) / page * page;
+  unsigned char resident = 0;
+  EXPECT_EQ(::mincore(a + tail, page, &resident), -1);
+  EXPECT_EQ(errno, ENOMEM);
+  std::memset(b, 0x11, smaller);
+  free_volume_memory(b, smaller);
+  // Asked zeroed, a smaller size still reads zeros.
+  auto* c = static_cast<std::uint8_t*>(allocate_volume_memory(smaller - 4096, true));
+  EXPECT_EQ(c, a);
+  EXPECT_TRUE(std::all_of(c, c + smaller - 4096, [](std::uint8_t x) { return x == 0; }));
+  free_volume_memory(c, smaller - 4096);
 }
 
 TEST(VolumeMemory, DenseVolumesFillCopyAndCompareAsVectors) {
@@ -119,6 +145,10 @@ TEST(VolumeMemory, AnUninitializedDenseVolumeTouchesNothing) {
   const DenseVolume<float> reused(g, DenseVolume<float>::Uninitialized{});
   EXPECT_EQ(reused.values().size(), g.voxel_count());
   EXPECT_EQ(reused.at(511, 255, 167), 6.5f);  // the kept block, as it was
+  // With no kept block to take (earlier tests' larger ones would serve it),
+  // a new mapping: nothing of it is faulted in.
+  set_keep_freed_volumes(false);
+  set_keep_freed_volumes(true);
   const Grid other{glm::dvec3(0.0), 1.0, glm::i64vec3(512, 256, 172)};
   const DenseVolume<float> fresh(other, DenseVolume<float>::Uninitialized{});
   const std::size_t bytes = fresh.values().size() * sizeof(float);

@@ -6,8 +6,8 @@
 // service's many quick jobs, come from the heap: an mmap and munmap per
 // volume costs system calls and cross-core TLB flushes. The last few large
 // blocks given back (64 MiB to 1 GiB in all) are kept for the next volume of
-// exactly their size, which then skips the kernel's page faults and
-// clearing (one asked zeroed gets the block's pages dropped, so it starts
+// their size or smaller (a larger block returns its tail), which then skips
+// the kernel's page faults and clearing (one asked zeroed gets the block's pages dropped, so it starts
 // as fresh zero pages do); mapping any other new block returns them first. A host that
 // would rather have every block returned at once (a plugin inside a CAD
 // program sharing its memory) turns that off: set_keep_freed_volumes(false).

@@ -118,7 +118,15 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
                 "this grid is " + std::to_string(nx) + " x " + std::to_string(ny) + " x " + std::to_string(nz) +
                     ": use a larger voxel size");
   }
-  if (out.grid().dims != grid.dims) out = DenseVolume<std::uint32_t>(grid, 0u);
+  // Sites set in the bits (marked voxels, not outside): after pass x only
+  // the rows holding one have sites, and after pass y only the layers
+  // holding one, so passes x and y read only those rows and pass z only
+  // those layers. Else pass x writes every voxel, and a new volume starts
+  // uninitialized (a kept block's pages are not faulted in again).
+  const bool listed_sites = sites_are_set && !outside_is_site;
+  if (out.grid().dims != grid.dims)
+    out = listed_sites ? DenseVolume<std::uint32_t>(grid, 0u)
+                       : DenseVolume<std::uint32_t>(grid, DenseVolume<std::uint32_t>::Uninitialized{});
   if (grid.voxel_count() == 0) return;
   const int nthreads = threads > 0 ? threads : default_thread_count();
   const ProgressSpan progress{control, progress_from, progress_to};
@@ -126,11 +134,6 @@ void nearest_sites(const BitVolume& solid, bool sites_are_set, bool outside_is_s
   const std::size_t slab = out.slab_size();
   auto grain_for = [&](std::int64_t items) { return std::max<std::int64_t>(1, items / (nthreads * 32)); };
 
-  // Sites set in the bits (marked voxels, not outside): after pass x only
-  // the rows holding one have sites, and after pass y only the layers
-  // holding one, so passes x and y read only those rows and pass z only
-  // those layers.
-  const bool listed_sites = sites_are_set && !outside_is_site;
   auto has_bits = [&](const std::uint64_t* row) {
     for (std::int64_t w = 0; w < solid.row_words(); ++w)
       if (row[w] != 0) return true;

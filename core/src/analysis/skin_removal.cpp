@@ -60,7 +60,11 @@ DenseVolume<Depth> peel_depth(const BitVolume& volume, int threads, PeelMetric m
   const Grid& g = volume.grid();
   if (std::max({g.dims.x, g.dims.y, g.dims.z}) >= static_cast<std::int64_t>(kMaxDepth))
     throw Error(ErrorCode::limit_exceeded, "peel depth supports grids up to 65534 voxels along an axis");
-  DenseVolume<Depth> d(g, 0);
+  // The sweeps below write every voxel: their volume starts uninitialized
+  // (on a kept block's pages, no page faults); the euclidean depths write
+  // only the filled ones.
+  DenseVolume<Depth> d = metric == PeelMetric::euclidean ? DenseVolume<Depth>(g, 0)
+                                                         : DenseVolume<Depth>(g, DenseVolume<Depth>::Uninitialized{});
   if (metric == PeelMetric::euclidean) {
     // ceil(sqrt(d2)) exactly: the smallest r with r * r >= d2.
     const DenseVolume<std::uint32_t> d2 = squared_distance_transform(volume, threads);
