@@ -6,10 +6,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
@@ -578,6 +580,47 @@ TEST(PreviewPng, ThicknessColoursUseTheWholeMapRange) {
 
   const DenseVolume<float> wrong(unit_grid(40, 20, 11));
   EXPECT_EQ(code_of([&] { preview_png(vol, View{2, true}, &wrong); }), ErrorCode::invalid_argument);
+}
+
+TEST(PreviewPng, ThicknessRangeIsTheWholeMapsOnAnyThreadCount) {
+  // A map of 2.6M voxels is read in several chunks on several threads. Its
+  // extremes sit in different chunks, at positions not on a block of eight;
+  // NaN, negative and -0.0 values are not thicknesses. The legend's ends must
+  // be the eighths of the extremes found here voxel by voxel, and the bytes
+  // the same on 1 and 3 threads.
+  const Grid g = unit_grid(160, 128, 128, 0.5);
+  BitVolume vol(g);
+  fill_box(vol, {4, 4, 4}, {155, 123, 123});
+  DenseVolume<float> thickness(g, 0.0f);
+  std::mt19937 rng(39);
+  std::uniform_real_distribution<float> wall(2.0f, 30.0f);
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; ++i)
+        if (vol.get(i, j, k)) thickness.at(i, j, k) = wall(rng);
+  thickness.at(7, 9, 5) = 37.0f;       // the largest, in the first chunk
+  thickness.at(151, 117, 121) = 1.5f;  // the smallest, in the last
+  thickness.at(33, 40, 50) = std::numeric_limits<float>::quiet_NaN();
+  thickness.at(34, 40, 50) = -50.0f;
+  thickness.at(35, 40, 50) = -0.0f;
+  thickness.at(1, 1, 1) = 0.25f;  // outside the part, still the map's smallest
+  float lo = std::numeric_limits<float>::infinity(), hi = 0.0f;
+  for (const float t : thickness.values())
+    if (t > 0.0f) lo = std::min(lo, t), hi = std::max(hi, t);
+  ASSERT_EQ(lo, 0.25f);
+  ASSERT_EQ(hi, 37.0f);
+
+  const std::vector<std::uint8_t> one = preview_png(vol, View{2, true}, &thickness, {}, 1);
+  EXPECT_EQ(preview_png(vol, View{2, true}, &thickness, {}, 3), one);
+  const json png = decode_png(one);
+  EXPECT_EQ(png["text"]["voxd:min"], "0.125 model units");  // 0.25 voxels = 2 eighths of 0.5
+  EXPECT_EQ(png["text"]["voxd:max"], "18.5 model units");   // 37 voxels = 296 eighths
+
+  const std::vector<std::uint8_t> section = section_png(vol, 2, 60, &thickness, {}, 1);
+  EXPECT_EQ(section_png(vol, 2, 60, &thickness, {}, 3), section);
+  const json decoded = decode_png(section);
+  EXPECT_EQ(decoded["text"]["voxd:min"], "0.125 model units");
+  EXPECT_EQ(decoded["text"]["voxd:max"], "18.5 model units");
 }
 
 }  // namespace

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "voxd/byte_sink.h"
 #include "voxd/encode/colour_map.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/error.h"
 #include "voxd/analysis/section.h"
+#include "voxd/parallel.h"
+#include "analysis/zero_skip.h"
 
 namespace voxd {
 const std::vector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m) {
@@ -48,16 +51,52 @@ void shade_into(std::uint8_t* px, Rgb c, float shade) {
   px[2] = static_cast<std::uint8_t>(std::lround(c.b * shade));
 }
 
+// The smallest and largest value > 0 of a map (a thickness map is 0 outside
+// the part, most of a padded grid), on up to `threads` threads. Minimum and
+// maximum do not depend on the order they are taken in, so the range is the
+// same for any thread count. NaN is not > 0 and is left out.
+struct PositiveRange {
+  float min = std::numeric_limits<float>::infinity();
+  float max = 0.0f;  // stays 0 when nothing is > 0
+};
+
+PositiveRange positive_range(const DenseVolume<float>& map, int threads) {
+  const float* v = map.values().data();
+  const auto n = static_cast<std::int64_t>(map.values().size());
+  constexpr std::int64_t kGrain = std::int64_t{1} << 20;  // 4 MiB of floats a chunk
+  std::vector<PositiveRange> chunks(static_cast<std::size_t>((n + kGrain - 1) / kGrain));
+  parallel_for(0, n, kGrain, threads, [&](std::int64_t begin, std::int64_t end) {
+    PositiveRange r;
+    for (std::int64_t i = detail::skip_zero_blocks(v, begin, end); i < end; i = detail::skip_zero_blocks(v, i, end)) {
+      const std::int64_t stop = std::min(end, i + 8);
+      for (; i < stop; ++i) {
+        const float t = v[i];
+        if (!(t > 0.0f)) continue;
+        r.min = std::min(r.min, t);
+        r.max = std::max(r.max, t);
+      }
+    }
+    chunks[static_cast<std::size_t>(begin / kGrain)] = r;
+  });
+  PositiveRange all;
+  for (const PositiveRange& r : chunks) {
+    all.min = std::min(all.min, r.min);
+    all.max = std::max(all.max, r.max);
+  }
+  return all;
+}
+
 // The colour map options for a local thickness map: labels in model units,
-// ramp over the whole map's non-zero range.
-ColourMapOptions thickness_colours(const DenseVolume<float>& thickness, double voxel_size) {
+// ramp over the whole map's non-zero range. eighths() never decreases as t
+// grows, so the range of the voxels' eighths is the eighths of the map's
+// positive range.
+ColourMapOptions thickness_colours(const DenseVolume<float>& thickness, double voxel_size, int threads) {
   ColourMapOptions options;
   options.scale = PngScale{voxel_size / 8.0, "model units"};
-  for (const float t : thickness.values()) {
-    const std::uint32_t q = eighths(t);
-    if (q == 0) continue;
-    options.range_min = std::min(options.range_min.value_or(q), q);
-    options.range_max = std::max(options.range_max.value_or(q), q);
+  const PositiveRange range = positive_range(thickness, threads);
+  if (range.max > 0.0f) {
+    options.range_min = eighths(range.min);
+    options.range_max = eighths(range.max);
   }
   return options;
 }
@@ -91,7 +130,7 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
 }
 
 std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index,
-                                      const DenseVolume<float>* thickness, std::vector<PngText> text) {
+                                      const DenseVolume<float>* thickness, std::vector<PngText> text, int threads) {
   const Grid& g = volume.grid();
   if (thickness && thickness->grid().dims != g.dims) {
     throw Error(ErrorCode::invalid_argument, "section: the thickness map's grid does not match the volume's");
@@ -103,7 +142,7 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
   VectorSink out;
   // Each filled pixel in the ramp colour of its voxel's thickness, over the
   // whole map's range so every section of a part shares one legend.
-  ColourMapOptions options = thickness_colours(*thickness, g.voxel_size);
+  ColourMapOptions options = thickness_colours(*thickness, g.voxel_size, threads);
   const int c_axis = axis == 0 ? 1 : 0, r_axis = axis == 2 ? 1 : 2;
   std::vector<std::uint32_t> values(image.pixels.size(), 0);
   for (int r = 0; r < image.height; ++r)
@@ -135,7 +174,7 @@ void check_preview_maps(const Grid& g, const DenseVolume<float>* thickness, cons
 // visible voxel's own colour.
 std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const Grid& g, View view,
                                              const DenseVolume<float>* thickness, const DenseVolume<Rgba8>* colours,
-                                             std::vector<PngText> text, int max_side) {
+                                             std::vector<PngText> text, int max_side, int threads) {
   check_preview_maps(g, thickness, colours);
   const int factor = shrink_factor(rendered.width, rendered.height, max_side);
   const PreviewImage shrunk = factor > 1 ? shrink_preview(rendered, g, view, factor) : PreviewImage{};
@@ -172,7 +211,7 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const
   } else {
     // Range over the whole map, not the visible voxels: the legend then
     // matches the thickness report and the other views of the same part.
-    const ColourMapOptions options = thickness_colours(*thickness, g.voxel_size);
+    const ColourMapOptions options = thickness_colours(*thickness, g.voxel_size, threads);
     std::vector<std::uint32_t> values(pixels, 0);
     for (std::size_t p = 0; p < pixels; ++p) {
       if (preview.voxel[p] >= 0) values[p] = eighths(thickness->values()[static_cast<std::size_t>(preview.voxel[p])]);
@@ -199,19 +238,19 @@ std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const 
                                       std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), thickness, nullptr);
   return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, thickness, nullptr, std::move(text),
-                            max_side);
+                            max_side, threads);
 }
 
 std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view, std::vector<PngText> text,
                                       int max_side) {
-  return render_preview_png(preview, grid, view, nullptr, nullptr, std::move(text), max_side);
+  return render_preview_png(preview, grid, view, nullptr, nullptr, std::move(text), max_side, 0);
 }
 
 std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
                                              std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), nullptr, &colours);
   return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, nullptr, &colours, std::move(text),
-                            max_side);
+                            max_side, threads);
 }
 
 }  // namespace voxd

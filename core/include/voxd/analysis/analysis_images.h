@@ -37,9 +37,12 @@ std::vector<std::uint8_t> section_png(const GreyImage8& section, const Grid& gri
 // The same section coloured by local thickness (map in voxels on the same
 // grid): filled pixels in the ramp colour of round(t * 8) over the whole
 // map's range, empty ones white, legend strip below with labels in model
-// units (as preview_png). A null map gives the grey section.
+// units (as preview_png). A null map gives the grey section. The map's range
+// is found on up to `threads` threads (0: every core); the bytes do not
+// depend on the count.
 std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::int64_t index,
-                                      const DenseVolume<float>* thickness, std::vector<PngText> text = {});
+                                      const DenseVolume<float>* thickness, std::vector<PngText> text = {},
+                                      int threads = 0);
 
 // Shaded preview (voxd/analysis/preview.h) as 8-bit RGB. Without `thickness`: the part
 // in kPreviewPartColour times the shade, background white. With `thickness`
