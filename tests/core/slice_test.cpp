@@ -17,6 +17,8 @@
 
 #include "support/test_checks.h"
 #include "support/test_meshes.h"
+#include "voxd/analysis/analysis_images.h"
+#include "voxd/analysis/value_images.h"
 #include "voxd/byte_sink.h"
 #include "voxd/error.h"
 #include "voxd/voxelize/slice_functions.h"
@@ -573,6 +575,44 @@ TEST(SliceVoxelize, TheResultDoesNotDependOnTheThreadCount) {
       EXPECT_TRUE(voxelize_slice(mesh, g, o).values() == one.values()) << t << " threads";
     }
   }
+}
+
+TEST(SliceColours, SectionsAndPreviewsOfASolidAreTheColouredVolumesOwn) {
+  // Colouring a solid already made, a section or a view at a time, must give
+  // the bytes of the coloured volume's own images, for every function, every
+  // section axis and views from several sides, on a grid of odd sizes.
+  const Mesh mesh = torus();
+  const Grid g = grid_for(mesh, 41);
+  ASSERT_TRUE(g.dims.x % 2 == 1 || g.dims.y % 2 == 1 || g.dims.z % 2 == 1) << "an odd size along some axis";
+  const BitVolume solid = voxelize(mesh, g, {VoxelMode::solid, InsideTest::parity, 2});
+  for (const SliceFunction f : kAll) {
+    SCOPED_TRACE(to_string(f));
+    const SliceOptions o = options_for(f);
+    const DenseVolume<Rgba8> volume = voxelize_slice(mesh, g, o);
+    const SliceColours colours(o, make_slice_frame(mesh, o.axis), g);
+    std::uint64_t differ = 0, filled = 0;
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i)
+          if (solid.get(i, j, k)) ++filled, differ += colours.at(i, j, k) == volume.at(i, j, k) ? 0 : 1;
+    ASSERT_GT(filled, 1000u);
+    EXPECT_EQ(differ, 0u);
+    for (int axis = 0; axis < 3; ++axis)
+      for (const std::int64_t index : {std::int64_t{0}, g.dims[axis] / 2, g.dims[axis] / 3 + 1}) {
+        SCOPED_TRACE("axis " + std::to_string(axis) + " index " + std::to_string(index));
+        EXPECT_EQ(slice_section_png(solid, colours, axis, index, {{"voxd:source", "t"}}, 3),
+                  colour_section_png(volume, axis, index, {{"voxd:source", "t"}}));
+      }
+    for (const View view : {View{2, true}, View{0, false}, View{1, true}}) {
+      SCOPED_TRACE(to_string(view));
+      EXPECT_EQ(slice_preview_png(solid, colours, view, {}, 2), colour_preview_png(solid, volume, view, {}, 2));
+    }
+  }
+  const SliceColours other(options_for(SliceFunction::wood), make_slice_frame(mesh, {0, 0, 1}), grid_for(mesh, 30));
+  EXPECT_EQ(code_of([&] { slice_section_png(solid, other, 2, 3); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { slice_preview_png(solid, other, View{2, true}); }), ErrorCode::invalid_argument);
+  EXPECT_EQ(code_of([&] { slice_section_png(solid, SliceColours(options_for(SliceFunction::rock), make_slice_frame(mesh, {0, 0, 1}), g), 2, g.dims.z); }),
+            ErrorCode::invalid_argument);
 }
 
 TEST(SliceVoxelize, BadOptionsAreRefusedWithTheFieldAndWhatItMustBe) {

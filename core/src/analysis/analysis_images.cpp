@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "voxd/byte_sink.h"
@@ -172,10 +173,12 @@ void check_preview_maps(const Grid& g, const DenseVolume<float>* thickness, cons
 
 // The preview in the part's grey-blue, coloured by thickness, or in each
 // visible voxel's own colour.
+// A visible voxel's own colour, by its index in the volume.
+using VoxelColour = std::function<Rgba8(std::int64_t)>;
+
 std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const Grid& g, View view,
-                                             const DenseVolume<float>* thickness, const DenseVolume<Rgba8>* colours,
+                                             const DenseVolume<float>* thickness, const VoxelColour& colours,
                                              std::vector<PngText> text, int max_side, int threads) {
-  check_preview_maps(g, thickness, colours);
   const int factor = shrink_factor(rendered.width, rendered.height, max_side);
   const PreviewImage shrunk = factor > 1 ? shrink_preview(rendered, g, view, factor) : PreviewImage{};
   const PreviewImage& preview = factor > 1 ? shrunk : rendered;
@@ -198,15 +201,19 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const
     image.width = preview.width;
     image.height = preview.height;
     image.pixels.assign(pixels * 3, 255);
-    for (std::size_t p = 0; p < pixels; ++p) {
-      if (preview.voxel[p] < 0) continue;
-      Rgb c = kPreviewPartColour;
-      if (colours) {
-        const Rgba8 v = colours->values()[static_cast<std::size_t>(preview.voxel[p])];
-        c = {v.r, v.g, v.b};
+    // A pixel's colour is its own voxel's: the rows are shaded in parallel.
+    parallel_for(0, preview.height, 16, threads, [&](std::int64_t r0, std::int64_t r1) {
+      for (std::size_t p = static_cast<std::size_t>(r0 * preview.width); p < static_cast<std::size_t>(r1 * preview.width);
+           ++p) {
+        if (preview.voxel[p] < 0) continue;
+        Rgb c = kPreviewPartColour;
+        if (colours) {
+          const Rgba8 v = colours(preview.voxel[p]);
+          c = {v.r, v.g, v.b};
+        }
+        shade_into(&image.pixels[3 * p], c, preview.shade[p]);
       }
-      shade_into(&image.pixels[3 * p], c, preview.shade[p]);
-    }
+    });
     if (colours) chunks.push_back({"voxd:colour", "each visible voxel's own colour (its alpha ignored), shaded"});
   } else {
     // Range over the whole map, not the visible voxels: the legend then
@@ -237,20 +244,34 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const
 std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
                                       std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), thickness, nullptr);
-  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, thickness, nullptr, std::move(text),
+  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, thickness, {}, std::move(text),
                             max_side, threads);
 }
 
 std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view, std::vector<PngText> text,
                                       int max_side) {
-  return render_preview_png(preview, grid, view, nullptr, nullptr, std::move(text), max_side, 0);
+  return render_preview_png(preview, grid, view, nullptr, {}, std::move(text), max_side, 0);
 }
 
 std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
                                              std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), nullptr, &colours);
-  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, nullptr, &colours, std::move(text),
-                            max_side, threads);
+  const Rgba8* values = colours.values().data();
+  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, nullptr,
+                            [values](std::int64_t voxel) { return values[voxel]; }, std::move(text), max_side, threads);
+}
+
+std::vector<std::uint8_t> slice_preview_png(const BitVolume& volume, const SliceColours& colours, View view,
+                                            std::vector<PngText> text, int threads, int max_side) {
+  const Grid& g = volume.grid();
+  if (g.dims != colours.grid().dims)
+    throw Error(ErrorCode::invalid_argument, "slice preview: the solid's grid is not the slice colours' grid");
+  const std::int64_t nx = g.dims.x, ny = g.dims.y;
+  return render_preview_png(render_preview(volume, view, threads), g, view, nullptr,
+                            [&colours, nx, ny](std::int64_t voxel) {
+                              return colours.at(voxel % nx, voxel / nx % ny, voxel / (nx * ny));
+                            },
+                            std::move(text), max_side, threads);
 }
 
 }  // namespace voxd

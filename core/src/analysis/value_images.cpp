@@ -1,6 +1,7 @@
 #include "voxd/analysis/value_images.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <string>
 
@@ -9,6 +10,7 @@
 #include "voxd/error.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/analysis/radiography.h"
+#include "voxd/parallel.h"
 
 namespace voxd {
 namespace {
@@ -148,9 +150,11 @@ std::vector<std::uint8_t> CoverageSectionGatherer::png(std::vector<PngText> text
   return grey_png(section_, plane_text(grid_, axis_, index_, {kCoverageText}, text));
 }
 
-std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, int axis, std::int64_t index,
-                                             std::vector<PngText> text) {
-  const ValueSection<Rgba8> s = extract(colours, axis, index);
+namespace {
+
+// Colours over white (alpha blended, rounded), as one PNG.
+std::vector<std::uint8_t> colour_png(const ValueSection<Rgba8>& s, const Grid& grid, int axis, std::int64_t index,
+                                     const std::vector<PngText>& text) {
   RgbImage image{s.width, s.height, std::vector<std::uint8_t>(s.values.size() * 3)};
   for (std::size_t p = 0; p < s.values.size(); ++p) {
     const Rgba8 c = s.values[p];
@@ -160,8 +164,48 @@ std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, 
           static_cast<std::uint8_t>((rgb[ch] * c.a + 255 * (255 - c.a) + 127) / 255);
   }
   VectorSink out;
-  write_png_rgb8(image, plane_text(colours.grid(), axis, index, {{"voxd:colour", "the voxel's colour over white"}}, text), out);
+  write_png_rgb8(image, plane_text(grid, axis, index, {{"voxd:colour", "the voxel's colour over white"}}, text), out);
   return std::move(out.data);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, int axis, std::int64_t index,
+                                             std::vector<PngText> text) {
+  return colour_png(extract(colours, axis, index), colours.grid(), axis, index, text);
+}
+
+std::vector<std::uint8_t> slice_section_png(const BitVolume& solid, const SliceColours& colours, int axis,
+                                            std::int64_t index, std::vector<PngText> text, int threads) {
+  const Grid& g = solid.grid();
+  if (g.dims != colours.grid().dims)
+    throw Error(ErrorCode::invalid_argument, "slice section: the solid's grid is not the slice colours' grid");
+  const ImageSize size = section_size(g, axis, index);
+  ValueSection<Rgba8> s;
+  s.width = size.width;
+  s.height = size.height;
+  s.values.assign(static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height), Rgba8{0, 0, 0, 0});
+  // Image row r is layer r along the row axis (z, or y for a z section);
+  // column c runs along x, or y for an x section.
+  parallel_for(0, size.height, 8, threads, [&](std::int64_t r0, std::int64_t r1) {
+    for (std::int64_t r = r0; r < r1; ++r) {
+      Rgba8* out = &s.values[static_cast<std::size_t>(r * size.width)];
+      if (axis == 0) {  // column j of voxels (index, j, r)
+        for (std::int64_t j = 0; j < size.width; ++j)
+          if (solid.get(index, j, r)) out[j] = colours.at(index, j, r);
+        continue;
+      }
+      const std::int64_t j = axis == 2 ? r : index, k = axis == 2 ? index : r;
+      const std::uint64_t* row = solid.row(j, k);
+      const glm::dvec3 start = colours.row_start(j, k);
+      for (std::int64_t word = 0; word < solid.row_words(); ++word)
+        for (std::uint64_t bits = row[word]; bits != 0; bits &= bits - 1) {
+          const std::int64_t i = word * 64 + std::countr_zero(bits);
+          out[i] = colours.along_row(start, i);
+        }
+    }
+  });
+  return colour_png(s, g, axis, index, text);
 }
 
 double sdf_section_range(const SdfRenderInput& input) {

@@ -63,6 +63,10 @@ inline Rgba8 mix(const Rgba8& c0, const Rgba8& c1, double t) {
 
 inline double clamp01(double t) { return t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0; }
 
+}  // namespace
+
+namespace detail {
+
 // The function of validated options, prepared once (the noise's table, the
 // extents' reciprocals) and evaluated at frame coordinates, on any thread.
 class SliceShader {
@@ -157,7 +161,7 @@ class SliceShader {
   std::optional<detail::PerlinNoise> noise_;
 };
 
-}  // namespace
+}  // namespace detail
 
 glm::dvec3 SliceFrame::coordinates(const glm::dvec3& p) const {
   const glm::dvec3 d = p - origin;
@@ -257,14 +261,33 @@ void validate(const SliceOptions& o) {
 
 Rgba8 evaluate_slice(const SliceOptions& options, const SliceFrame& frame, const glm::dvec3& model_point) {
   validate(options);
-  return SliceShader(options, frame).shade(frame.coordinates(model_point));
+  return detail::SliceShader(options, frame).shade(frame.coordinates(model_point));
+}
+
+SliceColours::SliceColours(const SliceOptions& options, const SliceFrame& frame, const Grid& grid)
+    : options_(options), frame_(frame), grid_(grid) {
+  validate(options_);
+  // Along a row the centre moves by voxel_size along x: the frame
+  // coordinates by voxel_size * (u.x, v.x, w.x).
+  step_ = grid_.voxel_size * glm::dvec3(frame_.u.x, frame_.v.x, frame_.w.x);
+  shader_ = std::make_unique<const detail::SliceShader>(options_, frame_);
+}
+
+SliceColours::~SliceColours() = default;
+
+glm::dvec3 SliceColours::row_start(std::int64_t j, std::int64_t k) const {
+  return frame_.coordinates(grid_.center(0, j, k));
+}
+
+Rgba8 SliceColours::along_row(const glm::dvec3& start, std::int64_t i) const {
+  const double x = static_cast<double>(i);
+  return shader_->shade({start.x + x * step_.x, start.y + x * step_.y, start.z + x * step_.z});
 }
 
 DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const SliceOptions& options,
                                   JobControl* control) {
   validate(options);
-  const SliceFrame frame = make_slice_frame(mesh, options.axis);
-  const SliceShader shader(options, frame);
+  const SliceColours colours(options, make_slice_frame(mesh, options.axis), grid);
 
   // The solid takes the first half of the caller's share of the bar, the
   // colours the second.
@@ -276,9 +299,6 @@ DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const Slic
 
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
   if (grid.voxel_count() == 0) return DenseVolume<Rgba8>(grid);
-  // Along a row the centre moves by voxel_size along x: the frame
-  // coordinates by voxel_size * (u.x, v.x, w.x).
-  const glm::dvec3 step = grid.voxel_size * glm::dvec3(frame.u.x, frame.v.x, frame.w.x);
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   const std::int64_t grain = std::max<std::int64_t>(1, nz / (threads * 8));
   // Calls visit(j, i) for each filled voxel (i, j, k) of slab k, in order.
@@ -305,10 +325,9 @@ DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const Slic
       for_each_filled(k, [&](std::int64_t j, std::int64_t i) {
         if (j != row_j) {
           row_j = j;
-          start = frame.coordinates(grid.center(0, j, k));
+          start = colours.row_start(j, k);
         }
-        const double x = static_cast<double>(i);
-        slab[j * nx + i] = shader.shade({start.x + x * step.x, start.y + x * step.y, start.z + x * step.z});
+        slab[j * nx + i] = colours.along_row(start, i);
       });
       const std::int64_t done = slabs_done.fetch_add(1, std::memory_order_relaxed) + 1;
       if (control) control->set_progress(static_cast<double>(done) / static_cast<double>(nz));

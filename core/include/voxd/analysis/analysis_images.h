@@ -13,6 +13,7 @@
 #include "voxd/analysis/radiography.h"
 #include "voxd/analysis/section.h"
 #include "voxd/enum_names.h"
+#include "voxd/voxelize/slice_functions.h"
 
 namespace voxd {
 
@@ -72,5 +73,12 @@ std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& g
 // colours' dims differ from the volume's.
 std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const DenseVolume<Rgba8>& colours, View view,
                                              std::vector<PngText> text = {}, int threads = 0, int max_side = 0);
+// The same view of a solid coloured by a slice function without its volume:
+// each visible voxel's colour from `colours` (voxd/voxelize/slice_functions.h).
+// The bytes colour_preview_png gives for voxelize_slice's volume of the same
+// solid, options and frame. Throws as preview_png, and when the solid's grid
+// is not the colours'.
+std::vector<std::uint8_t> slice_preview_png(const BitVolume& volume, const SliceColours& colours, View view,
+                                            std::vector<PngText> text = {}, int threads = 0, int max_side = 0);
 
 }  // namespace voxd

@@ -11,9 +11,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "voxd/bit_volume.h"
 #include "voxd/dense_volume.h"
 #include "voxd/encode/png_image.h"
 #include "voxd/analysis/sdf_render.h"
+#include "voxd/voxelize/slice_functions.h"
 
 namespace voxd {
 
@@ -63,6 +65,14 @@ class CoverageSectionGatherer {
 // rounded), so empty voxels are white. Same layout as the other sections.
 std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, int axis, std::int64_t index,
                                              std::vector<PngText> text = {});
+// The same section of a solid coloured by a slice function without its
+// volume: each filled voxel of layer `index` its colour from `colours`
+// (voxd/voxelize/slice_functions.h), on up to `threads` threads (0: every
+// core). The bytes colour_section_png gives for voxelize_slice's volume of
+// the same solid, options and frame. Throws as colour_section_png, and when
+// the solid's grid is not the colours'.
+std::vector<std::uint8_t> slice_section_png(const BitVolume& solid, const SliceColours& colours, int axis,
+                                            std::int64_t index, std::vector<PngText> text = {}, int threads = 0);
 
 // The symmetric range of a field's sections: the largest |value| over the
 // whole field (non-finite values skipped; with a clamped narrow band, the

@@ -77,6 +77,7 @@
 // (hash & 15).
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -178,6 +179,39 @@ void validate(const SliceOptions& options);
 // last bits of the frame coordinates (the voxelizer steps them along a row).
 // Validates the options as voxelize_slice does.
 Rgba8 evaluate_slice(const SliceOptions& options, const SliceFrame& frame, const glm::dvec3& model_point);
+
+namespace detail {
+class SliceShader;
+}
+
+// The colours voxelize_slice gives the voxels of `grid`, a voxel at a time
+// and with the same bits: to show a function on a solid already made (a
+// section or a preview of a finished job, while its parameters are edited)
+// without colouring the whole grid. voxelize_slice itself colours through
+// it. Validates the options as voxelize_slice does; keeps its own copies.
+class SliceColours {
+ public:
+  SliceColours(const SliceOptions& options, const SliceFrame& frame, const Grid& grid);
+  ~SliceColours();
+  SliceColours(const SliceColours&) = delete;
+  SliceColours& operator=(const SliceColours&) = delete;
+
+  const Grid& grid() const { return grid_; }
+  // The colour at voxel (i, j, k)'s centre.
+  Rgba8 at(std::int64_t i, std::int64_t j, std::int64_t k) const { return along_row(row_start(j, k), i); }
+  // The same along a row: the frame coordinates of voxel (0, j, k)'s
+  // centre, then voxel i's colour from them (the centre stepped i voxels
+  // along x), as the voxelizer walks a row.
+  glm::dvec3 row_start(std::int64_t j, std::int64_t k) const;
+  Rgba8 along_row(const glm::dvec3& start, std::int64_t i) const;
+
+ private:
+  SliceOptions options_;
+  SliceFrame frame_;
+  Grid grid_;
+  glm::dvec3 step_{0.0};
+  std::unique_ptr<const detail::SliceShader> shader_;
+};
 
 // The coloured solid: each voxel the solid voxelization {solid,
 // options.inside} fills gets the slice function at its centre, every other
