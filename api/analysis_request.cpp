@@ -1,4 +1,9 @@
 #include "api/analysis_request.h"
+#include "api/slice_options.h"
+
+#include <openssl/evp.h>
+
+#include <stdexcept>
 
 #include "api/analyses/analysis_kind.h"
 #include "api/param_error.h"
@@ -35,10 +40,55 @@ std::string AnalysisRequest::peel_query() const {
 
 std::string AnalysisRequest::query() const { return analysis_kind_request(kind).query(*this); }
 
+bool AnalysisRequest::slice_coloured() const { return colour == kSliceName; }
+
+std::string AnalysisRequest::slice_query() const {
+  if (!slice_coloured()) return "";
+  std::string out = "&slice=";
+  static const char* const kHex = "0123456789ABCDEF";
+  for (const unsigned char c : slice_json) {
+    if ((c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '-' || c == '.' || c == '_' ||
+        c == '~') {
+      out += static_cast<char>(c);
+    } else {
+      out += '%';
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// Lowercase hex SHA-256 of `text`.
+std::string sha256_hex(const std::string& text) {
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  if (EVP_Digest(text.data(), text.size(), digest, &length, EVP_sha256(), nullptr) != 1)
+    throw std::runtime_error("SHA-256 failed");
+  static const char* const kHex = "0123456789abcdef";
+  std::string out;
+  for (unsigned int i = 0; i < length; ++i) {
+    out += kHex[digest[i] >> 4];
+    out += kHex[digest[i] & 15];
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string AnalysisRequest::artifact_key() const {
-  // File-name safe: the query with its separators and signs spelled out.
+  // File-name safe: the query with its separators and signs spelled out; a
+  // slice function's JSON (any length, any characters) by its digest.
+  std::string q = query();
+  std::string suffix;
+  if (!slice_json.empty() && slice_coloured()) {
+    q.erase(q.size() - slice_query().size());
+    suffix = "__slice-" + sha256_hex(slice_json).substr(0, 40);
+  }
   std::string key = std::string(to_string(kind)) + "_";
-  for (char c : query()) {
+  for (char c : q) {
     if (c == '&') key += "__";
     else if (c == '=') key += "-";
     else if (c == '%') key += "p";
@@ -46,7 +96,7 @@ std::string AnalysisRequest::artifact_key() const {
     else if (c == '-') key += "m";
     else key += "x";
   }
-  return key;
+  return key + suffix;
 }
 
 const char* AnalysisRequest::content_type() const { return analysis_kind_request(kind).content_type(*this); }
@@ -76,11 +126,12 @@ std::vector<AnalysisRequest> parse_analyses(const json& analyses) {
     for (const auto& [k, v] : a.items()) {
       if (k == "kind") continue;
       if (v.is_string()) fields.emplace_back(k, v.get<std::string>());
+      else if (k == kSliceName && v.is_object()) fields.emplace_back(k, v.dump());  // a slice function, as a slice job's
       else if (v.is_boolean()) fields.emplace_back(k, v.get<bool>() ? "true" : "false");
       else if (v.is_number_integer()) fields.emplace_back(k, v.dump());
       else if (v.is_number()) fields.emplace_back(k, number_text(v.get<double>()));
       else {
-        errors.push_back({path + "/" + k, "must be a string, number or boolean, got " + std::string(v.type_name())});
+        errors.push_back({path + "/" + k, "must be a string, number or boolean (\"slice\": an object), got " + std::string(v.type_name())});
         typed = false;
       }
     }

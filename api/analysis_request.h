@@ -14,6 +14,7 @@
 #include "voxd/analysis/analysis_images.h"
 #include "voxd/analysis/skin_removal.h"
 #include "voxd/enum_names.h"
+#include "voxd/voxelize/slice_functions.h"
 
 namespace voxd::api {
 
@@ -57,9 +58,15 @@ struct AnalysisRequest {
   // the model after `peel` layers of skin removal (0 = as voxelized).
   PeelMetric peel_metric = PeelMetric::faces;
   std::int64_t peel = 0;
-  // section, preview: none | thickness (colour by wall thickness); section
-  // also distance (a distance field's diverging map).
+  // section, preview: none | thickness (colour by wall thickness) | slice
+  // (by a slice function: `slice`); section also distance (a distance
+  // field's diverging map).
   std::string colour = "none";
+  // section, preview with colour=slice: the slice function that colours the
+  // job's solid (api/slice_options.h) and its canonical JSON text, the same
+  // object a slice job of the same upload takes as `slice`.
+  std::optional<SliceOptions> slice;
+  std::string slice_json;
   // preview: +x | -x | +y | -y | +z | -z.
   std::string view = "+z";
   // preview: the image's longest side at most, in pixels (a larger view is
@@ -70,9 +77,14 @@ struct AnalysisRequest {
 
   // Every parameter of the kind, defaults included, in a fixed order, e.g.
   // "axis=z&measure=max&format=png16&unit=voxels": the route's canonical URL
-  // query and, with the kind, the key its result is kept under.
+  // query and, with the kind, the key its result is kept under (a slice
+  // function's JSON by its SHA-256 there: a file name holds no JSON).
   std::string query() const;
   std::string peel_query() const;
+  // "&slice=" and the slice JSON percent-encoded, for colour=slice; else "".
+  std::string slice_query() const;
+  // colour=slice: the solid coloured by `slice`.
+  bool slice_coloured() const;
   std::string artifact_key() const;
   // MIME type of the result.
   const char* content_type() const;

@@ -53,6 +53,10 @@ class FieldReader {
   int axis();
   // peel and peel_metric into r.
   void peel(AnalysisRequest& r);
+  // With r.colour == `slice`: the required `slice` field, a slice
+  // function's options as JSON (api/slice_options.h), into r.slice and
+  // r.slice_json; otherwise `slice` is refused.
+  void slice(AnalysisRequest& r);
 
   bool ok() const { return errors_.empty(); }
   // Refuses the fields no read asked for, then throws InvalidParams with

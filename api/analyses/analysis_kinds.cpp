@@ -4,8 +4,18 @@
 #include <stdexcept>
 
 #include "api/analyses/analysis_kind.h"
+#include "api/bounded_json.h"
+#include "api/param_validator.h"
+#include "api/slice_options.h"
 
 namespace voxd::api {
+namespace {
+
+// A slice function's options are a few hundred bytes; a custom lookup of a
+// few hundred cells fits too. Larger lookups are a slice job's.
+constexpr std::size_t kMaxSliceBytes = 8 << 10;
+
+}  // namespace
 
 // Each defined in its own file under api/analyses/.
 const AnalysisKindRequest& report_request();
@@ -78,6 +88,33 @@ int FieldReader::axis() { return choice("axis", {"x", "y", "z"}, "z")[0] - 'x'; 
 void FieldReader::peel(AnalysisRequest& r) {
   if (auto n = count("peel")) r.peel = *n;
   r.peel_metric = choice("peel_metric", kPeelMetricNames, PeelMetric::faces);
+}
+
+void FieldReader::slice(AnalysisRequest& r) {
+  const std::string* text = find(kSliceName);
+  if (!r.slice_coloured()) {
+    if (text) error(kSliceName, "applies only with colour=slice (a slice function's colours on the job's solid)");
+    return;
+  }
+  if (!text) {
+    error(kSliceName, "required with colour=slice: the slice function's options as JSON, the object a slice job takes as "
+                   "\"slice\", e.g. {\"function\": \"marble\", \"period\": 2}");
+    return;
+  }
+  nlohmann::json options;
+  try {
+    options = parse_bounded_json(*text, kSliceName, JsonLimits{kMaxSliceBytes, 8});
+  } catch (const InvalidJson& e) {
+    error(kSliceName, e.what());
+    return;
+  }
+  ParamValidator val;
+  SliceOptions parsed;
+  parse_slice_options(val, options, "", parsed);
+  for (const FieldError& e : val.errors) errors_.push_back({prefix_ + "/" + kSliceName + e.path, e.message});
+  if (!val.errors.empty()) return;
+  r.slice = parsed;
+  r.slice_json = slice_options_json(parsed).dump();
 }
 
 void FieldReader::finish() {

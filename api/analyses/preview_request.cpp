@@ -1,5 +1,6 @@
 // A shaded preview from one of six views.
 #include "api/analyses/analysis_kind.h"
+#include "api/slice_options.h"
 
 namespace voxd::api {
 namespace {
@@ -15,9 +16,10 @@ class PreviewRequest final : public AnalysisKindRequest {
   AnalysisKind kind() const override { return AnalysisKind::preview; }
 
   void parse(FieldReader& in, AnalysisRequest& r) const override {
-    in.allow({"view", "colour", "size"});
+    in.allow({"view", "colour", "size", kSliceName});
     r.view = in.choice("view", {"+x", "-x", "+y", "-y", "+z", "-z"}, "+z");
-    r.colour = in.choice("colour", {"none", "thickness", "distance"}, "none");
+    r.colour = in.choice("colour", {"none", "thickness", "distance", kSliceName}, "none");
+    in.slice(r);
     if (const std::string* size = in.find("size")) {
       const auto n = parse_number<std::int64_t>(*size);
       if (*size == "full") r.size = 0;
@@ -32,13 +34,14 @@ class PreviewRequest final : public AnalysisKindRequest {
   // CLI's file name are what they were before it had one.
   std::string query(const AnalysisRequest& r) const override {
     return "view=" + std::string(r.view[0] == '+' ? "%2B" : "-") + r.view.substr(1) + "&colour=" + r.colour +
-           (r.size != AnalysisRequest::kDefaultPreviewSize ? "&size=" + size_text(r) : "");
+           (r.size != AnalysisRequest::kDefaultPreviewSize ? "&size=" + size_text(r) : "") + r.slice_query();
   }
 
   void add_json(const AnalysisRequest& r, nlohmann::json& j) const override {
     j.update({{"view", r.view}, {"colour", r.colour}});
     if (r.size == 0) j["size"] = "full";
     else if (r.size != AnalysisRequest::kDefaultPreviewSize) j["size"] = r.size;
+    if (r.slice_coloured()) j[kSliceName] = nlohmann::json::parse(r.slice_json);
   }
 
   const char* content_type(const AnalysisRequest&) const override { return "image/png"; }

@@ -1,5 +1,6 @@
 // A section: one voxel layer across an axis, at an index or a coordinate.
 #include "api/analyses/analysis_kind.h"
+#include "api/slice_options.h"
 
 namespace voxd::api {
 namespace {
@@ -9,12 +10,13 @@ class SectionRequest final : public AnalysisKindRequest {
   AnalysisKind kind() const override { return AnalysisKind::section; }
 
   void parse(FieldReader& in, AnalysisRequest& r) const override {
-    in.allow({"axis", "index", "coordinate", "colour", "peel", "peel_metric"});
+    in.allow({"axis", "index", "coordinate", "colour", "peel", "peel_metric", kSliceName});
     r.axis = in.axis();
     in.peel(r);
     r.index = in.count("index");
     r.coordinate = in.finite("coordinate");
-    r.colour = in.choice("colour", {"none", "thickness", "distance"}, "none");
+    r.colour = in.choice("colour", {"none", "thickness", "distance", kSliceName}, "none");
+    in.slice(r);
     if (r.index.has_value() == r.coordinate.has_value() && in.ok())
       in.error("index", "give exactly one of index (voxel layer) or coordinate (model units)");
   }
@@ -22,7 +24,7 @@ class SectionRequest final : public AnalysisKindRequest {
   std::string query(const AnalysisRequest& r) const override {
     return "axis=" + axis_name(r.axis) +
            (r.index ? "&index=" + std::to_string(*r.index) : "&coordinate=" + number_text(*r.coordinate)) +
-           "&colour=" + r.colour + r.peel_query();
+           "&colour=" + r.colour + r.peel_query() + r.slice_query();
   }
 
   void add_json(const AnalysisRequest& r, nlohmann::json& j) const override {
@@ -32,6 +34,7 @@ class SectionRequest final : public AnalysisKindRequest {
     j["colour"] = r.colour;
     j["peel"] = r.peel;
     j["peel_metric"] = to_string(r.peel_metric);
+    if (r.slice_coloured()) j[kSliceName] = nlohmann::json::parse(r.slice_json);
   }
 
   const char* content_type(const AnalysisRequest&) const override { return "image/png"; }

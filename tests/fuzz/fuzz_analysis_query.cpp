@@ -28,7 +28,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const voxd::api::AnalysisRequest r = voxd::api::parse_analysis_request(kind, fields, "");
     (void)r.artifact_key();
-    (void)r.query();
+    const std::string query = r.query();
+    // A slice function's canonical JSON reads back to itself: the same
+    // function, the same query, the same key.
+    if (r.slice_coloured()) {
+      voxd::api::Fields again = fields;
+      for (auto& [k, v] : again)
+        if (k == "slice") v = r.slice_json;
+      const voxd::api::AnalysisRequest back = voxd::api::parse_analysis_request(kind, again, "");
+      if (back.slice_json != r.slice_json || back.query() != query) __builtin_trap();
+    }
   } catch (const voxd::api::InvalidParams&) {
   } catch (const voxd::Error&) {
   }

@@ -9,7 +9,10 @@
 #include "voxd/analysis/section.h"
 #include "voxd/analysis/skin_removal.h"
 #include "voxd/encode/rle_slabs.h"
+#include "api/job_params.h"
 #include "server/jobs/job_store.h"
+#include "server/jobs/kept_mesh.h"
+#include "voxd/transform.h"
 #include "voxd/error.h"
 
 namespace voxd::server {
@@ -111,6 +114,21 @@ std::string radiography_result(const AnalysisInput& in, const ThicknessImage& im
 std::optional<SdfRenderInput> sdf_input(const AnalysisInput& in) {
   if (!in.output.values) return std::nullopt;
   return in.job.job->mode->distance_field(*in.job.job, *in.output.values);
+}
+
+std::unique_ptr<const SliceColours> slice_colours(const AnalysisInput& in) {
+  const api::AnalysisRequest& r = in.request;
+  if (!r.slice) throw std::logic_error("colour=slice without its slice function");
+  if (in.job.job->mode->voxel_aspect(*in.job.job) != glm::dvec3(1.0))
+    throw AnalysisRejected("colour=slice colours a solid of cubic voxels as a slice job would; this job's " +
+                           std::string(in.job.job->mode_name()) + " voxels are not cubes");
+  const auto kept = in.artifacts.load(kKeptMeshKey);
+  if (!kept)
+    throw AnalysisRejected("this job kept no mesh to place the slice function's frame on (it ran before the service "
+                           "kept its jobs' meshes): submit it again");
+  KeptMesh k = decode_kept_mesh(*kept);
+  rotate_mesh(k.mesh, k.rotation);  // into the grid's frame, exactly as the job turned it
+  return std::make_unique<const SliceColours>(*r.slice, make_slice_frame(k.mesh, r.slice->axis), in.job.grid);
 }
 
 std::uint64_t image_pixels(const Grid& grid, int axis) {

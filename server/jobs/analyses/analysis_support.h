@@ -3,6 +3,7 @@
 // slabs, the model after skin removal, a section's layer, a radiograph's
 // bytes, a distance field's values.
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "voxd/analysis/analysis_images.h"
 #include "voxd/analysis/radiography.h"
 #include "voxd/analysis/sdf_render.h"
+#include "voxd/voxelize/slice_functions.h"
 #include "voxd/voxelize/streamed.h"
 
 namespace voxd::server {
@@ -45,6 +47,13 @@ std::string radiography_result(const AnalysisInput& in, const ThicknessImage& im
 // A distance field's values and how to read them (its convention and units
 // come from the job's mode and options); nullopt for other jobs.
 std::optional<SdfRenderInput> sdf_input(const AnalysisInput& in);
+
+// The colours of a colour=slice request's slice function on the job's
+// solid: its frame from the job's kept mesh, turned into the grid's frame
+// as the job turned it, so they are the colours a slice job of the same
+// upload and parameters gives its voxels. Throws AnalysisRejected for a job
+// that kept no mesh or whose voxels are not cubes.
+std::unique_ptr<const SliceColours> slice_colours(const AnalysisInput& in);
 
 // Pixels of an image across `axis` of the grid.
 std::uint64_t image_pixels(const Grid& grid, int axis);

@@ -21,6 +21,8 @@ class PreviewAnalysis final : public JobAnalysisKind {
   std::string compute(const AnalysisInput& in, const BitVolume& volume) const override {
     const api::AnalysisRequest& r = in.request;
     const View view = *parse_view(r.view);
+    if (r.slice_coloured())
+      return to_bytes(slice_preview_png(volume, *slice_colours(in), view, image_text(in), 0, max_side(r)));
     // A distance field's surface is its zero level set, rendered directly.
     if (const auto field = sdf_input(in); field && r.colour == "none")
       return to_bytes(sdf_preview_png(*field, view, image_text(in), 0, 1, max_side(r)));
@@ -58,7 +60,12 @@ class PreviewAnalysis final : public JobAnalysisKind {
     return r.colour == "thickness" ? 18 : 6;
   }
 
-  std::string needs_whole_grid(const api::AnalysisRequest&) const override { return "a preview coloured by wall thickness"; }
+  // The kept mesh, turned, for a slice function's frame.
+  std::uint64_t bytes_per_triangle(const api::AnalysisRequest& r) const override { return r.slice_coloured() ? 64 : 0; }
+
+  std::string needs_whole_grid(const api::AnalysisRequest& r) const override {
+    return r.slice_coloured() ? "a preview coloured by a slice function" : "a preview coloured by wall thickness";
+  }
 };
 
 }  // namespace

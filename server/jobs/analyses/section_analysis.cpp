@@ -29,7 +29,7 @@ std::optional<std::string> value_job_section(const AnalysisInput& in, std::int64
   if (r.colour == "distance" && !field)
     throw AnalysisRejected("colour=distance shows the distances of an " + distance_modes() + " job; this job's mode is " +
                            job.job->mode_name() + ": use colour none or thickness");
-  if (!in.output.values || r.colour == "thickness") return std::nullopt;
+  if (!in.output.values || r.colour == "thickness" || r.slice_coloured()) return std::nullopt;
   // Values that are not an image (indices into a table): the section shows the solid.
   if (!job.job->mode->values_are_image()) return std::nullopt;
   if (r.peel > 0)
@@ -55,14 +55,18 @@ class SectionAnalysis final : public JobAnalysisKind {
     const api::AnalysisRequest& r = in.request;
     const std::int64_t layer = section_layer(r, in.job.grid);
     if (auto values = value_job_section(in, layer)) return std::move(*values);
+    const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
+    const BitVolume& model = peeled_model ? *peeled_model : volume;
+    if (r.slice_coloured()) return to_bytes(slice_section_png(model, *slice_colours(in), r.axis, layer, image_text(in, true)));
     JobThicknessMap map;
     if (r.colour == "thickness") map = job_thickness_map(volume, in.artifacts, in.control);
-    const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
-    return to_bytes(section_png(peeled_model ? *peeled_model : volume, r.axis, layer, map.map.get(), image_text(in, true)));
+    return to_bytes(section_png(model, r.axis, layer, map.map.get(), image_text(in, true)));
   }
 
   bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.peel == 0 && r.colour == "none"; }
-  bool shows_values(const api::AnalysisRequest& r) const override { return r.colour != "thickness" && r.peel == 0; }
+  bool shows_values(const api::AnalysisRequest& r) const override {
+    return r.colour != "thickness" && !r.slice_coloured() && r.peel == 0;
+  }
 
   std::string over_slabs(const AnalysisInput& in) const override {
     const api::AnalysisRequest& r = in.request;
@@ -97,8 +101,13 @@ class SectionAnalysis final : public JobAnalysisKind {
     return r.colour == "thickness" ? 18 : 6;
   }
 
+  // The kept mesh, turned, for a slice function's frame.
+  std::uint64_t bytes_per_triangle(const api::AnalysisRequest& r) const override { return r.slice_coloured() ? 64 : 0; }
+
   std::string needs_whole_grid(const api::AnalysisRequest& r) const override {
-    return r.peel > 0 ? "a section of the peeled model (peel)" : "a section coloured by wall thickness";
+    return r.peel > 0               ? "a section of the peeled model (peel)"
+           : r.slice_coloured() ? "a section coloured by a slice function"
+                                 : "a section coloured by wall thickness";
   }
 };
 
