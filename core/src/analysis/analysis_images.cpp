@@ -263,11 +263,16 @@ std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const Dens
 
 std::vector<std::uint8_t> slice_preview_png(const BitVolume& volume, const SliceColours& colours, View view,
                                             std::vector<PngText> text, int threads, int max_side) {
-  const Grid& g = volume.grid();
-  if (g.dims != colours.grid().dims)
+  return slice_preview_png(render_preview(volume, view, threads), volume.grid(), colours, view, std::move(text), threads,
+                           max_side);
+}
+
+std::vector<std::uint8_t> slice_preview_png(const PreviewImage& preview, const Grid& grid, const SliceColours& colours,
+                                            View view, std::vector<PngText> text, int threads, int max_side) {
+  if (grid.dims != colours.grid().dims)
     throw Error(ErrorCode::invalid_argument, "slice preview: the solid's grid is not the slice colours' grid");
-  const std::int64_t nx = g.dims.x, ny = g.dims.y;
-  return render_preview_png(render_preview(volume, view, threads), g, view, nullptr,
+  const std::int64_t nx = grid.dims.x, ny = grid.dims.y;
+  return render_preview_png(preview, grid, view, nullptr,
                             [&colours, nx, ny](std::int64_t voxel) {
                               return colours.at(voxel % nx, voxel / nx % ny, voxel / (nx * ny));
                             },

@@ -11,6 +11,7 @@
 #include "voxd/encode/rle_slabs.h"
 #include "api/job_params.h"
 #include "server/jobs/job_store.h"
+#include "server/jobs/analyses/slice_editing_cache.h"
 #include "server/jobs/kept_mesh.h"
 #include "voxd/transform.h"
 #include "voxd/error.h"
@@ -122,13 +123,19 @@ std::unique_ptr<const SliceColours> slice_colours(const AnalysisInput& in) {
   if (in.job.job->mode->voxel_aspect(*in.job.job) != glm::dvec3(1.0))
     throw AnalysisRejected("colour=slice colours a solid of cubic voxels as a slice job would; this job's " +
                            std::string(in.job.job->mode_name()) + " voxels are not cubes");
-  const auto kept = in.artifacts.load(kKeptMeshKey);
-  if (!kept)
-    throw AnalysisRejected("this job kept no mesh to place the slice function's frame on (it ran before the service "
-                           "kept its jobs' meshes): submit it again");
-  KeptMesh k = decode_kept_mesh(*kept);
-  rotate_mesh(k.mesh, k.rotation);  // into the grid's frame, exactly as the job turned it
-  return std::make_unique<const SliceColours>(*r.slice, make_slice_frame(k.mesh, r.slice->axis), in.job.grid);
+  SliceEditingCache& cache = slice_editing_cache();
+  std::optional<SliceFrame> frame = cache.frame(in.job.id, r.slice->axis);
+  if (!frame) {
+    const auto kept = in.artifacts.load(kKeptMeshKey);
+    if (!kept)
+      throw AnalysisRejected("this job kept no mesh to place the slice function's frame on (it ran before the service "
+                             "kept its jobs' meshes): submit it again");
+    KeptMesh k = decode_kept_mesh(*kept);
+    rotate_mesh(k.mesh, k.rotation);  // into the grid's frame, exactly as the job turned it
+    frame = make_slice_frame(k.mesh, r.slice->axis);
+    cache.keep_frame(in.job.id, r.slice->axis, *frame);
+  }
+  return std::make_unique<const SliceColours>(*r.slice, *frame, in.job.grid);
 }
 
 std::uint64_t image_pixels(const Grid& grid, int axis) {

@@ -5,6 +5,7 @@
 #include <variant>
 
 #include "api/job_params.h"
+#include "server/jobs/analyses/slice_editing_cache.h"
 #include "voxd/analysis/preview.h"
 #include "voxd/analysis/value_images.h"
 
@@ -21,8 +22,17 @@ class PreviewAnalysis final : public JobAnalysisKind {
   std::string compute(const AnalysisInput& in, const BitVolume& volume) const override {
     const api::AnalysisRequest& r = in.request;
     const View view = *parse_view(r.view);
-    if (r.slice_coloured())
-      return to_bytes(slice_preview_png(volume, *slice_colours(in), view, image_text(in), 0, max_side(r)));
+    if (r.slice_coloured()) {
+      // The rendering is the solid's whatever the function: kept for the next one.
+      const std::unique_ptr<const SliceColours> colours = slice_colours(in);
+      SliceEditingCache& cache = slice_editing_cache();
+      std::shared_ptr<const PreviewImage> rendered = cache.preview(in.job.id, view);
+      if (!rendered) {
+        rendered = std::make_shared<const PreviewImage>(render_preview(volume, view, 0));
+        cache.keep_preview(in.job.id, view, rendered);
+      }
+      return to_bytes(slice_preview_png(*rendered, volume.grid(), *colours, view, image_text(in), 0, max_side(r)));
+    }
     // A distance field's surface is its zero level set, rendered directly.
     if (const auto field = sdf_input(in); field && r.colour == "none")
       return to_bytes(sdf_preview_png(*field, view, image_text(in), 0, 1, max_side(r)));
