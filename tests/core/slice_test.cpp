@@ -602,10 +602,16 @@ TEST(SliceColours, SectionsAndPreviewsOfASolidAreTheColouredVolumesOwn) {
         SCOPED_TRACE("axis " + std::to_string(axis) + " index " + std::to_string(index));
         EXPECT_EQ(slice_section_png(solid, colours, axis, index, {{"voxd:source", "t"}}, 3),
                   colour_section_png(volume, axis, index, {{"voxd:source", "t"}}));
+        // Encoded fast for an editor: other bytes, the same pixels.
+        EXPECT_EQ(test::decode_png(slice_section_png(solid, colours, axis, index, {}, 2, PngCompression::fast))["pixels"],
+                  test::decode_png(colour_section_png(volume, axis, index))["pixels"]);
       }
     for (const View view : {View{2, true}, View{0, false}, View{1, true}}) {
       SCOPED_TRACE(to_string(view));
       EXPECT_EQ(slice_preview_png(solid, colours, view, {}, 2), colour_preview_png(solid, volume, view, {}, 2));
+      EXPECT_EQ(test::decode_png(slice_preview_png(render_preview(solid, view), g, colours, view, {}, 2, 0,
+                                                   PngCompression::fast))["pixels"],
+                test::decode_png(colour_preview_png(solid, volume, view))["pixels"]);
     }
   }
   const SliceColours other(options_for(SliceFunction::wood), make_slice_frame(mesh, {0, 0, 1}), grid_for(mesh, 30));

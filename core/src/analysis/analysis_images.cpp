@@ -178,7 +178,8 @@ using VoxelColour = std::function<Rgba8(std::int64_t)>;
 
 std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const Grid& g, View view,
                                              const DenseVolume<float>* thickness, const VoxelColour& colours,
-                                             std::vector<PngText> text, int max_side, int threads) {
+                                             std::vector<PngText> text, int max_side, int threads,
+                                             PngCompression compression = PngCompression::balanced) {
   const int factor = shrink_factor(rendered.width, rendered.height, max_side);
   const PreviewImage shrunk = factor > 1 ? shrink_preview(rendered, g, view, factor) : PreviewImage{};
   const PreviewImage& preview = factor > 1 ? shrunk : rendered;
@@ -235,7 +236,7 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const
   }
   chunks.insert(chunks.end(), text.begin(), text.end());
   VectorSink out;
-  write_png_rgb8(image, chunks, out);
+  write_png_rgb8(image, chunks, out, compression);
   return std::move(out.data);
 }
 
@@ -268,7 +269,8 @@ std::vector<std::uint8_t> slice_preview_png(const BitVolume& volume, const Slice
 }
 
 std::vector<std::uint8_t> slice_preview_png(const PreviewImage& preview, const Grid& grid, const SliceColours& colours,
-                                            View view, std::vector<PngText> text, int threads, int max_side) {
+                                            View view, std::vector<PngText> text, int threads, int max_side,
+                                            PngCompression compression) {
   if (grid.dims != colours.grid().dims)
     throw Error(ErrorCode::invalid_argument, "slice preview: the solid's grid is not the slice colours' grid");
   const std::int64_t nx = grid.dims.x, ny = grid.dims.y;
@@ -276,7 +278,7 @@ std::vector<std::uint8_t> slice_preview_png(const PreviewImage& preview, const G
                             [&colours, nx, ny](std::int64_t voxel) {
                               return colours.at(voxel % nx, voxel / nx % ny, voxel / (nx * ny));
                             },
-                            std::move(text), max_side, threads);
+                            std::move(text), max_side, threads, compression);
 }
 
 }  // namespace voxd

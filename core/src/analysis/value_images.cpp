@@ -154,7 +154,8 @@ namespace {
 
 // Colours over white (alpha blended, rounded), as one PNG.
 std::vector<std::uint8_t> colour_png(const ValueSection<Rgba8>& s, const Grid& grid, int axis, std::int64_t index,
-                                     const std::vector<PngText>& text) {
+                                     const std::vector<PngText>& text,
+                                     PngCompression compression = PngCompression::balanced) {
   RgbImage image{s.width, s.height, std::vector<std::uint8_t>(s.values.size() * 3)};
   for (std::size_t p = 0; p < s.values.size(); ++p) {
     const Rgba8 c = s.values[p];
@@ -164,7 +165,8 @@ std::vector<std::uint8_t> colour_png(const ValueSection<Rgba8>& s, const Grid& g
           static_cast<std::uint8_t>((rgb[ch] * c.a + 255 * (255 - c.a) + 127) / 255);
   }
   VectorSink out;
-  write_png_rgb8(image, plane_text(grid, axis, index, {{"voxd:colour", "the voxel's colour over white"}}, text), out);
+  write_png_rgb8(image, plane_text(grid, axis, index, {{"voxd:colour", "the voxel's colour over white"}}, text), out,
+                 compression);
   return std::move(out.data);
 }
 
@@ -176,7 +178,8 @@ std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, 
 }
 
 std::vector<std::uint8_t> slice_section_png(const BitVolume& solid, const SliceColours& colours, int axis,
-                                            std::int64_t index, std::vector<PngText> text, int threads) {
+                                            std::int64_t index, std::vector<PngText> text, int threads,
+                                            PngCompression compression) {
   const Grid& g = solid.grid();
   if (g.dims != colours.grid().dims)
     throw Error(ErrorCode::invalid_argument, "slice section: the solid's grid is not the slice colours' grid");
@@ -205,7 +208,7 @@ std::vector<std::uint8_t> slice_section_png(const BitVolume& solid, const SliceC
         }
     }
   });
-  return colour_png(s, g, axis, index, text);
+  return colour_png(s, g, axis, index, text, compression);
 }
 
 double sdf_section_range(const SdfRenderInput& input) {

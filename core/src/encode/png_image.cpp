@@ -180,14 +180,14 @@ void write_png_grey8(int width, int height, std::span<const std::uint8_t> pixels
   encode(width, height, 8, PNG_COLOR_TYPE_GRAY, row_pointers(bytes, height, static_cast<std::size_t>(width)), text, out);
 }
 
-void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out) {
+void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out, PngCompression compression) {
   if (image.pixels.size() % 3 != 0) {
     throw Error(ErrorCode::invalid_argument, "RGB image has " + std::to_string(image.pixels.size()) + " bytes, not a multiple of 3");
   }
   check_size(image.width, image.height, image.pixels.size() / 3, "RGB image");
   std::vector<std::uint8_t> bytes = image.pixels;
   encode(image.width, image.height, 8, PNG_COLOR_TYPE_RGB,
-         row_pointers(bytes, image.height, static_cast<std::size_t>(image.width) * 3), text, out);
+         row_pointers(bytes, image.height, static_cast<std::size_t>(image.width) * 3), text, out, compression);
 }
 
 void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,

@@ -31,7 +31,8 @@ class PreviewAnalysis final : public JobAnalysisKind {
         rendered = std::make_shared<const PreviewImage>(render_preview(volume, view, 0));
         cache.keep_preview(in.job.id, view, rendered);
       }
-      return to_bytes(slice_preview_png(*rendered, volume.grid(), *colours, view, image_text(in), 0, max_side(r)));
+      return to_bytes(slice_preview_png(*rendered, volume.grid(), *colours, view, image_text(in), 0, max_side(r),
+                                        PngCompression::fast));  // redrawn while a parameter is dragged
     }
     // A distance field's surface is its zero level set, rendered directly.
     if (const auto field = sdf_input(in); field && r.colour == "none")

@@ -57,7 +57,10 @@ class SectionAnalysis final : public JobAnalysisKind {
     if (auto values = value_job_section(in, layer)) return std::move(*values);
     const std::optional<BitVolume> peeled_model = peeled_volume(r, volume);
     const BitVolume& model = peeled_model ? *peeled_model : volume;
-    if (r.slice_coloured()) return to_bytes(slice_section_png(model, *slice_colours(in), r.axis, layer, image_text(in, true)));
+    // An editor's next picture, redrawn while a parameter is dragged: encoded fast.
+    if (r.slice_coloured())
+      return to_bytes(slice_section_png(model, *slice_colours(in), r.axis, layer, image_text(in, true), 0,
+                                        PngCompression::fast));
     JobThicknessMap map;
     if (r.colour == "thickness") map = job_thickness_map(volume, in.artifacts, in.control);
     return to_bytes(section_png(model, r.axis, layer, map.map.get(), image_text(in, true)));

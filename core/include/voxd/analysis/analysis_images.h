@@ -82,8 +82,9 @@ std::vector<std::uint8_t> slice_preview_png(const BitVolume& volume, const Slice
                                             std::vector<PngText> text = {}, int threads = 0, int max_side = 0);
 // The same from the solid's preview already rendered (render_preview of
 // the volume on `grid` from `view`): an editor's next colours cost only the
-// visible voxels' colours.
+// visible voxels' colours. `compression` as slice_section_png's.
 std::vector<std::uint8_t> slice_preview_png(const PreviewImage& preview, const Grid& grid, const SliceColours& colours,
-                                            View view, std::vector<PngText> text = {}, int threads = 0, int max_side = 0);
+                                            View view, std::vector<PngText> text = {}, int threads = 0, int max_side = 0,
+                                            PngCompression compression = PngCompression::balanced);
 
 }  // namespace voxd

@@ -70,9 +70,11 @@ std::vector<std::uint8_t> colour_section_png(const DenseVolume<Rgba8>& colours, 
 // (voxd/voxelize/slice_functions.h), on up to `threads` threads (0: every
 // core). The bytes colour_section_png gives for voxelize_slice's volume of
 // the same solid, options and frame. Throws as colour_section_png, and when
-// the solid's grid is not the colours'.
+// the solid's grid is not the colours'. `compression` fast: the same
+// pixels, encoded for an editor's next picture rather than for keeping.
 std::vector<std::uint8_t> slice_section_png(const BitVolume& solid, const SliceColours& colours, int axis,
-                                            std::int64_t index, std::vector<PngText> text = {}, int threads = 0);
+                                            std::int64_t index, std::vector<PngText> text = {}, int threads = 0,
+                                            PngCompression compression = PngCompression::balanced);
 
 // The symmetric range of a field's sections: the largest |value| over the
 // whole field (non-finite values skipped; with a clamped narrow band, the

@@ -48,14 +48,16 @@ void write_png_grey16(int width, int height, std::span<const std::uint32_t> valu
 void write_png_grey8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
                      ByteSink& out);
 
-// 8-bit RGB, e.g. a false-colour thickness map (voxd/encode/colour_map.h).
-void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out);
-
 // How hard libpng compresses: balanced is its default (zlib level 6, the
 // best of five filters per row); fast is zlib level 1 with one filter (Sub),
-// for bulk output such as a PNG stack: at 512^3 about 2.5 x faster for 12%
+// for bulk output such as a PNG stack, or images redrawn while
+// a parameter is dragged: at 512^3 about 2.5 x faster for 12%
 // larger files.
 enum class PngCompression { balanced, fast };
+
+// 8-bit RGB, e.g. a false-colour thickness map (voxd/encode/colour_map.h).
+void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out,
+                    PngCompression compression = PngCompression::balanced);
 
 // 8-bit RGBA, 4 bytes per pixel (r, g, b, a), row-major, straight (not
 // premultiplied) alpha, e.g. one layer of a colour volume (voxd/encode/png_stack.h).
