@@ -190,6 +190,7 @@ await runPageTest(work, async (browser, base) => {
   assert.notEqual(await page.$eval('#viewer canvas', (c) => c.toDataURL()), before3d, 'the region box was not drawn');
   await shot(page, 'region-in-3d');
 
+  assert.equal(await page.isVisible('#slice-tab'), true, 'a solid job offers no slice function tab');
   // 6. Sections: the slider moves through the part.
   await page.click('button[data-tab=sections]');
   await page.waitForFunction(() => document.getElementById('sec-image').complete && document.getElementById('sec-image').naturalWidth > 0);
@@ -223,6 +224,8 @@ await runPageTest(work, async (browser, base) => {
   assert.ok(sdfPixels.drawn > sdfPixels.total * 0.02, `zero level set nearly blank: ${sdfPixels.drawn} drawn`);
   await shot(page, 'sdf-zero-level-set');
   assert.deepEqual(await page.$$eval('#sec-colour option', (o) => o.map((x) => x.value)), ['none', 'distance']);
+  // A distance field has no solid to colour by a slice function (a solid's can: slice_editor_test.mjs).
+  assert.equal(await page.isVisible('#slice-tab'), false, 'the slice function tab is offered for an sdf job');
   // ... and its sections open coloured by distance, with a legend.
   assert.equal(await page.$eval('#sec-colour', (e) => e.value), 'distance');
 

@@ -11,6 +11,7 @@ import { bandOf, fmt, lookupTexels, renderLegend, wallBands } from './wall_colou
 const $ = (id) => document.getElementById(id);
 let schema = null;       // proto-schemas/job-params.schema.json
 let meshFile = null;
+const meshesSent = new Map();  // job id -> the mesh file this page sent for it
 let current = null;      // the job shown
 let stopWatching = () => {};
 let viewer = null;
@@ -156,9 +157,8 @@ function optionInput(name, s, kind, options) {
 }
 
 // One input per option of a mode the form can give, each shown only while
-// the option applies (a slice's colours with their function).
-function optionInputs(modeName) {
-  const box = $('mode-options');
+// the option applies (a slice's colours with their function), into `box`.
+function optionInputs(modeName, box = $('mode-options')) {
   box.replaceChildren();
   const options = schema.properties[modeName];
   if (!options || !options.properties) return;
@@ -187,6 +187,16 @@ function optionInputs(modeName) {
   };
   box.onchange = showApplying;
   showApplying();
+}
+
+// The options given in `box` (those shown), as the job JSON takes them.
+function optionsFrom(box) {
+  const options = {};
+  for (const input of box.querySelectorAll(':scope > label:not([hidden]) > [data-option]')) {
+    const value = optionValue(input);
+    if (value !== undefined) options[input.dataset.option] = value;
+  }
+  return options;
 }
 
 // An option's value from its input, or undefined to leave it out.
@@ -252,12 +262,7 @@ function jobParams() {
   const kind = document.querySelector('input[name=grid-kind]:checked').value;
   params.grid = kind === 'resolution' ? { resolution: Number($('resolution').value) }
                                       : { voxel_size: Number($('voxel-size').value) };
-  const options = {};
-  for (const input of $('mode-options').querySelectorAll(':scope > label:not([hidden]) > [data-option]')) {
-    const value = optionValue(input);
-    if (value !== undefined) options[input.dataset.option] = value;
-  }
-  if (schema.properties[params.mode]?.properties) params[params.mode] = options;
+  if (schema.properties[params.mode]?.properties) params[params.mode] = optionsFrom($('mode-options'));
   params.analyses = [];
   if ($('want-report').checked) {
     const a = { kind: 'analysis' };
@@ -291,6 +296,7 @@ $('job-form').onsubmit = guarded(async (e) => {
   $('submit').disabled = true;
   try {
     const job = await submitJob(meshFile, jobParams());
+    meshesSent.set(job.id, meshFile);
     openJob(job.id);
     refreshJobs();
   } finally {
@@ -452,6 +458,7 @@ async function showResults(job) {
   const sources = { palette: ['voxels', 'reconstruction'], sdf: ['zero level set', 'voxels'], solid }[mode] || ['voxels'];
   fillSelect($('view-source'), sources, sources[0]);
   $('view-source').onchange = guarded(() => show3d(job));
+  sliceEditor.open(job, mode);
   await Promise.all([show3d(job), showRadiography(job), showSection(job, true), showPreviews(job), showReport(job)]
     .map((p) => p.catch(showProblem)));
   showDownloads(job);
@@ -570,6 +577,144 @@ async function showPreviews(job) {
   }));
 }
 $('prev-colour').onchange = guarded(() => current?.job && showPreviews(current.job));
+
+// ---- a slice function on the part, edited live (Liao) ---------------------------
+// The finished job's solid coloured by a slice function a layer and a view
+// at a time (colour=slice) while its options change: one update in flight,
+// the latest options next, so dragging never queues stale pictures. The
+// coloured volume itself is a slice job of the same mesh and grid, made
+// when asked.
+
+const sliceEditor = (() => {
+  let job = null;
+  const urls = {};
+  const timing = $('slice-timing');
+
+  // The axis as the frame's direction; the options the form gives.
+  const options = () => ({ ...optionsFrom($('slice-options')),
+                           axis: { x: [1, 0, 0], y: [0, 1, 0], z: [0, 0, 1] }[$('slice-frame-axis').value] });
+
+  // Lengths start in proportion to the part (the schema's defaults suit a
+  // part of a few units), and each number but the seed gets a slider: a
+  // length up to half the part's size, an octave count over its range,
+  // turbulence up to 4.
+  const lengths = { noise_scale: 1 / 8, period: 1 / 6, checker_size: 1 / 8 };
+  function addSliders() {
+    const extent = Math.max(...job.grid.dims) * job.grid.voxel_size;
+    for (const number of $('slice-options').querySelectorAll('input[type=number]')) {
+      const name = number.dataset.option;
+      if (lengths[name]) number.value = Number((extent * lengths[name]).toPrecision(3));
+      const integer = number.dataset.kind === 'integer';
+      if (integer && !(number.max !== '' && Number.isFinite(Number(number.max)))) continue;  // the seed
+      const max = integer ? Number(number.max) : name === 'turbulence' ? 4 : extent / 2;
+      const step = integer ? 1 : max / 500;
+      const min = integer ? Number(number.min) : name === 'turbulence' ? 0 : step;  // lengths are > 0
+      const range = Object.assign(document.createElement('input'), { type: 'range', min, max, step, className: 'drag' });
+      range.dataset.drags = number.dataset.option;
+      range.value = number.value || number.placeholder;
+      range.oninput = () => { number.value = range.value; update(); };
+      number.addEventListener('input', () => { range.value = number.value; });
+      number.after(range);
+    }
+  }
+
+  // One picture for `slice` (the options' JSON, URL-encoded); the <img>
+  // keeps which options it shows.
+  async function image(kind, query, slice) {
+    const res = await call(`/v1/jobs/${job.id}/${kind}?${query}&colour=slice&slice=${slice}`);
+    const url = URL.createObjectURL(await res.blob());
+    const img = $(`slice-${kind}`);
+    await new Promise((resolve, reject) => { img.onload = resolve; img.onerror = reject; img.src = url; });
+    img.dataset.slice = slice;
+    if (urls[kind]) URL.revokeObjectURL(urls[kind]);
+    urls[kind] = url;
+  }
+
+  // Each picture on its own loop: one request in flight, the latest
+  // options next, once, so dragging never queues stale pictures and the
+  // section is not held up by the view.
+  function loop(kind, query, counter, settled = () => {}) {
+    let busy = false, again = false;
+    async function run() {
+      if (!job) return;
+      // custom needs its lookup image first.
+      if (options().function === 'custom' && !options().lookup) {
+        counter.textContent = 'upload a lookup image';
+        return;
+      }
+      if (busy) { again = true; return; }
+      busy = true;
+      try {
+        do {
+          again = false;
+          const started = performance.now();
+          await image(kind, query(), encodeURIComponent(JSON.stringify(options())));
+          const ms = performance.now() - started;
+          counter.dataset.updates = String(Number(counter.dataset.updates || 0) + 1);
+          counter.dataset.lastMs = ms.toFixed(1);
+          counter.textContent = `${kind} updated in ${ms.toFixed(0)} ms`;
+        } while (again);
+        settled();
+      } catch (e) {
+        showProblem(e);
+      } finally {
+        busy = false;
+      }
+    }
+    return run;
+  }
+  // The view follows once the section has caught up with the options: while
+  // a parameter is dragged the section has the service's cores to itself.
+  const preview = loop('preview', () => `view=${encodeURIComponent($('slice-view').value)}`, $('slice-view-timing'));
+  const section = loop('section', () => {
+    const axis = $('slice-axis').value, slider = $('slice-index');
+    slider.max = job.grid.dims['xyz'.indexOf(axis)] - 1;
+    return `axis=${axis}&index=${slider.value}`;
+  }, timing, preview);
+  // After the event's other handlers (the form's own shows the options
+  // that apply first).
+  const update = () => queueMicrotask(section);
+
+  $('slice-options').addEventListener('input', update);
+  $('slice-options').addEventListener('change', update);
+  for (const id of ['slice-axis', 'slice-index', 'slice-view', 'slice-frame-axis']) $(id).addEventListener('input', update);
+
+  $('slice-make').onclick = guarded(async () => {
+    const file = meshesSent.get(job.id);
+    if (!file) throw new ApiError(0, { title: 'No mesh here', detail: 'this page did not send this job\'s mesh: drop the mesh and submit a slice job with these options' });
+    const params = { ...job.params, mode: 'slice', slice: options(), analyses: [] };
+    const made = await submitJob(file, params);
+    meshesSent.set(made.id, file);
+    $('slice-made').textContent = `slice job ${made.id}`;
+    $('slice-made').dataset.job = made.id;
+    openJob(made.id);
+    refreshJobs();
+  });
+
+  return {
+    open(finished, mode) {
+      // A job whose voxels are a solid (solid jobs, and slice jobs to try
+      // other functions) kept its mesh for the frame.
+      const offered = ['solid', 'solid+surface', 'slice'].includes(mode);
+      $('slice-tab').hidden = !offered;
+      job = offered ? finished : null;
+      if (!offered) return;
+      optionInputs('slice', $('slice-options'));
+      // A slice job opens on its own function, unless that is a lookup the
+      // page has not got (custom): marble then.
+      const fn = $('slice-options').querySelector('[data-option=function]');
+      fn.value = mode === 'slice' && finished.params.slice.function !== 'custom' ? finished.params.slice.function : 'marble';
+      fn.dispatchEvent(new Event('change', { bubbles: true }));
+      const slider = $('slice-index');
+      slider.max = finished.grid.dims[2] - 1;
+      slider.value = Math.floor(finished.grid.dims[2] / 2);
+      addSliders();
+      $('slice-made').textContent = '';
+      $('slice-make').disabled = !meshesSent.has(finished.id);
+      update();
+    },
+  };
+})();
 
 async function showReport(job) {
   const report = await reportOf(job);
