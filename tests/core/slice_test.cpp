@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "support/test_checks.h"
+#include "support/slice_cases.h"
 #include "support/test_meshes.h"
 #include "voxd/analysis/analysis_images.h"
 #include "voxd/analysis/value_images.h"
@@ -32,9 +33,7 @@ namespace {
 using test::code_of;
 using test::make_grid;
 
-constexpr SliceFunction kAll[] = {SliceFunction::single_color, SliceFunction::color_ramp,
-                                  SliceFunction::interpolated_colors, SliceFunction::checker,
-                                  SliceFunction::wood, SliceFunction::marble, SliceFunction::rock, SliceFunction::custom};
+constexpr auto& kAll = test::kAllSliceFunctions;
 
 Mesh torus() {
   Mesh m = test::make_torus({0.1, -0.2, 0.05}, 1.0, 0.4, 48, 24);
@@ -51,21 +50,7 @@ Grid grid_for(const Mesh& mesh, std::int64_t n) {
   return resolve_grid(r, bounds(mesh));
 }
 
-SliceOptions options_for(SliceFunction f) {
-  SliceOptions o;
-  o.function = f;
-  o.axis = {0.3, -0.5, 1.0};
-  o.ramp = {{0.0, {10, 20, 30, 255}}, {0.4, {250, 0, 90, 200}}, {0.4, {0, 255, 0, 255}}, {1.0, {30, 40, 250, 255}}};
-  o.checker_size = 0.37;
-  o.noise_scale = 0.4;
-  o.period = 0.6;
-  o.octaves = 3;
-  o.seed = 7;
-  o.lookup_dims = {2, 1, 3};
-  o.lookup_colors = {{255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255},
-                     {255, 255, 0, 255}, {0, 255, 255, 255}, {255, 0, 255, 128}};
-  return o;
-}
+SliceOptions options_for(SliceFunction f) { return test::slice_case(f); }
 
 int channel_difference(const Rgba8& p, const Rgba8& q) {
   return std::max({std::abs(p.r - q.r), std::abs(p.g - q.g), std::abs(p.b - q.b), std::abs(p.a - q.a)});

@@ -8,22 +8,20 @@
 #include <bit>
 #include <cmath>
 #include <limits>
-#include <numbers>
-#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <glm/common.hpp>
 
+#include "voxd/detail/slice_gpu.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
-#include "voxelize/perlin_noise.h"
+#include "voxelize/slice_device.h"
+#include "voxelize/splitmix.h"
 
 namespace voxd {
 namespace {
-
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 [[noreturn]] void bad(const std::string& message) { throw Error(ErrorCode::invalid_argument, message); }
 
@@ -52,114 +50,67 @@ void check_axis(const glm::dvec3& axis) {
 }
 
 // mix(c0, c1, t) per channel: floor(c0 + (c1 - c0) t + 1/2), t in [0, 1].
-inline std::uint8_t mix_channel(std::uint8_t c0, std::uint8_t c1, double t) {
-  const double a = c0;
-  return static_cast<std::uint8_t>(static_cast<int>(a + (static_cast<double>(c1) - a) * t + 0.5));
-}
-inline Rgba8 mix(const Rgba8& c0, const Rgba8& c1, double t) {
-  return {mix_channel(c0.r, c1.r, t), mix_channel(c0.g, c1.g, t), mix_channel(c0.b, c1.b, t),
-          mix_channel(c0.a, c1.a, t)};
-}
-
-inline double clamp01(double t) { return t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0; }
-
 }  // namespace
 
 namespace detail {
 
-// The function of validated options, prepared once (the noise's table, the
-// extents' reciprocals) and evaluated at frame coordinates, on any thread.
-class SliceShader {
- public:
-  SliceShader(const SliceOptions& options, const SliceFrame& frame) : o_(options), frame_(frame) {
-    const glm::dvec3 extent = frame.hi - frame.lo;
-    for (int i = 0; i < 3; ++i) inv_extent_[i] = extent[i] > 0.0 ? 1.0 / extent[i] : 0.0;
-    inv_cell_ = 1.0 / options.checker_size;
-    inv_scale_ = 1.0 / options.noise_scale;
-    inv_period_ = 1.0 / options.period;
-    if (o_.function == SliceFunction::wood || o_.function == SliceFunction::marble ||
-        o_.function == SliceFunction::rock)
-      noise_.emplace(options.seed);
+std::unique_ptr<const SliceShading> make_slice_shading(const SliceOptions& o, const SliceFrame& frame,
+                                                       const Grid& grid) {
+  auto shading = std::make_unique<SliceShading>();
+  SliceShadeParams& p = shading->params;
+  const auto colour = [](const Rgba8& c) { return ShadeColour{c.r, c.g, c.b, c.a}; };
+  p.function = static_cast<int>(o.function);
+  p.color = colour(o.color);
+  for (std::size_t i = 0; i < 4; ++i) p.corners[i] = colour(o.corners[i]);
+  for (std::size_t i = 0; i < 2; ++i) p.checker[i] = colour(o.checker_colors[i]);
+  // Validated: 2 or 3 noise colours, at least 2 ramp stops, a full lookup,
+  // for the function that uses them.
+  p.noise_count = static_cast<int>(std::min<std::size_t>(o.noise_colors.size(), 3));
+  for (int i = 0; i < p.noise_count; ++i) p.noise_colors[i] = colour(o.noise_colors[static_cast<std::size_t>(i)]);
+  if (o.function == SliceFunction::color_ramp)
+    for (const RampStop& stop : o.ramp) shading->ramp.push_back({stop.position, colour(stop.color)});
+  if (o.function == SliceFunction::custom)
+    for (const Rgba8& c : o.lookup_colors) shading->lookup.push_back(colour(c));
+  p.ramp = shading->ramp.data();
+  p.ramp_count = static_cast<int>(shading->ramp.size());
+  p.lookup = shading->lookup.data();
+  for (int i = 0; i < 3; ++i) p.lookup_dims[i] = o.lookup_dims[static_cast<std::size_t>(i)];
+  const glm::dvec3 extent = frame.hi - frame.lo;
+  for (int i = 0; i < 3; ++i) {
+    p.lo[i] = frame.lo[i];
+    p.inv_extent[i] = extent[i] > 0.0 ? 1.0 / extent[i] : 0.0;
   }
+  p.inv_cell = 1.0 / o.checker_size;
+  p.inv_scale = 1.0 / o.noise_scale;
+  p.inv_period = 1.0 / o.period;
+  p.turbulence = o.turbulence;
+  p.octaves = o.octaves;
+  // The noise's permutation: 0..255 shuffled by Fisher-Yates with
+  // splitmix64(seed), twice over so p[i + 1] never wraps.
+  std::array<std::uint8_t, 256> perm;
+  for (int i = 0; i < 256; ++i) perm[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(i);
+  std::uint64_t state = o.seed;
+  for (std::uint64_t i = 255; i >= 1; --i) std::swap(perm[i], perm[splitmix64(state) % (i + 1)]);
+  shading->perm.resize(512);
+  for (std::size_t i = 0; i < 512; ++i) shading->perm[i] = perm[i & 255];
+  p.perm = shading->perm.data();
 
-  Rgba8 shade(const glm::dvec3& abc) const {
-    switch (o_.function) {
-      case SliceFunction::single_color: return o_.color;
-      case SliceFunction::color_ramp: return ramp_stops(clamp01((abc.z - frame_.lo.z) * inv_extent_.z));
-      case SliceFunction::interpolated_colors: {
-        const double s = clamp01((abc.x - frame_.lo.x) * inv_extent_.x);
-        const double t = clamp01((abc.y - frame_.lo.y) * inv_extent_.y);
-        // mix of mixes in doubles, rounded once: the bilinear value.
-        Rgba8 out;
-        const auto& c = o_.corners;
-        const auto channel = [s, t](std::uint8_t c0, std::uint8_t c1, std::uint8_t c2, std::uint8_t c3) {
-          const double bottom = c0 + (static_cast<double>(c1) - c0) * s;
-          const double top = c2 + (static_cast<double>(c3) - c2) * s;
-          return static_cast<std::uint8_t>(static_cast<int>(bottom + (top - bottom) * t + 0.5));
-        };
-        out.r = channel(c[0].r, c[1].r, c[2].r, c[3].r);
-        out.g = channel(c[0].g, c[1].g, c[2].g, c[3].g);
-        out.b = channel(c[0].b, c[1].b, c[2].b, c[3].b);
-        out.a = channel(c[0].a, c[1].a, c[2].a, c[3].a);
-        return out;
-      }
-      case SliceFunction::checker: {
-        const double n = std::floor(abc.x * inv_cell_) + std::floor(abc.y * inv_cell_) + std::floor(abc.z * inv_cell_);
-        return o_.checker_colors[std::fmod(n, 2.0) == 0.0 ? 0 : 1];
-      }
-      case SliceFunction::wood: {
-        const double r = std::sqrt(abc.x * abc.x + abc.y * abc.y);
-        const double T = noise_->turbulence(abc.x * inv_scale_, abc.y * inv_scale_, abc.z * inv_scale_, o_.octaves);
-        return ramp_even(0.5 - 0.5 * std::cos(kTwoPi * (r * inv_period_ + o_.turbulence * T)));
-      }
-      case SliceFunction::marble: {
-        const double T = noise_->turbulence(abc.x * inv_scale_, abc.y * inv_scale_, abc.z * inv_scale_, o_.octaves);
-        return ramp_even(0.5 + 0.5 * std::sin(kTwoPi * (abc.z * inv_period_ + o_.turbulence * T)));
-      }
-      case SliceFunction::rock: {
-        const double F = noise_->fbm(abc.x * inv_scale_, abc.y * inv_scale_, abc.z * inv_scale_, o_.octaves);
-        return ramp_even(clamp01(0.5 + 0.5 * F));
-      }
-      case SliceFunction::custom: {
-        std::size_t index = 0, stride = 1;
-        for (int i = 0; i < 3; ++i) {
-          const int n = o_.lookup_dims[static_cast<std::size_t>(i)];
-          const double t = clamp01((abc[i] - frame_.lo[i]) * inv_extent_[i]);
-          const auto cell = std::min(static_cast<std::size_t>(t * n), static_cast<std::size_t>(n - 1));
-          index += cell * stride;
-          stride *= static_cast<std::size_t>(n);
-        }
-        return o_.lookup_colors[index];
-      }
-    }
-    return o_.color;
+  SliceVoxelFrame& f = shading->frame;
+  for (int i = 0; i < 3; ++i) {
+    f.grid_origin[i] = grid.origin[i];
+    f.frame_origin[i] = frame.origin[i];
+    f.u[i] = frame.u[i];
+    f.v[i] = frame.v[i];
+    f.w[i] = frame.w[i];
   }
-
- private:
-  Rgba8 ramp_stops(double t) const {
-    const std::vector<RampStop>& s = o_.ramp;
-    if (t < s.front().position) return s.front().color;
-    if (t >= s.back().position) return s.back().color;
-    std::size_t i = 0;
-    while (i + 1 < s.size() && s[i + 1].position <= t) ++i;
-    // s[i].position <= t < s[i + 1].position
-    return mix(s[i].color, s[i + 1].color, (t - s[i].position) / (s[i + 1].position - s[i].position));
-  }
-
-  // ramp(colours, t): n colours spread evenly over [0, 1].
-  Rgba8 ramp_even(double t) const {
-    const std::vector<Rgba8>& c = o_.noise_colors;
-    const double s = t * static_cast<double>(c.size() - 1);
-    const std::size_t i = std::min(static_cast<std::size_t>(s), c.size() - 2);
-    return mix(c[i], c[i + 1], s - static_cast<double>(i));
-  }
-
-  const SliceOptions& o_;
-  const SliceFrame& frame_;
-  glm::dvec3 inv_extent_{0.0};
-  double inv_cell_ = 1.0, inv_scale_ = 1.0, inv_period_ = 1.0;
-  std::optional<detail::PerlinNoise> noise_;
-};
+  f.voxel_size = grid.voxel_size;
+  // Along a row the centre moves by voxel_size along x: the frame
+  // coordinates by voxel_size * (u.x, v.x, w.x).
+  f.step[0] = grid.voxel_size * frame.u.x;
+  f.step[1] = grid.voxel_size * frame.v.x;
+  f.step[2] = grid.voxel_size * frame.w.x;
+  return shading;
+}
 
 }  // namespace detail
 
@@ -259,34 +210,50 @@ void validate(const SliceOptions& o) {
   }
 }
 
+namespace {
+Rgba8 rgba(const detail::ShadeColour& c) { return {c.r, c.g, c.b, c.a}; }
+}  // namespace
+
 Rgba8 evaluate_slice(const SliceOptions& options, const SliceFrame& frame, const glm::dvec3& model_point) {
   validate(options);
-  return detail::SliceShader(options, frame).shade(frame.coordinates(model_point));
+  const auto shading = detail::make_slice_shading(options, frame, Grid{});
+  const glm::dvec3 abc = frame.coordinates(model_point);
+  return rgba(detail::slice_shade(shading->params, abc.x, abc.y, abc.z));
 }
 
-SliceColours::SliceColours(const SliceOptions& options, const SliceFrame& frame, const Grid& grid)
-    : options_(options), frame_(frame), grid_(grid) {
-  validate(options_);
-  // Along a row the centre moves by voxel_size along x: the frame
-  // coordinates by voxel_size * (u.x, v.x, w.x).
-  step_ = grid_.voxel_size * glm::dvec3(frame_.u.x, frame_.v.x, frame_.w.x);
-  shader_ = std::make_unique<const detail::SliceShader>(options_, frame_);
+SliceColours::SliceColours(const SliceOptions& options, const SliceFrame& frame, const Grid& grid) : grid_(grid) {
+  validate(options);
+  shading_ = detail::make_slice_shading(options, frame, grid);
 }
 
 SliceColours::~SliceColours() = default;
 
 glm::dvec3 SliceColours::row_start(std::int64_t j, std::int64_t k) const {
-  return frame_.coordinates(grid_.center(0, j, k));
+  double start[3];
+  detail::slice_row_start(shading_->frame, j, k, start);
+  return {start[0], start[1], start[2]};
 }
 
 Rgba8 SliceColours::along_row(const glm::dvec3& start, std::int64_t i) const {
-  const double x = static_cast<double>(i);
-  return shader_->shade({start.x + x * step_.x, start.y + x * step_.y, start.z + x * step_.z});
+  const double s[3] = {start.x, start.y, start.z};
+  return rgba(detail::slice_along_row(shading_->params, shading_->frame, s, i));
+}
+
+ComputeDevice slice_device_for(const SliceOptions& options, const Grid& grid) {
+  if (options.device != ComputeDevice::automatic) return options.device;
+  const bool noise = options.function == SliceFunction::wood || options.function == SliceFunction::marble ||
+                     options.function == SliceFunction::rock;
+  return noise && grid.voxel_count() >= (std::uint64_t{1} << 21) && cuda_unavailable_reason().empty()
+             ? ComputeDevice::cuda
+             : ComputeDevice::cpu;
 }
 
 DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const SliceOptions& options,
-                                  JobControl* control) {
+                                  JobControl* control, SliceRunReport* report) {
   validate(options);
+  if (slice_device_for(options, grid) == ComputeDevice::cuda)
+    return detail::voxelize_slice_on(detail::SliceBackend::cuda, mesh, grid, options, control, report);
+  if (report) *report = SliceRunReport{};
   const SliceColours colours(options, make_slice_frame(mesh, options.axis), grid);
 
   // The solid takes the first half of the caller's share of the bar, the

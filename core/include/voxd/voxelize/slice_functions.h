@@ -57,7 +57,10 @@
 //     marble: t = 1/2 + 1/2 sin(2 pi c / period + 2 pi turbulence * T(q)):
 //             bands across the axis, `period` apart, veined by the noise.
 //     rock:   t = clamp(1/2 + 1/2 F(q)): fractal noise.
-//     then ramp(noise_colors, t) (two or three colours).
+//     then ramp(noise_colors, t) (two or three colours). sin and cos here
+//     are voxd's own (x reduced exactly to an eighth of a turn, then
+//     fdlibm's polynomials; within 2 ulp), so that the CPU and the GPU
+//     compute the same bits (core/src/voxelize/slice_shading.h).
 //  - custom:              a small 3D lookup image stretched over the part's
 //                         extent in the frame, nearest cell: with s, t as for
 //                         interpolated_colors and u = clamp((c - lo.c) /
@@ -84,6 +87,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "voxd/compute_device.h"
 #include "voxd/dense_volume.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
@@ -149,7 +153,28 @@ struct SliceOptions {
 
   InsideTest inside = InsideTest::parity;  // which voxels are interior (voxd/voxelize/voxelize.h)
   int threads = 0;                         // 0 = all cores
+  // Where the colours are computed (voxd/compute_device.h): the same bytes
+  // on either. The solid they colour is made on the CPU. automatic takes
+  // the GPU for the noise functions on grids of 2^21 voxels or more, where
+  // the colours cost far more than copying them back.
+  ComputeDevice device = ComputeDevice::cpu;
+  // Bytes of GPU memory the colouring may hold at once; grids that need
+  // more go slab by slab. 0 = three quarters of the GPU's free memory.
+  std::uint64_t gpu_memory = 0;
 };
+
+// What a run of voxelize_slice did, for the job's record and the benchmarks.
+struct SliceRunReport {
+  ComputeDevice device = ComputeDevice::cpu;  // where the colours were computed (cpu or cuda)
+  std::int64_t slabs = 0;                     // GPU: slabs of z layers, one after another
+  std::uint64_t gpu_bytes = 0;                // GPU: memory held at once
+  double gpu_kernel_ms = 0.0;                 // GPU: time in the colouring kernel
+  double gpu_copy_ms = 0.0;                   // GPU: time copying solids in and colours out
+};
+
+// The device options.device resolves to for `grid`: cpu or cuda (automatic
+// as above; cuda stays cuda, available or not).
+ComputeDevice slice_device_for(const SliceOptions& options, const Grid& grid);
 
 // The slicing frame of a mesh and an axis (formulas above).
 struct SliceFrame {
@@ -181,7 +206,7 @@ void validate(const SliceOptions& options);
 Rgba8 evaluate_slice(const SliceOptions& options, const SliceFrame& frame, const glm::dvec3& model_point);
 
 namespace detail {
-class SliceShader;
+struct SliceShading;
 }
 
 // The colours voxelize_slice gives the voxels of `grid`, a voxel at a time
@@ -206,11 +231,8 @@ class SliceColours {
   Rgba8 along_row(const glm::dvec3& start, std::int64_t i) const;
 
  private:
-  SliceOptions options_;
-  SliceFrame frame_;
   Grid grid_;
-  glm::dvec3 step_{0.0};
-  std::unique_ptr<const detail::SliceShader> shader_;
+  std::unique_ptr<const detail::SliceShading> shading_;
 };
 
 // The coloured solid: each voxel the solid voxelization {solid,
@@ -218,8 +240,12 @@ class SliceColours {
 // voxel (0, 0, 0, 0). Only filled voxels are evaluated. The result does not
 // depend on options.threads. `control` may be null; when given, progress is
 // reported (the solid the first half, the colours the second) and
-// cancellation honoured (Error(cancelled)). Throws as validate does.
+// cancellation honoured (Error(cancelled)). Throws as validate does, and
+// Error(invalid_argument) with cuda_unavailable_reason() when the options
+// resolve to cuda where no GPU can run them, Error(limit_exceeded) when not
+// even one z layer fits the GPU memory budget. `report`, when given, says
+// where and how the colours were made.
 DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const SliceOptions& options,
-                                  JobControl* control = nullptr);
+                                  JobControl* control = nullptr, SliceRunReport* report = nullptr);
 
 }  // namespace voxd
