@@ -116,6 +116,9 @@ class JobMode {
   // by "auto"); false for a mode that counts crossings itself, which is
   // parity whatever the mesh (and refuses the key).
   virtual bool uses_inside_test() const { return true; }
+  // Whether part of its run can go to a GPU (voxd/compute_device.h): a job
+  // of another mode that asks for device cuda is refused.
+  virtual bool runs_on_gpu() const { return false; }
   // Whether the job's bits are the parity solid of the mesh, made before
   // run() (which then makes only the values).
   virtual bool needs_parity_solid(const JobParams& params) const;

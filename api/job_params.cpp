@@ -110,7 +110,7 @@ JobParams parse_job_params(const json& params) {
   Validator val;
   JobParams out;
   if (!val.is_object(params, "")) throw InvalidParams(std::move(val.errors));
-  std::vector<std::string_view> keys = {"grid", "mode", "inside", "units", "rotation", "orient", "analyses", "streaming"};
+  std::vector<std::string_view> keys = {"grid", "mode", "inside", "units", "rotation", "orient", "analyses", "streaming", "device"};
   std::vector<std::string_view> names;
   for (const JobMode* m : job_modes()) {
     names.push_back(m->name());
@@ -143,6 +143,13 @@ JobParams parse_job_params(const json& params) {
   if (!out.mode->uses_inside_test()) out.inside_auto = false;
   if (auto u = val.one_of(params, "", "units", kLengthUnitNames)) out.units = *u;
   if (auto s = val.one_of(params, "", "streaming", kStreamingNames)) out.streaming = *s;
+  if (auto d = val.one_of(params, "", "device", kComputeDeviceNames)) {
+    out.device = *d;
+    // Whether this machine has a GPU is for the one that runs the job to
+    // say (prepare_voxel_job): a client validates the JSON without one.
+    if (*d == ComputeDevice::cuda && !out.mode->runs_on_gpu())
+      val.fail("/device", "mode \"" + out.mode_name() + "\" runs only on the CPU; drop \"device\" or use auto or cpu");
+  }
   out.mode->complete(val, params, out);
   if (params.contains("analyses")) {
     try {

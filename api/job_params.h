@@ -12,6 +12,7 @@
 #include "api/analysis_request.h"
 #include "api/job_mode.h"
 #include "api/length_unit.h"
+#include "voxd/compute_device.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/grid.h"
 #include "voxd/voxelize/voxelize.h"
@@ -46,6 +47,9 @@ struct JobParams {
   // Analyses the worker prepares once the volume exists (api/analysis_request.h).
   std::vector<AnalysisRequest> analyses;
   Streaming streaming = Streaming::automatic;
+  // "device": where what a GPU can compute runs (the mode's run reads it);
+  // unset, the service's own, which preparing the job fills in.
+  std::optional<ComputeDevice> device;
 
   JobParams();
   // The job's "mode" as written (api/modes/mode_registry.cpp lists them).

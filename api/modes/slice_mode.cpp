@@ -31,6 +31,9 @@ class SliceMode final : public ModeWithOptions<SliceParams> {
       val.fail("/slice", "required with mode \"slice\": at least {\"function\": ...}");
   }
 
+  // The colours; the solid they colour is made on the CPU.
+  bool runs_on_gpu() const override { return true; }
+
   std::optional<ValueVolume> value_type(const JobParams&) const override { return ValueVolume(DenseVolume<Rgba8>()); }
   bool colour_values() const override { return true; }
 
@@ -45,7 +48,9 @@ class SliceMode final : public ModeWithOptions<SliceParams> {
     SliceOptions o = options(in.params);
     o.inside = in.params.inside;
     o.threads = in.threads;
-    DenseVolume<Rgba8> colours = voxelize_slice(in.mesh, in.grid, o, in.control);
+    o.device = in.params.device.value_or(ComputeDevice::automatic);
+    SliceRunReport report;
+    DenseVolume<Rgba8> colours = voxelize_slice(in.mesh, in.grid, o, in.control, &report);
     // The solid is exactly the coloured voxels (alpha > 0).
     BitVolume solid(in.grid);
     for (std::int64_t k = 0; k < in.grid.dims.z; ++k)
@@ -60,7 +65,8 @@ class SliceMode final : public ModeWithOptions<SliceParams> {
     result.values_info = {{"quantity", "colour"},
                           {"unit", "rgba8"},
                           {"function", to_string(o.function)},
-                          {"axis", {frame.w.x, frame.w.y, frame.w.z}}};
+                          {"axis", {frame.w.x, frame.w.y, frame.w.z}},
+                          {"device", to_string(report.device)}};
     result.values = std::make_shared<const ValueVolume>(std::move(colours));
     return result;
   }

@@ -65,6 +65,7 @@ void apply_param_flags(const Args& args, json& params) {
   if (auto v = args.value("mode")) params["mode"] = *v;
   if (auto v = args.value("inside")) params["inside"] = *v;
   if (auto v = args.value("units")) params["units"] = *v;
+  if (auto v = args.value("device")) params["device"] = *v;
 }
 
 int thread_count(const Args& args) {

@@ -87,6 +87,7 @@ int serve_command(int argc, char** argv) {
   jc.limits.decode.max_bytes = config.max_upload_bytes;
   jc.limits.decode.max_triangles = config.max_triangles;
   jc.limits.max_voxels = config.max_voxels;
+  jc.limits.device = config.device;
   jc.limits.max_streamed_voxels = config.max_streamed_voxels;
   DracoIsolation draco;
   draco.max_triangles = config.max_triangles;
@@ -197,6 +198,11 @@ int serve_command(int argc, char** argv) {
     jobs.shutdown(std::chrono::seconds(config.shutdown_grace));
     server.stop();
   });
+  for (const GpuInfo& gpu : cuda_devices())
+    log("GPU " + gpu.name + " (" + std::to_string(gpu.memory_bytes >> 20) + " MiB, compute " +
+        std::to_string(gpu.compute_major) + "." + std::to_string(gpu.compute_minor) + ")");
+  log(std::string("device ") + to_string(config.device) +
+      (cuda_devices().empty() ? " (no GPU: " + cuda_unavailable_reason() + ")" : ""));
   log("listening on http://" + config.host + ":" + std::to_string(port) + " (data dir " + config.data_dir + ")");
   server.listen_after_bind();
   // listen_after_bind returns after stop(); a failure to serve without a

@@ -53,6 +53,15 @@ const std::vector<Option>& options() {
       {"workers", "voxelization worker threads; 0 = one per core",
        [](ServeConfig& c, const std::string& v, const std::string& s) { c.workers = static_cast<int>(to_u64(v, s, 0, 1024)); },
        [](const ServeConfig& c) { return std::to_string(c.workers); }},
+      {"device", "where jobs that name no \"device\" run what a GPU can (a slice job's colours): auto (a GPU where there is one and the job pays for it), cpu, or cuda (needs a GPU; checked at start)",
+       [](ServeConfig& c, const std::string& v, const std::string& s) {
+         const std::optional<ComputeDevice> d = compute_device_from_string(v);
+         if (!d) throw UsageError(s + " must be auto, cpu or cuda, got '" + v + "'");
+         if (*d == ComputeDevice::cuda && !cuda_unavailable_reason().empty())
+           throw UsageError(s + ": " + cuda_unavailable_reason());
+         c.device = *d;
+       },
+       [](const ServeConfig& c) { return std::string(to_string(c.device)); }},
       {"queue-size", "jobs waiting for a worker before 429",
        [](ServeConfig& c, const std::string& v, const std::string& s) { c.queue_size = to_u64(v, s, 1, 1000000); },
        [](const ServeConfig& c) { return std::to_string(c.queue_size); }},

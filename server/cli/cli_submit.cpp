@@ -55,8 +55,9 @@ The job runs on the service, with its limits; the flags are voxd voxelize's.
                          and its format's extension (OUT.analysis.json), or
                          into --analyses-dir DIR
   --resolution N, --voxel-size H, --origin X,Y,Z, --dims NX,NY,NZ,
-  --padding P, --mode M, --inside T, --units U, --streaming S
-                         as for voxd voxelize (they override --params)
+  --padding P, --mode M, --inside T, --units U, --streaming S, --device D
+                         as for voxd voxelize (they override --params; the
+                         service's GPU is what device cuda needs)
   --format F             {formats}
                          (default: from OUT's extension)
   --raw-packing P, --nrrd-encoding E, --quantize Q
@@ -349,7 +350,7 @@ class ProgressBar {
 int submit(int argc, char** argv) {
   std::set<std::string> valued(std::begin(kParamFlags), std::end(kParamFlags));
   valued.insert(std::begin(kOutputFlags), std::end(kOutputFlags));
-  valued.insert({"server", "api-key", "streaming", "name", "tags", "callback", "analysis", "analyses-dir"});
+  valued.insert({"server", "api-key", "streaming", "device", "name", "tags", "callback", "analysis", "analyses-dir"});
   Args args(argc, argv, 2, valued, {"json", "report", "no-progress", "help"});
   if (args.has("help")) {
     std::cout << with_format_list(kUsage);

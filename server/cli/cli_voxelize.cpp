@@ -65,6 +65,10 @@ volume to OUT ("-" for standard output).
   --quantize Q           none (default) | u8 | u16: float values as rle levels
                          (value = offset + scale * level, both in the header)
   --threads N            worker threads (default: all cores)
+  --device D             auto (default) | cpu | cuda: where a slice job's
+                         colours are computed (auto: a CUDA GPU for the noise
+                         functions on grids of 2^21 voxels or more, where one
+                         is); the same bytes on either
   --streaming S          auto (default) | on | off: voxelize slab by slab and
                          write each slab as it is done, in bounded memory
                          (modes of bits with the parity inside test, and
@@ -109,7 +113,7 @@ std::string format_seconds(double s) {
 int voxelize_command(int argc, char** argv) {
   Args args(argc, argv, 2,
             {"params", "resolution", "voxel-size", "origin", "dims", "padding", "mode", "inside", "units", "format",
-             "raw-packing", "nrrd-encoding", "quantize", "threads", "output", "max-voxels", "streaming"},
+             "raw-packing", "nrrd-encoding", "quantize", "threads", "output", "max-voxels", "streaming", "device"},
             {"json", "report", "help"});
   if (args.has("help")) {
     std::cout << usage();

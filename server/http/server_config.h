@@ -6,12 +6,16 @@
 #include <string>
 #include <vector>
 
+#include "voxd/compute_device.h"
+
 namespace voxd::server {
 
 struct ServeConfig {
   std::string host = "127.0.0.1";
   int port = 8080;  // 0: any free port (the chosen one is logged)
   int workers = 0;  // 0: one per core
+  // Where jobs that name no "device" run what a GPU can (a slice job's colours).
+  ComputeDevice device = ComputeDevice::automatic;
   std::size_t queue_size = 64;
   std::string data_dir = "voxd-data";
   std::uint64_t max_upload_bytes = std::uint64_t{256} << 20;

@@ -123,6 +123,11 @@ PreparedVoxelJob prepare_voxel_job(MeshFormat detected, std::span<const std::uin
                                    std::string_view name_hint, const api::JobParams& params, const JobLimits& limits) {
   PreparedVoxelJob job;
   job.params = params;
+  // The machine's default device, and a GPU asked for where none can run
+  // the job refused before any work.
+  if (!job.params.device) job.params.device = limits.device;
+  if (*job.params.device == ComputeDevice::cuda && job.params.mode->runs_on_gpu())
+    if (const std::string& why = cuda_unavailable_reason(); !why.empty()) throw Error(ErrorCode::invalid_argument, why);
   Stopwatch clock;
   job.format = detected;
   job.mesh = decode_detected_mesh(detected, mesh_bytes, name_hint, limits.decode, &job.decode_warnings);

@@ -77,6 +77,9 @@ struct JobLimits {
   // then counts the edges of the welded mesh, exactly and once, rather
   // than hashing them in parallel (the choice for a job that never welds).
   bool welds_mesh = false;
+  // Where a job that names no "device" runs what a GPU can (voxd serve
+  // --device, voxd voxelize --device; voxd/compute_device.h).
+  ComputeDevice device = ComputeDevice::automatic;
 };
 
 struct StageTimings {

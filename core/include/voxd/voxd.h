@@ -6,6 +6,7 @@
 #include "voxd/bit_volume.h"
 #include "voxd/byte_sink.h"
 #include "voxd/byte_source.h"
+#include "voxd/compute_device.h"
 #include "voxd/dense_volume.h"
 #include "voxd/enum_names.h"
 #include "voxd/error.h"

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# The GPU checks of the CUDA backend (issue #40), for a machine with an
+# NVIDIA GPU that has CUDA and Python but none of Debian's packages: build
+# and pack here, run there, all within 5 minutes.
+#   bench/gpu/check.sh pack BUILD_DIR OUT_DIR
+#       packs the gpu tests, the host-side tests and the benchmark with the
+#       shared libraries they need that a bare machine lacks into
+#       OUT_DIR/pack.tar.xz (BUILD_DIR built with -DVOXD_CUDA=ON)
+#   bench/gpu/check.sh run PACK_DIR [RESULTS_DIR]
+#       unpacks PACK_DIR/pack.tar.xz and runs: the gpu tests (the kernel's
+#       bytes against the CPU's, every slice function, three meshes, odd
+#       grids, slab by slab), the host-side tests, then the benchmark of
+#       every slice function at 512^3 on the CPU's threads (all of them,
+#       VOXD_THREADS to pin) and on the GPU, and prints the speed-ups.
+#       Results (gtest and benchmark JSON) go to RESULTS_DIR (default $OUT
+#       when set, else ./gpu-results).
+set -euo pipefail
+
+case "${1:-}" in
+  pack)
+    build=$2 out=$3
+    stage=$(mktemp -d); trap 'rm -rf "$stage"' EXIT
+    mkdir -p "$stage/bin" "$stage/lib" "$out"
+    for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench; do
+      cp "$build/$exe" "$stage/bin/"
+      # The C and C++ runtimes stay behind: the GPU machine has its own, newer.
+      ldd "$build/$exe" | awk '/=> \// {print $3}' |
+        grep -v -E '/(libc|libm|libstdc\+\+|libgcc_s|libpthread|libdl|librt|ld-linux[^/]*)\.so' |
+        while read -r lib; do cp -Ln "$lib" "$stage/lib/" 2>/dev/null || true; done
+    done
+    tar -C "$stage" -cJf "$out/pack.tar.xz" .
+    echo "$out/pack.tar.xz: $(du -h "$out/pack.tar.xz" | cut -f1)"
+    ;;
+  run)
+    pack=$2
+    results=${3:-${OUT:-./gpu-results}}
+    mkdir -p "$results"
+    root=$(mktemp -d)
+    tar -C "$root" -xJf "$pack/pack.tar.xz"
+    export LD_LIBRARY_PATH="$root/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | tee "$results/gpu.txt"
+    echo "CPU threads: $(nproc)" | tee -a "$results/gpu.txt"
+    status=0
+    timeout 120 "$root/bin/slice_cuda_test" --gtest_output="json:$results/slice_cuda_test.json" || status=1
+    timeout 60 "$root/bin/slice_device_test" --gtest_filter='-SliceWithoutGpu.*' \
+      --gtest_output="json:$results/slice_device_test.json" || status=1
+    timeout 150 "$root/bin/slice_device_bench" --benchmark_filter='BM_SliceDevice/[0-9]+/512/' \
+      --benchmark_min_time=0.3 --benchmark_out="$results/slice_device_bench.json" --benchmark_out_format=json ||
+      status=1
+    python3 - "$results/slice_device_bench.json" <<'PY' | tee "$results/speedups.txt"
+import json, sys
+runs = {}
+for b in json.load(open(sys.argv[1]))["benchmarks"]:
+    if b.get("error_occurred"):
+        print("error:", b["name"], b.get("error_message")); continue
+    function, device = b["label"].split()
+    runs.setdefault(function, {})[device] = b
+print(f"{'function':22} {'cpu ms':>9} {'gpu ms':>9} {'kernel ms':>10} {'copy ms':>9} {'whole':>7} {'colours':>8}")
+for function, r in runs.items():
+    if "cpu" not in r or "cuda" not in r: continue
+    cpu, gpu = r["cpu"]["real_time"], r["cuda"]["real_time"]
+    kernel, copy = r["cuda"]["gpu_kernel_ms"], r["cuda"]["gpu_copy_ms"]
+    solid = gpu - kernel - copy  # the solid and the rest, made on the CPU either way
+    print(f"{function:22} {cpu:9.1f} {gpu:9.1f} {kernel:10.2f} {copy:9.2f} {cpu / gpu:6.1f}x "
+          f"{(cpu - solid) / max(kernel, 1e-9):7.1f}x")
+PY
+    exit $status
+    ;;
+  *)
+    sed -n '2,17p' "$0" >&2
+    exit 2
+    ;;
+esac
