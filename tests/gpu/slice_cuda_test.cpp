@@ -2,7 +2,8 @@
 // by scripts/test.sh when nvidia-smi finds one and by bench/gpu/check.sh):
 // the kernel's colours are the CPU's, byte for byte, for every function on
 // three meshes and odd grids, whole or slab by slab; device auto takes the
-// GPU where it pays; what the GPU held fits the budget it was given.
+// GPU where it pays; what the GPU held fits the budget it was given, and
+// the memory its allocations took, measured, is what the plan estimated.
 #include <cstdint>
 #include <string>
 
@@ -73,6 +74,10 @@ TEST_F(SliceCuda, SlabBySlabEqualsTheCpuAndHoldsNoMoreThanTheBudget) {
     const DenseVolume<Rgba8> gpu = voxelize_slice(ms[0], g, o, nullptr, &report);
     EXPECT_GE(report.slabs, 20);
     EXPECT_LE(report.gpu_bytes, o.gpu_memory);
+    // The estimate against what the allocations took: the driver rounds
+    // each of the 6 up to its 2 MiB pages.
+    EXPECT_GT(report.gpu_measured_bytes, 0u);
+    EXPECT_LE(report.gpu_measured_bytes, report.gpu_bytes + 6 * (std::uint64_t{2} << 20));
     EXPECT_TRUE(gpu.values() == cpu.values());
   }
 }

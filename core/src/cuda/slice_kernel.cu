@@ -71,6 +71,8 @@ class CudaSlabDevice final : public SliceSlabDevice {
   }
 
   void begin(const SliceShading& shading, const SlabShape& shape, std::int64_t max_layers) override {
+    std::size_t free_before = 0, free_after = 0, total = 0;
+    check(cudaMemGetInfo(&free_before, &total), "query of the GPU's free memory");
     shape_ = shape;
     params_ = shading.params;
     frame_ = shading.frame;
@@ -93,6 +95,8 @@ class CudaSlabDevice final : public SliceSlabDevice {
     const auto layers = static_cast<std::size_t>(max_layers);
     bits_.allocate(layers * static_cast<std::size_t>(shape.ny * shape.row_words), "allocation of the solid's slab");
     out_.allocate(layers * static_cast<std::size_t>(shape.nx * shape.ny), "allocation of the colours' slab");
+    check(cudaMemGetInfo(&free_after, &total), "query of the GPU's free memory");
+    measured_ = free_before > free_after ? free_before - free_after : 0;
   }
 
   void colour(const std::uint64_t* bits, std::int64_t k0, std::int64_t layers, ShadeColour* out) override {
@@ -123,6 +127,7 @@ class CudaSlabDevice final : public SliceSlabDevice {
 
   double kernel_ms() const override { return kernel_ms_; }
   double copy_ms() const override { return copy_ms_; }
+  std::uint64_t measured_bytes() const override { return measured_; }
 
  private:
   cudaStream_t stream_{};
@@ -136,6 +141,7 @@ class CudaSlabDevice final : public SliceSlabDevice {
   DeviceBuffer<std::uint64_t> bits_;
   DeviceBuffer<ShadeColour> out_;
   double kernel_ms_ = 0.0, copy_ms_ = 0.0;
+  std::uint64_t measured_ = 0;
 };
 
 }  // namespace

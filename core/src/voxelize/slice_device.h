@@ -56,6 +56,9 @@ class SliceSlabDevice {
   // Milliseconds spent in kernels and in copies so far (0 on the host).
   virtual double kernel_ms() const { return 0.0; }
   virtual double copy_ms() const { return 0.0; }
+  // The device memory its allocations took, measured (0 on the host): what
+  // the plan's estimate is checked against.
+  virtual std::uint64_t measured_bytes() const { return 0; }
 };
 
 // The CUDA GPU (device 0), with `budget` bytes of its memory at most (0:

@@ -117,6 +117,7 @@ DenseVolume<Rgba8> voxelize_slice_on(SliceBackend backend, const Mesh& mesh, con
     report->gpu_bytes = plan.device_bytes;
     report->gpu_kernel_ms = device->kernel_ms();
     report->gpu_copy_ms = device->copy_ms();
+    report->gpu_measured_bytes = device->measured_bytes();
   }
   return out;
 }

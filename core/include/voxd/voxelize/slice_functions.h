@@ -167,7 +167,8 @@ struct SliceOptions {
 struct SliceRunReport {
   ComputeDevice device = ComputeDevice::cpu;  // where the colours were computed (cpu or cuda)
   std::int64_t slabs = 0;                     // GPU: slabs of z layers, one after another
-  std::uint64_t gpu_bytes = 0;                // GPU: memory held at once
+  std::uint64_t gpu_bytes = 0;                // GPU: memory held at once, as planned
+  std::uint64_t gpu_measured_bytes = 0;       // GPU: the free memory its allocations took, measured
   double gpu_kernel_ms = 0.0;                 // GPU: time in the colouring kernel
   double gpu_copy_ms = 0.0;                   // GPU: time copying solids in and colours out
 };
