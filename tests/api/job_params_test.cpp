@@ -82,6 +82,24 @@ TEST(JobParams, ReportsEveryOffendingFieldWithItsPath) {
   EXPECT_EQ(errors.size(), 5u);
 }
 
+TEST(JobParams, DeviceIsAChoiceThatOnlyAModeWithAGpuPathTakesAsCuda) {
+  EXPECT_FALSE(parse_job_params(json::object()).device.has_value());  // the machine's default
+  for (const char* d : {"auto", "cpu", "cuda"}) {
+    const JobParams p = parse_job_params(json{{"mode", "slice"}, {"slice", {{"function", "rock"}}}, {"device", d}});
+    EXPECT_EQ(p.device, compute_device_from_string(d)) << d;
+  }
+  // Whether this machine has a GPU is not the parser's to say: a client
+  // validates a cuda job without one.
+  EXPECT_TRUE(parse_job_params(json{{"mode", "slice"}, {"slice", {{"function", "rock"}}}, {"device", "cuda"}})
+                  .device == ComputeDevice::cuda);
+  EXPECT_EQ(parse_job_params(json{{"device", "cpu"}}).device, ComputeDevice::cpu);
+  EXPECT_TRUE(has_error(errors_of(json{{"mode", "sdf"}, {"device", "cuda"}}), "/device",
+                        "mode \"sdf\" runs only on the CPU; drop \"device\" or use auto or cpu"));
+  EXPECT_TRUE(has_error(errors_of(json{{"device", "cuda"}}), "/device", "mode \"solid\" runs only on the CPU"));
+  EXPECT_TRUE(has_error(errors_of(json{{"device", "gpu"}}), "/device", R"(must be one of "auto", "cpu", "cuda")"));
+  EXPECT_TRUE(has_error(errors_of(json{{"device", 1}}), "/device", "got number"));
+}
+
 TEST(JobParams, RejectsWrongTypesAndRanges) {
   EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"resolution": 12.5}})")), "/grid/resolution", "integer"));
   EXPECT_TRUE(has_error(errors_of(json::parse(R"({"grid": {"resolution": "256"}})")), "/grid/resolution", "integer"));
