@@ -118,6 +118,19 @@ TEST_F(SliceCuda, AutoTakesTheGpuForNoiseOnLargeGrids) {
   EXPECT_EQ(slice_device_for(o, big), ComputeDevice::cpu);
 }
 
+TEST_F(SliceCuda, AutoLeavesToTheCpuWhatTheGpuCannotHold) {
+  const Mesh mesh = meshes()[0];
+  const Grid big = grid_for(mesh, 200);
+  SliceOptions o = test::slice_case(SliceFunction::marble);
+  const DenseVolume<Rgba8> cpu = voxelize_slice(mesh, big, o);
+  o.device = ComputeDevice::automatic;
+  o.gpu_memory = 1000;
+  SliceRunReport report;
+  report.device = ComputeDevice::cuda;
+  EXPECT_TRUE(voxelize_slice(mesh, big, o, nullptr, &report).values() == cpu.values());
+  EXPECT_EQ(report.device, ComputeDevice::cpu);
+}
+
 TEST_F(SliceCuda, ABudgetBelowOneLayerIsRefused) {
   const Mesh mesh = meshes()[0];
   SliceOptions o = test::slice_case(SliceFunction::wood);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -251,8 +252,19 @@ ComputeDevice slice_device_for(const SliceOptions& options, const Grid& grid) {
 DenseVolume<Rgba8> voxelize_slice(const Mesh& mesh, const Grid& grid, const SliceOptions& options,
                                   JobControl* control, SliceRunReport* report) {
   validate(options);
-  if (slice_device_for(options, grid) == ComputeDevice::cuda)
-    return detail::voxelize_slice_on(detail::SliceBackend::cuda, mesh, grid, options, control, report);
+  if (slice_device_for(options, grid) == ComputeDevice::cuda) {
+    if (options.device == ComputeDevice::cuda)
+      return detail::voxelize_slice_on(detail::SliceBackend::cuda, mesh, grid, options, control, report);
+    // automatic: a GPU that cannot take the work (its memory taken by
+    // others, a CUDA failure) leaves it to the CPU, whose bytes are the
+    // same; the report says where it ran. Cancellation is not a failure.
+    try {
+      return detail::voxelize_slice_on(detail::SliceBackend::cuda, mesh, grid, options, control, report);
+    } catch (const Error& e) {
+      if (e.code() == ErrorCode::cancelled) throw;
+    } catch (const std::runtime_error&) {
+    }
+  }
   if (report) *report = SliceRunReport{};
   const SliceColours colours(options, make_slice_frame(mesh, options.axis), grid);
 

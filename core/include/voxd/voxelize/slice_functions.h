@@ -156,7 +156,8 @@ struct SliceOptions {
   // Where the colours are computed (voxd/compute_device.h): the same bytes
   // on either. The solid they colour is made on the CPU. automatic takes
   // the GPU for the noise functions on grids of 2^21 voxels or more, where
-  // the colours cost far more than copying them back.
+  // the colours cost far more than copying them back, and the CPU when the
+  // GPU fails them (its memory taken by others, a CUDA error).
   ComputeDevice device = ComputeDevice::cpu;
   // Bytes of GPU memory the colouring may hold at once; grids that need
   // more go slab by slab. 0 = three quarters of the GPU's free memory.
