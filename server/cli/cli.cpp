@@ -21,6 +21,7 @@ usage:
   voxd analyze MESH -o DIR [options]   manufacturing analysis into DIR (analysis.json)
   voxd submit MESH -o OUT [options]    run the job on a voxd service (--server URL)
   voxd serve [options]                 the HTTP service (voxd serve --help)
+  voxd devices [--json]                the GPUs it can compute on, or why none
   voxd --version
 
 Run 'voxd COMMAND --help' for a command's options.
@@ -44,6 +45,7 @@ int run(int argc, char** argv) {
     if (command == "analyze") return analyze_command(argc, argv);
     if (command == "submit") return submit_command(argc, argv);
     if (command == "serve") return serve_command(argc, argv);
+    if (command == "devices") return devices_command(argc, argv);
     // Internal: the service's isolated Draco decoder (server/draco_isolation.h).
     if (command == "decode-draco-isolated") return server::decode_draco_child(argc, argv);
     throw UsageError("unknown command '" + command + "' (try voxd --help)");

@@ -8,5 +8,6 @@ int voxelize_command(int argc, char** argv);
 int submit_command(int argc, char** argv);
 int analyze_command(int argc, char** argv);
 int serve_command(int argc, char** argv);
+int devices_command(int argc, char** argv);
 
 }  // namespace voxd::cli

@@ -3,8 +3,9 @@
 // are those of a machine without one wherever the test runs: auto runs a
 // slice job on the CPU with the bytes of device cpu and says so, cuda is
 // refused before any work with what to use instead, a mode that runs only
-// on the CPU refuses cuda at its field, and `serve --device cuda` does not
-// start.
+// on the CPU refuses cuda at its field, `serve --device cuda` does not
+// start, and `voxd devices` says why there is no GPU.
+#include <cstdlib>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -18,6 +19,9 @@ namespace {
 using nlohmann::json;
 
 const std::vector<std::string> kNoGpu = {"CUDA_VISIBLE_DEVICES="};
+// This process too, before anything asks CUDA, so the reasons it expects
+// are those the hidden voxd gives on a GPU machine as well.
+const bool kGpusHidden = setenv("CUDA_VISIBLE_DEVICES", "", 1) == 0;
 
 class ComputeDeviceTest : public HttpServiceTest {};
 
@@ -80,6 +84,19 @@ TEST_F(ComputeDeviceTest, ServeWithDeviceCudaDoesNotStartWithoutAGpu) {
   EXPECT_EQ(cli.exit_code, 2) << cli.err;
   EXPECT_NE(cli.err.find("device cuda: "), std::string::npos) << cli.err;
   EXPECT_NE(cli.err.find("use device auto or cpu"), std::string::npos) << cli.err;
+}
+
+TEST_F(ComputeDeviceTest, DevicesListsNoGpuAndSaysWhy) {
+  ASSERT_TRUE(kGpusHidden);
+  const ProcessResult r = run_process("CUDA_VISIBLE_DEVICES= " + std::string(VOXD_BINARY) + " devices --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json d = json::parse(r.out);
+  EXPECT_EQ(d.at("cuda_built"), cuda_built());
+  EXPECT_TRUE(d.at("gpus").empty());
+  EXPECT_EQ(d.at("cuda_unavailable"), cuda_unavailable_reason());
+  const ProcessResult text = run_process("CUDA_VISIBLE_DEVICES= " + std::string(VOXD_BINARY) + " devices");
+  EXPECT_EQ(text.exit_code, 0);
+  EXPECT_EQ(text.out, "cpu: yes\ncuda: none (" + cuda_unavailable_reason() + ")\n");
 }
 
 }  // namespace

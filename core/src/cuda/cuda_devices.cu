@@ -22,8 +22,12 @@ const Probe& probe() {
     const cudaError_t status = cudaGetDeviceCount(&count);
     if (status != cudaSuccess) {
       // No driver, no device, or CUDA_VISIBLE_DEVICES hiding them all.
-      p.reason = std::string("device cuda: no usable CUDA GPU on this machine (") + cudaGetErrorString(status) +
-                 "); use device auto or cpu";
+      const char* what = status == cudaErrorInsufficientDriver
+                             ? "no NVIDIA driver, or one older than this build's CUDA runtime"
+                         : status == cudaErrorNoDevice ? "no GPU visible (CUDA_VISIBLE_DEVICES may hide them)"
+                                                       : "CUDA could not start";
+      p.reason = std::string("device cuda: no usable CUDA GPU on this machine (") + what + ": " +
+                 cudaGetErrorString(status) + "); use device auto or cpu";
       return p;
     }
     for (int i = 0; i < count; ++i) {
