@@ -31,18 +31,8 @@ const bool kGpusHidden = setenv("CUDA_VISIBLE_DEVICES", "", 1) == 0;
 
 using test::code_of;
 
-Grid grid_for(const Mesh& mesh, std::int64_t n) {
-  GridRequest r;
-  r.resolution = n;
-  r.padding = 1;
-  return resolve_grid(r, bounds(mesh));
-}
-
-Mesh turned_torus() {
-  Mesh m = test::make_torus({0.1, -0.2, 0.05}, 1.0, 0.4, 48, 24);
-  rotate_mesh(m, rotation_from_axis_angle({1.0, 0.3, 0.2}, 33.0));
-  return m;
-}
+Grid grid_for(const Mesh& mesh, std::int64_t n) { return test::slice_case_grid(mesh, n); }
+Mesh turned_torus() { return test::slice_case_meshes()[0]; }
 
 // Distance in units in the last place of the double nearest to `reference`.
 double ulps(double value, long double reference) {
@@ -141,8 +131,7 @@ TEST(SliceSlabPlan, SlabsAreTheDeepestThatFitTheBudget) {
 // layers, the colours are the CPU path's, byte for byte: every function,
 // three meshes, odd grids.
 TEST(SliceEmulatedDevice, SlabBySlabEqualsTheCpuForEveryFunction) {
-  const Mesh meshes[] = {turned_torus(), test::make_icosphere({0.3, 0.1, -0.2}, 1.1, 3),
-                         test::rotated(test::make_tube(1.0, 0.6, -0.8, 0.9, 40), 20.0, 35.0)};
+  const std::vector<Mesh> meshes = test::slice_case_meshes();
   const std::int64_t sizes[] = {37, 53, 71};
   for (int m = 0; m < 3; ++m) {
     const Grid g = grid_for(meshes[m], sizes[m]);

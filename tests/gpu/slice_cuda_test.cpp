@@ -20,19 +20,8 @@
 namespace voxd {
 namespace {
 
-Grid grid_for(const Mesh& mesh, std::int64_t n) {
-  GridRequest r;
-  r.resolution = n;
-  r.padding = 1;
-  return resolve_grid(r, bounds(mesh));
-}
-
-std::vector<Mesh> meshes() {
-  Mesh torus = test::make_torus({0.1, -0.2, 0.05}, 1.0, 0.4, 48, 24);
-  rotate_mesh(torus, rotation_from_axis_angle({1.0, 0.3, 0.2}, 33.0));
-  return {torus, test::make_icosphere({0.3, 0.1, -0.2}, 1.1, 3),
-          test::rotated(test::make_tube(1.0, 0.6, -0.8, 0.9, 40), 20.0, 35.0)};
-}
+Grid grid_for(const Mesh& mesh, std::int64_t n) { return test::slice_case_grid(mesh, n); }
+std::vector<Mesh> meshes() { return test::slice_case_meshes(); }
 
 class SliceCuda : public ::testing::Test {
  protected:

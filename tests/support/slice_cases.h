@@ -1,8 +1,14 @@
 #pragma once
+#include <cstdint>
+#include <vector>
+
 // Slice-function options that exercise every field of each function (an
 // oblique axis, a ramp with a hard edge and a translucent stop, several
 // octaves, an uneven lookup), for the tests that compare two ways of
 // colouring a solid.
+#include "support/test_meshes.h"
+#include "voxd/grid.h"
+#include "voxd/transform.h"
 #include "voxd/voxelize/slice_functions.h"
 
 namespace voxd::test {
@@ -26,6 +32,21 @@ inline SliceOptions slice_case(SliceFunction f) {
   o.lookup_colors = {{255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255},
                      {255, 255, 0, 255}, {0, 255, 255, 255}, {255, 0, 255, 128}};
   return o;
+}
+
+// A grid of `n` voxels along the mesh's longest extent, 1 voxel of padding.
+inline Grid slice_case_grid(const Mesh& mesh, std::int64_t n) {
+  GridRequest r;
+  r.resolution = n;
+  r.padding = 1;
+  return resolve_grid(r, bounds(mesh));
+}
+
+// Three solids to colour: a turned torus, a sphere and a tilted tube.
+inline std::vector<Mesh> slice_case_meshes() {
+  Mesh torus = make_torus({0.1, -0.2, 0.05}, 1.0, 0.4, 48, 24);
+  rotate_mesh(torus, rotation_from_axis_angle({1.0, 0.3, 0.2}, 33.0));
+  return {torus, make_icosphere({0.3, 0.1, -0.2}, 1.1, 3), rotated(make_tube(1.0, 0.6, -0.8, 0.9, 40), 20.0, 35.0)};
 }
 
 }  // namespace voxd::test
