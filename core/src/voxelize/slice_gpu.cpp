@@ -6,6 +6,7 @@
 #include <mutex>
 #include <string>
 
+#include "voxd/compute_device.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 #include "voxd/voxelize/voxelize.h"
@@ -82,8 +83,21 @@ DenseVolume<Rgba8> voxelize_slice_on(SliceBackend backend, const Mesh& mesh, con
                                      const SliceOptions& options, JobControl* control, SliceRunReport* report) {
   validate(options);
   const auto shading = make_slice_shading(options, make_slice_frame(mesh, options.axis), grid);
-  // Fail before the solid is made: a GPU asked for and missing is the
-  // user's to fix, not worth a wasted voxelization.
+  // Fail before the solid is made: a GPU asked for and missing, or a budget
+  // given that cannot hold a layer, is the user's to fix, not worth a
+  // wasted voxelization.
+  if (backend == SliceBackend::cuda && !cuda_unavailable_reason().empty())
+    throw Error(ErrorCode::invalid_argument, cuda_unavailable_reason());
+  if (options.gpu_memory > 0) plan_slice_slabs(grid, shading->table_bytes(), options.gpu_memory);
+
+  const BitVolume solid = [&] {
+    const NestedSpan first_half(control, 0.0, 0.5);
+    return voxelize(mesh, grid, {VoxelMode::solid, options.inside, options.threads}, control);
+  }();
+  const NestedSpan second_half(control, 0.5, 1.0);
+
+  // The GPU is held only for the colours: another job's solid is made
+  // meanwhile. Its budget is read from the memory free now.
   std::unique_lock<std::mutex> gate;
   std::unique_ptr<SliceSlabDevice> device;
   std::uint64_t budget = options.gpu_memory;
@@ -95,12 +109,6 @@ DenseVolume<Rgba8> voxelize_slice_on(SliceBackend backend, const Mesh& mesh, con
     if (budget == 0) budget = shading->table_bytes() + slice_layer_bytes(grid) * static_cast<std::uint64_t>(grid.dims.z);
   }
   const SliceSlabPlan plan = plan_slice_slabs(grid, shading->table_bytes(), budget);
-
-  const BitVolume solid = [&] {
-    const NestedSpan first_half(control, 0.0, 0.5);
-    return voxelize(mesh, grid, {VoxelMode::solid, options.inside, options.threads}, control);
-  }();
-  const NestedSpan second_half(control, 0.5, 1.0);
   DenseVolume<Rgba8> out(grid);
   if (plan.slabs > 0) {
     device->begin(*shading, {grid.dims.x, grid.dims.y, solid.row_words()}, plan.layers_per_slab);
