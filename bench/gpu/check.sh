@@ -24,8 +24,9 @@ case "${1:-}" in
     for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench; do
       cp "$build/$exe" "$stage/bin/"
       # The C and C++ runtimes stay behind: the GPU machine has its own, newer.
+      # (grep finds nothing to keep for an executable of system libraries only.)
       ldd "$build/$exe" | awk '/=> \// {print $3}' |
-        grep -v -E '/(libc|libm|libstdc\+\+|libgcc_s|libpthread|libdl|librt|ld-linux[^/]*)\.so' |
+        { grep -v -E '/(libc|libm|libstdc\+\+|libgcc_s|libpthread|libdl|librt|ld-linux[^/]*)\.so' || true; } |
         while read -r lib; do cp -Ln "$lib" "$stage/lib/" 2>/dev/null || true; done
     done
     tar -C "$stage" -cJf "$out/pack.tar.xz" .
@@ -38,6 +39,10 @@ case "${1:-}" in
     root=$(mktemp -d)
     tar -C "$root" -xJf "$pack/pack.tar.xz"
     export LD_LIBRARY_PATH="$root/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    if ! nvidia-smi -L >/dev/null 2>&1; then
+      echo "check.sh run: no GPU here (nvidia-smi finds none); run it on a machine with an NVIDIA GPU" >&2
+      exit 1
+    fi
     nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | tee "$results/gpu.txt"
     echo "CPU threads: $(nproc)" | tee -a "$results/gpu.txt"
     status=0
