@@ -166,6 +166,22 @@ TEST(SliceEmulatedDevice, ReportsProgressAndHonoursCancellation) {
             ErrorCode::cancelled);
 }
 
+// A budget given that cannot hold one layer is refused before the solid is
+// made: no progress, no work.
+TEST(SliceEmulatedDevice, ABudgetBelowOneLayerIsRefusedBeforeAnyWork) {
+  const Mesh mesh = turned_torus();
+  const Grid g = grid_for(mesh, 40);
+  SliceOptions o = test::slice_case(SliceFunction::rock);
+  o.gpu_memory = detail::slice_layer_bytes(g);  // the layer, but not the tables beside it
+  JobControl control;
+  std::string message;
+  EXPECT_EQ(code_of([&] { detail::voxelize_slice_on(detail::SliceBackend::host_emulation, mesh, g, o, &control); },
+                    &message),
+            ErrorCode::limit_exceeded);
+  EXPECT_NE(message.find("cannot hold one z layer"), std::string::npos) << message;
+  EXPECT_EQ(control.progress(), 0.0);
+}
+
 // ------------------------------------------------------- without a GPU --
 
 TEST(SliceWithoutGpu, AutoRunsOnTheCpuWithTheSameBytes) {
