@@ -66,6 +66,9 @@ struct ModeInput {
   // workers); honoured by run_runs (JobMode::makes_runs), the whole grid
   // for the other runs.
   LayerRange layers{};
+  // run_runs: the consumer's work on each slab done where it is made, in
+  // parallel, before the consumer takes it (voxelize_runs' `prepare`).
+  RunSlabPreparer prepare_runs{};
 };
 
 // The volumes of a finished job, by name: "values" (the result) and each

@@ -1,5 +1,6 @@
 // Per-stage benchmarks of the engine on the 1.1M-triangle benchmark mesh:
 // parse (binary STL from memory), voxelize (parity) at 256^3..2048^3, encode.
+#include <cstdlib>
 #include <benchmark/benchmark.h>
 
 #include "bench_mesh.h"
@@ -63,19 +64,30 @@ struct CountingSink final : ByteSink {
 
 // The parity solid straight to its RLE (voxd/voxelize/runs.h): what
 // `voxd voxelize -o X.rle` runs after parsing; the dense path is
-// BM_VoxelizeParity plus BM_Encode's rle.
+// BM_VoxelizeParity plus BM_Encode's rle. Second argument 1: the writer's
+// preparer encodes each slab on the thread that made it, as the CLI and the
+// service do; 0: the writer encodes on the one thread that writes in order.
 void BM_VoxelizeRunsToRle(benchmark::State& state) {
   const Grid g = grid_at(state.range(0));
+  const bool prepared = state.range(1) != 0;
+  VoxelizeOptions options;  // VOXD_THREADS=N: N threads (default: every core)
+  if (const char* t = std::getenv("VOXD_THREADS")) options.threads = std::atoi(t);
   for (auto _ : state) {
     CountingSink sink;
     BitSlabWriter writer(g, VolumeFormat::rle, {}, sink);
-    voxelize_runs(mesh(), g, {}, [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); });
+    voxelize_runs(
+        mesh(), g, options, [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); }, nullptr, {},
+        prepared ? writer.preparer() : RunSlabPreparer());
     writer.finish();
     benchmark::DoNotOptimize(sink.n);
     state.counters["bytes"] = static_cast<double>(sink.n);
   }
+  state.SetLabel(prepared ? "encoded where made" : "encoded by the writer");
 }
-BENCHMARK(BM_VoxelizeRunsToRle)->Arg(256)->Arg(512)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_VoxelizeRunsToRle)
+    ->ArgsProduct({{256, 512, 1024, 2048}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_Encode(benchmark::State& state) {
   const Grid g = grid_at(state.range(0));

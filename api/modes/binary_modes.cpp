@@ -59,7 +59,7 @@ class BinaryMode final : public JobMode {
     options.mode = mode_;
     options.inside = in.params.inside;
     options.threads = in.threads;
-    voxelize_runs(in.mesh, in.grid, options, runs, in.control, in.layers);
+    voxelize_runs(in.mesh, in.grid, options, runs, in.control, in.layers, in.prepare_runs);
   }
 
  private:

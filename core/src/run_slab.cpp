@@ -11,9 +11,12 @@ void RunSlab::reset(const Grid& grid) {
   starts_.push_back(0);
   bounds_.clear();
   filled_ = 0;
+  prepared_.k0 = -1;
+  prepared_.bytes.clear();
 }
 
 void RunSlab::append_rows(const RunSlab& next) {
+  prepared_.k0 = -1;
   const auto base = static_cast<std::uint32_t>(bounds_.size());
   bounds_.insert(bounds_.end(), next.bounds_.begin(), next.bounds_.end());
   for (std::size_t r = 1; r < next.starts_.size(); ++r) starts_.push_back(base + next.starts_[r]);

@@ -190,7 +190,8 @@ int voxelize_command(int argc, char** argv) {
     bytes_written = write_output([&](ByteSink& sink) {
       BitSlabWriter writer(grid, *format, encode_options, sink);
       result = execute_voxel_runs_job(std::move(job), args.has("report"), nullptr, threads,
-                                      [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); });
+                                      [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); },
+                                      writer.preparer());
       writer.finish();
     });
   } else if (path == ExecutionPath::slabs) {

@@ -120,7 +120,8 @@ void JobEngine::run(Job& job, PreparedVoxelJob prepared) {
         if (prepared.path == ExecutionPath::runs) {
           // Bits only, as runs: the stored RLE is written from them.
           r = execute_voxel_runs_job(std::move(prepared), /*with_report=*/true, &job.control, engine_threads,
-                                     [&](std::int64_t k0, const RunSlab& slab) { bits.write(k0, slab); });
+                                     [&](std::int64_t k0, const RunSlab& slab) { bits.write(k0, slab); },
+                                     bits.preparer());
         } else if (!type) {
           r = execute_streamed_voxel_job(std::move(prepared), /*with_report=*/true, &job.control, engine_threads,
                                          slab_layers, to_bits);

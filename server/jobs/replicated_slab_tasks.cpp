@@ -74,7 +74,8 @@ void ReplicatedJobBackend::run_slab_task(const TakenJob& taken, const SlabTaskRe
       VoxelJobResult r;
       parts_.slab_tasks->write_blocks(id, ref.index, [&](ByteSink& sink) {
         r = execute_voxel_layers(std::move(*prepared), range, &job->control, engine_.engine_threads,
-                                 [&](std::int64_t k0, const RunSlab& slab) { write_rle_layer_blocks(k0, slab, sink); });
+                                 [&](std::int64_t k0, const RunSlab& slab) { write_rle_layer_blocks(k0, slab, sink); },
+                                 prepare_rle_layer_blocks);
       });
       job->memory.release();
       done = parts_.slab_tasks->finish_task(id, ref.index, r.filled, tasks);

@@ -373,7 +373,7 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
 namespace {
 
 VoxelJobResult execute_runs(PreparedVoxelJob& job, bool with_report, LayerRange range, JobControl* control,
-                            int threads, const RunSlabConsumer& consume) {
+                            int threads, const RunSlabConsumer& consume, const RunSlabPreparer& prepare) {
   const api::JobMode& mode = *job.params.mode;
   if (!mode.makes_runs(job.params))
     throw Error(ErrorCode::invalid_argument, "mode " + std::string(mode.name()) + " with the " +
@@ -384,6 +384,7 @@ VoxelJobResult execute_runs(PreparedVoxelJob& job, bool with_report, LayerRange 
   if (control) control->set_stage("voxelize");
   api::ModeInput in{job.mesh, job.grid, job.params, threads, control, nullptr};
   in.layers = range;
+  in.prepare_runs = prepare;
   mode.run_runs(in, [&](std::int64_t k0, const RunSlab& slab) {
     result.filled += slab.count();
     consume(k0, slab);
@@ -395,15 +396,15 @@ VoxelJobResult execute_runs(PreparedVoxelJob& job, bool with_report, LayerRange 
 }  // namespace
 
 VoxelJobResult execute_voxel_runs_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
-                                      const RunSlabConsumer& consume) {
-  VoxelJobResult result = execute_runs(job, with_report, {}, control, threads, consume);
+                                      const RunSlabConsumer& consume, const RunSlabPreparer& prepare) {
+  VoxelJobResult result = execute_runs(job, with_report, {}, control, threads, consume, prepare);
   warn_if_empty(result, job);
   return result;
 }
 
 VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,
-                                    const RunSlabConsumer& consume) {
-  VoxelJobResult result = execute_runs(job, /*with_report=*/false, range, control, threads, consume);
+                                    const RunSlabConsumer& consume, const RunSlabPreparer& prepare) {
+  VoxelJobResult result = execute_runs(job, /*with_report=*/false, range, control, threads, consume, prepare);
   result.streamed = true;
   return result;
 }

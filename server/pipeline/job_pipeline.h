@@ -214,9 +214,11 @@ VoxelJobResult execute_streamed_voxel_job(PreparedVoxelJob job, bool with_report
 // (voxd/voxelize/runs.h), slab by slab to `consume`, bit for bit those the
 // other paths make, without a dense volume; `filled` counts them, `streamed`
 // is the job's. Throws Error(invalid_argument) for a job whose mode does not
-// make runs (api::JobMode::makes_runs).
+// make runs (api::JobMode::makes_runs). `prepare`: the consumer's work on
+// each slab that can run where the slab is made, in parallel (a writer's
+// preparer(): its encoding).
 VoxelJobResult execute_voxel_runs_job(PreparedVoxelJob job, bool with_report, JobControl* control, int threads,
-                                      const RunSlabConsumer& consume);
+                                      const RunSlabConsumer& consume, const RunSlabPreparer& prepare = {});
 
 // One part of a job spread over many workers (server/jobs/slab_tasks.h):
 // only the z layers `range` of its bits, as runs to `consume`, bit for bit
@@ -224,7 +226,7 @@ VoxelJobResult execute_voxel_runs_job(PreparedVoxelJob job, bool with_report, Jo
 // (describe_voxel_job gives it). Throws Error(invalid_argument) for a job
 // whose mode does not make runs (api::JobMode::makes_runs).
 VoxelJobResult execute_voxel_layers(PreparedVoxelJob job, LayerRange range, JobControl* control, int threads,
-                                    const RunSlabConsumer& consume);
+                                    const RunSlabConsumer& consume, const RunSlabPreparer& prepare = {});
 
 // What a job's result says beside its voxels, without making them: the mesh
 // report, the rotation, the mass properties in the voxels' frame (for the

@@ -3,6 +3,7 @@
 // makes runs, on CAD-like parts and an organic blob, with grids that cut the part, over layer ranges
 // and thread counts; and the RLE of hand-made runs (rows that end full, layers
 // full or empty) against the encoder of bits.
+#include <atomic>
 #include <cstring>
 #include <random>
 #include <string>
@@ -72,11 +73,32 @@ std::vector<std::uint8_t> rle_of(const BitVolume& volume) {
   return sink.data;
 }
 
-std::vector<std::uint8_t> rle_from_runs(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options) {
+// With `prepared`, each slab's blocks are encoded by the threads that make
+// the slabs (the writer's preparer) and only copied by write(): every slab
+// must come to it so, or the copy went untested.
+std::vector<std::uint8_t> rle_from_runs(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options,
+                                        bool prepared = false) {
   VectorSink sink;
   BitSlabWriter writer(grid, VolumeFormat::rle, {}, sink);
-  voxelize_runs(mesh, grid, options, [&](std::int64_t k0, const RunSlab& slab) { writer.write(k0, slab); });
+  std::atomic<int> preparations{0};
+  int slabs = 0;
+  const RunSlabPreparer prepare = writer.preparer();
+  voxelize_runs(
+      mesh, grid, options,
+      [&](std::int64_t k0, const RunSlab& slab) {
+        ++slabs;
+        EXPECT_EQ(slab.prepared().k0, prepared ? k0 : -1);
+        EXPECT_EQ(slab.prepared().bytes.empty(), !prepared);
+        writer.write(k0, slab);
+      },
+      nullptr, {},
+      prepared ? RunSlabPreparer([&](std::int64_t k0, RunSlab& slab) {
+        ++preparations;
+        prepare(k0, slab);
+      })
+               : RunSlabPreparer());
   writer.finish();
+  EXPECT_EQ(preparations.load(), prepared ? slabs : 0);
   return sink.data;
 }
 
@@ -101,6 +123,7 @@ TEST(RunVoxelize, RunsAreTheDenseVoxelsAndTheirRleTheSameBytesInEveryMode) {
           ASSERT_GT(expected.count(), 0u);
           EXPECT_TRUE(same_words(assembled(mesh, grid, options), expected));
           EXPECT_EQ(rle_from_runs(mesh, grid, options), rle_of(expected));
+          EXPECT_EQ(rle_from_runs(mesh, grid, options, /*prepared=*/true), rle_of(expected));
         }
       }
     }
@@ -201,6 +224,53 @@ TEST(RunSlab, RleOfRunsIsTheRleOfTheirBits) {
       EXPECT_EQ(blocks_of_runs.data, blocks_of_bits.data);
     }
   }
+}
+
+// Blocks prepared where a slab was made are what the writer copies, only
+// for the layer they were made at and the rows they were made of: a slab
+// handed on at another layer, cut short, grown or reset is encoded afresh.
+TEST(RunSlab, PreparedBlocksAreCopiedOnlyForTheLayerAndRowsTheyWereMadeOf) {
+  Grid grid;
+  grid.dims = {70, 4, 3};
+  grid.voxel_size = 0.5;
+  BitVolume bits(grid);
+  for (std::int64_t k = 0; k < 3; ++k)
+    for (std::int64_t j = 0; j < 4; ++j)
+      for (std::int64_t i = 0; i < 70; ++i) bits.set(i, j, k, (i * 7 + j * 3 + k) % 5 < 2);
+  const auto blocks = [](std::int64_t k0, const auto& slab) {
+    VectorSink sink;
+    write_rle_layer_blocks(k0, slab, sink);
+    return sink.data;
+  };
+  RunSlab runs = RunSlab::from_bits(bits);
+  EXPECT_EQ(runs.prepared().k0, -1);
+  prepare_rle_layer_blocks(5, runs);
+  ASSERT_EQ(runs.prepared().k0, 5);
+  EXPECT_EQ(blocks(5, runs), blocks(5, bits));
+  // The copy is what is written: bytes planted there come out.
+  runs.prepared().bytes = {1, 2, 3};
+  EXPECT_EQ(blocks(5, runs), (std::vector<std::uint8_t>{1, 2, 3}));
+  // At another layer the slab is encoded, not copied.
+  EXPECT_EQ(blocks(6, runs), blocks(6, bits));
+  // Cut to its first two layers: dropped.
+  prepare_rle_layer_blocks(5, runs);
+  runs.set_layers(2);
+  EXPECT_EQ(runs.prepared().k0, -1);
+  // Grown by more rows: dropped.
+  RunSlab two = RunSlab::from_bits(bits);
+  prepare_rle_layer_blocks(0, two);
+  two.append_rows(RunSlab::from_bits(bits));
+  EXPECT_EQ(two.prepared().k0, -1);
+  // Reset for the next slab: dropped, bytes and all.
+  prepare_rle_layer_blocks(0, runs);
+  runs.reset(grid);
+  EXPECT_EQ(runs.prepared().k0, -1);
+  EXPECT_TRUE(runs.prepared().bytes.empty());
+  // Only an RLE writer prepares; the formats written from bits do not.
+  VectorSink sink;
+  EXPECT_TRUE(static_cast<bool>(BitSlabWriter(grid, VolumeFormat::rle, {}, sink).preparer()));
+  VectorSink raw_sink;
+  EXPECT_FALSE(static_cast<bool>(BitSlabWriter(grid, VolumeFormat::raw, {}, raw_sink).preparer()));
 }
 
 }  // namespace

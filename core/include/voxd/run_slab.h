@@ -43,7 +43,10 @@ class RunSlab {
   void end_row() { starts_.push_back(static_cast<std::uint32_t>(bounds_.size())); }
   // Ends the slab after its first `layers` layers, whose rows are all
   // built: a slab handed on before its grid's last layer.
-  void set_layers(std::int64_t layers) { grid_.dims.z = layers; }
+  void set_layers(std::int64_t layers) {
+    grid_.dims.z = layers;
+    prepared_.k0 = -1;
+  }
   // Appends the rows of `next`, a slab of the layers after this one's rows
   // (a whole grid's runs gathered slab by slab).
   void append_rows(const RunSlab& next);
@@ -56,16 +59,35 @@ class RunSlab {
   BitVolume to_bits() const;
   static RunSlab from_bits(const BitVolume& volume);
 
+  // What a RunSlabPreparer made of the slab for the consumer it comes with
+  // (a writer's encoded bytes), and the grid layer k0 it was made at. The
+  // slab's rows must not change after it; reset() and the other changes of
+  // its layers drop it.
+  struct Prepared {
+    std::int64_t k0 = -1;
+    std::vector<std::uint8_t> bytes;
+  };
+  Prepared& prepared() { return prepared_; }
+  const Prepared& prepared() const { return prepared_; }
+
  private:
   Grid grid_;
   std::vector<std::uint32_t> starts_;  // row r's bounds are [starts_[r], starts_[r + 1])
   std::vector<std::uint32_t> bounds_;
   std::uint64_t filled_ = 0;
+  Prepared prepared_;
 };
 
 // Receives z layers [k0, k0 + slab.grid().dims.z) of the grid as runs, as a
 // BitSlabConsumer does bits (voxd/bit_slabs.h): in z order, on the calling
 // thread; the slab is reused after the call returns.
 using RunSlabConsumer = std::function<void(std::int64_t k0, const RunSlab& slab)>;
+
+// Work a consumer hands to the threads that make the slabs, done on each
+// slab as soon as it is made, in parallel and in any order, before the
+// consumer takes it in z order: what it makes goes in slab.prepared() (a
+// writer's encoding, so that only copying the bytes is left to the one
+// thread that writes in order).
+using RunSlabPreparer = std::function<void(std::int64_t k0, RunSlab& slab)>;
 
 }  // namespace voxd

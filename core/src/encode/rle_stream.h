@@ -60,6 +60,8 @@ RleHeader read_rle_header(ByteCursor& in);
 void write_rle_bit_header(const Grid& grid, ByteSink& sink);
 void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink);
 void write_rle_bit_layers(const RunSlab& slab, std::int64_t k0, ByteSink& sink);
+// The blocks write_rle_bit_layers writes for `slab` at k0, into `out`.
+void encode_rle_bit_layers(const RunSlab& slab, std::int64_t k0, std::vector<std::uint8_t>& out);
 void write_rle_end(std::int64_t nz, ByteSink& sink);
 // The same for a volume of values (u8, f32 or rgba8: `slab`'s type).
 void write_rle_value_header(const ValueVolume& type, const Grid& grid, ByteSink& sink);

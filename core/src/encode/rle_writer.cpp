@@ -6,6 +6,7 @@
 #include <bit>
 #include <cstring>
 #include <functional>
+#include <span>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -35,10 +36,10 @@ constexpr std::size_t kInFlightInputBytes = std::size_t{2} << 20;
 // Below this, starting threads costs more than the encoding.
 constexpr std::size_t kParallelMinBytes = std::size_t{256} << 10;
 
-// Writes layer k's block: its payload is in `buffer` after kBlockHeaderRoom
-// bytes left for the header, which goes just before it, so the block goes to
-// the sink in one write.
-void write_block(std::int64_t k, ByteBuffer& buffer, ByteSink& sink) {
+// Layer k's block: its payload is in `buffer` after kBlockHeaderRoom bytes
+// left for the header, which goes just before it, so the block is one span
+// (to the sink in one write).
+std::span<const std::uint8_t> finish_block(std::int64_t k, ByteBuffer& buffer) {
   const std::uint64_t payload = buffer.size() - kBlockHeaderRoom;
   std::uint8_t header[kBlockHeaderRoom];
   std::uint8_t* end = header;
@@ -48,7 +49,12 @@ void write_block(std::int64_t k, ByteBuffer& buffer, ByteSink& sink) {
   const auto header_size = static_cast<std::size_t>(end - header);
   std::uint8_t* block = buffer.data() + kBlockHeaderRoom - header_size;
   std::memcpy(block, header, header_size);
-  sink.write(block, header_size + payload);
+  return {block, header_size + payload};
+}
+
+void write_block(std::int64_t k, ByteBuffer& buffer, ByteSink& sink) {
+  const std::span<const std::uint8_t> block = finish_block(k, buffer);
+  sink.write(block.data(), block.size());
 }
 
 // Encodes slabs [k_begin, k_end) with encode_slab(k, buffer), in parallel,
@@ -270,9 +276,24 @@ void write_rle_bit_layers(const BitVolume& slab, std::int64_t k0, ByteSink& sink
       [&slab, k0](std::int64_t k, ByteBuffer& out) { encode_bit_slab(slab, k - k0, out); }, sink);
 }
 
+void encode_rle_bit_layers(const RunSlab& slab, std::int64_t k0, std::vector<std::uint8_t>& out) {
+  out.clear();
+  ByteBuffer buffer;
+  for (std::int64_t k = 0; k < slab.grid().dims.z; ++k) {
+    buffer.reset(kBlockHeaderRoom);
+    encode_run_layer(slab, k, buffer);
+    const std::span<const std::uint8_t> block = finish_block(k0 + k, buffer);
+    out.insert(out.end(), block.begin(), block.end());
+  }
+}
+
 void write_rle_bit_layers(const RunSlab& slab, std::int64_t k0, ByteSink& sink) {
-  // On the calling thread: a slab of runs is small, and its maker keeps the
-  // other threads busy.
+  // Encoded where the slab was made (prepare_rle_layer_blocks), the blocks
+  // are only copied here, on the one thread that writes in order.
+  if (const RunSlab::Prepared& ready = slab.prepared(); ready.k0 == k0) {
+    sink.write(ready.bytes.data(), ready.bytes.size());
+    return;
+  }
   ByteBuffer buffer;
   for (std::int64_t k = 0; k < slab.grid().dims.z; ++k) {
     buffer.reset(kBlockHeaderRoom);

@@ -113,6 +113,11 @@ void BitSlabWriter::write(std::int64_t k0, const RunSlab& slab) {
   s.next_layer = k0 + slab.grid().dims.z;
 }
 
+RunSlabPreparer BitSlabWriter::preparer() const {
+  if (state_->format != VolumeFormat::rle) return {};
+  return prepare_rle_layer_blocks;
+}
+
 void BitSlabWriter::finish() {
   State& s = *state_;
   if (!s.begin_finish()) return;
@@ -140,6 +145,11 @@ void write_rle_layer_blocks(std::int64_t k0, const BitVolume& slab, ByteSink& si
 
 void write_rle_layer_blocks(std::int64_t k0, const RunSlab& slab, ByteSink& sink) {
   encode::write_rle_bit_layers(slab, k0, sink);
+}
+
+void prepare_rle_layer_blocks(std::int64_t k0, RunSlab& slab) {
+  encode::encode_rle_bit_layers(slab, k0, slab.prepared().bytes);
+  slab.prepared().k0 = k0;
 }
 
 void write_rle_tail(const Grid& grid, ByteSink& sink) { encode::write_rle_end(grid.dims.z, sink); }

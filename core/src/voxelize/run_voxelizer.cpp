@@ -148,7 +148,7 @@ void make_chunk_runs(const ParityVoxelizer* parity, const SurfaceVoxelizer* surf
 bool can_make_runs(const VoxelizeOptions& options) { return can_stream(options); }
 
 void voxelize_runs(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, const RunSlabConsumer& consume,
-                   JobControl* control, LayerRange range) {
+                   JobControl* control, LayerRange range, const RunSlabPreparer& prepare) {
   if (!can_make_runs(options))
     throw Error(ErrorCode::invalid_argument, std::string("the ") + to_string(options.inside) +
                                                  " inside test needs the whole grid; only parity makes runs row by row");
@@ -171,7 +171,10 @@ void voxelize_runs(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& op
     return std::min(chunks.end, (c0 + i + 1) * chunks.per_chunk) - first_layer(i);
   };
   // Two chunks in flight per thread keep every thread busy while the
-  // consumer takes the oldest.
+  // consumer takes the oldest. Only the consumer is serial: whatever of its
+  // work `prepare` does runs on the threads that make the chunks (at 16
+  // threads, encoding each chunk's RLE on the consumer's thread alone
+  // bounded the whole run, docs/benchmarks.md).
   std::vector<ChunkRuns> slots(static_cast<std::size_t>(std::min<std::int64_t>(count, 4 * threads)));
   encode::run_ordered_pipeline(
       count, threads, slots.size(),
@@ -179,6 +182,7 @@ void voxelize_runs(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& op
         if (control) control->check_cancelled();
         make_chunk_runs(parity ? &*parity : nullptr, surface ? &*surface : nullptr, grid, c0 + i, first_layer(i),
                         layer_count(i), slots[slot]);
+        if (prepare) prepare(first_layer(i), slots[slot].slab);
       },
       [&](std::int64_t i, std::size_t slot) {
         consume(first_layer(i), slots[slot].slab);

@@ -36,6 +36,11 @@ class BitSlabWriter {
   // The same from runs (voxd/voxelize/runs.h): an RLE straight from them,
   // other formats through the slab's bits.
   void write(std::int64_t k0, const RunSlab& slab);
+  // What the threads that make the slabs of runs can do for write(): encode
+  // each slab's RLE blocks as it is made (prepare_rle_layer_blocks), so that
+  // write() only copies them and the one thread writing in order does not
+  // bound how many make them. Empty for the formats written from bits.
+  RunSlabPreparer preparer() const;
   // After the last layer: the format's trailer. Throws std::logic_error if
   // layers are missing.
   void finish();
@@ -54,6 +59,10 @@ void write_rle_head(const Grid& grid, ByteSink& sink);
 // The blocks of z layers [k0, k0 + slab.grid().dims.z).
 void write_rle_layer_blocks(std::int64_t k0, const BitVolume& slab, ByteSink& sink);
 void write_rle_layer_blocks(std::int64_t k0, const RunSlab& slab, ByteSink& sink);
+// Encodes the slab's layer blocks (z layers from k0) into slab.prepared(),
+// for write_rle_layer_blocks and BitSlabWriter::write to copy: a
+// RunSlabPreparer (voxelize_runs), run on the thread that made the slab.
+void prepare_rle_layer_blocks(std::int64_t k0, RunSlab& slab);
 void write_rle_tail(const Grid& grid, ByteSink& sink);
 
 // The same for a volume of values (coverage bytes or fractions; u8, f32 or

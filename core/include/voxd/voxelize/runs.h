@@ -18,10 +18,12 @@ namespace voxd {
 bool can_make_runs(const VoxelizeOptions& options);
 
 // Hands z layers [range.begin, range.end) to `consume` as slabs of runs of a
-// few layers each, in z order. Throws Error(invalid_argument) for options that
-// do not make runs or a range off the grid. Progress runs over the layers;
-// cancellation is honoured between slabs.
+// few layers each, in z order. With `prepare`, each slab goes through it
+// first, on the thread that made it (in parallel, in any order): the
+// consumer's own work that need not wait its turn (a writer's encoding). Throws
+// Error(invalid_argument) for options that do not make runs or a range off the
+// grid. Progress runs over the layers; cancellation is honoured between slabs.
 void voxelize_runs(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& options, const RunSlabConsumer& consume,
-                   JobControl* control = nullptr, LayerRange range = {});
+                   JobControl* control = nullptr, LayerRange range = {}, const RunSlabPreparer& prepare = {});
 
 }  // namespace voxd
