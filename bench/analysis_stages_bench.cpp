@@ -79,7 +79,7 @@ void BM_Mass(benchmark::State& state, const char* name) {
 
 void BM_PartsAndVoids(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
-  for (auto _ : state) benchmark::DoNotOptimize(find_components(v));
+  for (auto _ : state) benchmark::DoNotOptimize(find_components(v, threads_of(state)));
   counters(state, v);
 }
 

@@ -1,6 +1,7 @@
 // Parts and voids against shapes with known answers and against a
 // brute-force flood fill on random volumes, for both connectivities.
 #include <algorithm>
+#include <cstdlib>
 #include <queue>
 #include <random>
 #include <string>
@@ -181,6 +182,102 @@ TEST(Components, RandomVolumesMatchABruteForceFloodFill) {
       for (const auto& p : r.parts) solid += p.voxels;
       EXPECT_EQ(solid, v.count());
     }
+  }
+}
+
+// Unsorted, as the labeller orders them: its order must not depend on the
+// thread count either.
+std::vector<Found> as_listed(const std::vector<VoxelRegion>& regions) {
+  std::vector<Found> f;
+  for (const auto& r : regions) f.push_back({r.voxels, r.bbox_min, r.bbox_max, r.centroid});
+  return f;
+}
+
+// With more threads each phase's layers are cut into runs of layers
+// labelled apart and then joined: deep random volumes, where parts, voids
+// and the outside cross the cuts in every way (a region ending in one run
+// of layers and joined again in a later one; a void that the outside
+// reaches only through a later run), against the flood fill and against a
+// single thread, in the same order. Also from the stored runs, slab by
+// slab, where each slab is cut again.
+TEST(Components, LayersLabelledApartAndJoinedAreTheRegionsOfOneThreadInTheSameOrder) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 30; ++trial) {
+    const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 40 + 1), static_cast<std::int64_t>(rng() % 12 + 1),
+                            static_cast<std::int64_t>(rng() % 57 + 8));
+    BitVolume v(unit_grid(dims));
+    const double density = 0.2 + 0.6 * (rng() % 100) / 100.0;
+    std::bernoulli_distribution fill(density);
+    for (std::int64_t k = 0; k < dims.z; ++k)
+      for (std::int64_t j = 0; j < dims.y; ++j)
+        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+    const std::vector<Found> parts = brute_force_regions(v, false), voids = brute_force_regions(v, true);
+    const ComponentReport one = find_components(v, 1);
+    ASSERT_EQ(found_of(one.parts), parts) << "trial " << trial;
+    ASSERT_EQ(found_of(one.voids), voids) << "trial " << trial;
+    std::vector<std::pair<std::string, ComponentReport>> reports;
+    for (int threads : {4, 6, 9, 16, 64}) reports.emplace_back("threads " + std::to_string(threads), find_components(v, threads));
+    VectorSink rle;
+    write_rle(v, rle);
+    for (std::int64_t layers : {5, 17}) {
+      ComponentLabeller labeller(v.grid(), 8);
+      read_rle_run_slabs(rle.data, layers, [&](std::int64_t k0, const RunSlab& slab) { labeller.add(k0, slab); });
+      reports.emplace_back("runs in slabs of " + std::to_string(layers) + " on 8 threads", labeller.finish());
+    }
+    for (const auto& [how, r] : reports) {
+      EXPECT_EQ(as_listed(r.parts), as_listed(one.parts)) << "trial " << trial << ", " << how;
+      EXPECT_EQ(as_listed(r.voids), as_listed(one.voids)) << "trial " << trial << ", " << how;
+    }
+  }
+}
+
+// Shapes made to cross the cuts (40 layers, 16 threads: runs of 5 layers):
+// an arch whose two legs meet only at its top, a cavity closed only by its
+// lid several runs up, and a shaft from a closed cavity that reaches the
+// outside only at the grid's last layer.
+TEST(Components, ArchesLidsAndShaftsAcrossTheCutsAreOneRegionEach) {
+  const glm::i64vec3 dims(12, 12, 40);
+  // An arch: two legs from layer 0 to 29, joined by a bridge at 30..33.
+  BitVolume arch(unit_grid(dims));
+  for (std::int64_t k = 0; k < 34; ++k)
+    for (std::int64_t j = 4; j < 8; ++j)
+      for (std::int64_t i = 0; i < 12; ++i)
+        if (k >= 30 || i < 3 || i >= 9) arch.set(i, j, k, true);
+  // A closed box, walls 1 thick, over layers 2..37: one void of 8 x 8 x 34.
+  BitVolume box(unit_grid(dims));
+  for (std::int64_t k = 2; k < 38; ++k)
+    for (std::int64_t j = 1; j < 11; ++j)
+      for (std::int64_t i = 1; i < 11; ++i)
+        if (k == 2 || k == 37 || j == 1 || j == 10 || i == 1 || i == 10) box.set(i, j, k, true);
+  // The same box with a shaft from its cavity up through the lid and on to
+  // the grid's top layer: no void.
+  BitVolume shaft = box.clone();
+  for (std::int64_t k = 37; k < 40; ++k)
+    for (std::int64_t j = 3; j < 6; ++j)
+      for (std::int64_t i = 3; i < 6; ++i) {
+        shaft.set(i, j, k, false);
+        if (k > 37) {
+          for (std::int64_t dj = -1; dj <= 1; ++dj)
+            for (std::int64_t di = -1; di <= 1; ++di)
+              if (std::abs(dj) + std::abs(di) > 0 && !(j + dj >= 3 && j + dj < 6 && i + di >= 3 && i + di < 6))
+                shaft.set(i + di, j + dj, k, true);
+        }
+      }
+  for (int threads : {1, 16}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    const ComponentReport a = find_components(arch, threads);
+    ASSERT_EQ(a.parts.size(), 1u);
+    EXPECT_EQ(a.parts[0].voxels, arch.count());
+    EXPECT_EQ(a.voids.size(), 0u);
+    const ComponentReport b = find_components(box, threads);
+    ASSERT_EQ(b.parts.size(), 1u);
+    ASSERT_EQ(b.voids.size(), 1u);
+    EXPECT_EQ(b.voids[0].voxels, 8u * 8u * 34u);
+    EXPECT_EQ(b.voids[0].bbox_min, glm::i64vec3(2, 2, 3));
+    EXPECT_EQ(b.voids[0].bbox_max, glm::i64vec3(9, 9, 36));
+    const ComponentReport c = find_components(shaft, threads);
+    ASSERT_EQ(c.parts.size(), 1u);
+    EXPECT_EQ(c.voids.size(), 0u);
   }
 }
 

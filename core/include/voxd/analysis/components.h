@@ -31,9 +31,10 @@ struct ComponentReport {
 // Runs are labelled row by row with a union-find over runs, so memory is
 // proportional to the number of runs, not voxels. Empty voxels on the grid's
 // border are connected to the outside.
-// `threads`: the runs of a few layers are found in parallel, and the two
-// phases (parts, voids) are labelled on a thread each (0 = all cores); the
-// result is the same for any count.
+// `threads`: the runs of a batch of layers are found in parallel, and the
+// two phases (parts, voids) are labelled on a thread each, past two threads
+// each cut into runs of layers labelled apart and then joined (0 = all
+// cores); the result, order included, is the same for any count.
 ComponentReport find_components(const BitVolume& volume, int threads = 0);
 
 // find_components of a volume that arrives slab by slab in z order (a
