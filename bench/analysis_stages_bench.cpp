@@ -85,7 +85,8 @@ void BM_PartsAndVoids(benchmark::State& state, const char* name) {
 
 void BM_Skin(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
-  for (auto _ : state) benchmark::DoNotOptimize(summarize_peeling(peel_depth(v, threads_of(state), PeelMetric::faces)));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(summarize_peeling(peel_depth(v, threads_of(state), PeelMetric::faces), threads_of(state)));
   counters(state, v);
 }
 

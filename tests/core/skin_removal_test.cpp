@@ -7,6 +7,7 @@
 
 #include "support/test_meshes.h"
 #include "voxd/analysis/cleanup.h"
+#include "voxd/analysis/components.h"
 #include "voxd/analysis/skin_removal.h"
 #include "voxd/voxelize/voxelize.h"
 
@@ -165,6 +166,51 @@ TEST(SkinRemoval, TwoHotSpotsOfEqualDepthAreBothReported) {
   EXPECT_EQ(s.innermost[1].voxels, 2u);
   EXPECT_EQ(s.innermost[1].bbox_min, glm::i64vec3(22, 4, 4));
   EXPECT_EQ(s.innermost[1].bbox_max, glm::i64vec3(23, 4, 4));
+}
+
+// The innermost regions are found scanning only the z layers that reach
+// the deepest depth: the same regions as from the whole volume peeled to
+// it, on random volumes (hot spots scattered over many layers) and on two
+// equally deep blocks at different heights, each deep over several layers.
+TEST(SkinRemoval, InnermostRegionsAreThoseOfTheWholeVolumePeeledToTheDeepest) {
+  const auto expect_same = [](const std::vector<VoxelRegion>& a, const std::vector<VoxelRegion>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t r = 0; r < a.size(); ++r) {
+      EXPECT_EQ(a[r].voxels, b[r].voxels) << r;
+      EXPECT_EQ(a[r].bbox_min, b[r].bbox_min) << r;
+      EXPECT_EQ(a[r].bbox_max, b[r].bbox_max) << r;
+      EXPECT_EQ(a[r].centroid, b[r].centroid) << r;
+    }
+  };
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 40 + 3), static_cast<std::int64_t>(rng() % 20 + 3),
+                            static_cast<std::int64_t>(rng() % 30 + 3));
+    BitVolume v(unit_grid(dims));
+    std::bernoulli_distribution fill(0.75 + 0.24 * (rng() % 100) / 100.0);
+    for (std::int64_t k = 0; k < dims.z; ++k)
+      for (std::int64_t j = 0; j < dims.y; ++j)
+        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+    const auto depth = peel_depth(v, 2);
+    const PeelSummary s = summarize_peeling(depth, 2);
+    if (s.max_depth == 0) continue;
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    expect_same(s.innermost, find_components(peeled(depth, s.max_depth - 1)).parts);
+  }
+  // Two 7 x 7 x 11 blocks, one at z 1..11 and one at z 14..24: each core is
+  // 4 deep over 5 layers.
+  const Grid g = unit_grid({20, 9, 26});
+  const Mesh m = test::concat({test::make_box({1, 1, 1}, {8, 8, 12}), test::make_box({11, 1, 14}, {18, 8, 25})});
+  const auto depth = peel_depth(voxelize(m, g, {}));
+  const PeelSummary s = summarize_peeling(depth);
+  EXPECT_EQ(s.max_depth, 4u);
+  ASSERT_EQ(s.innermost.size(), 2u);
+  EXPECT_EQ(s.innermost[0].voxels, 5u);
+  EXPECT_EQ(s.innermost[0].bbox_min, glm::i64vec3(4, 4, 4));
+  EXPECT_EQ(s.innermost[0].bbox_max, glm::i64vec3(4, 4, 8));
+  EXPECT_EQ(s.innermost[1].bbox_min, glm::i64vec3(14, 4, 17));
+  EXPECT_EQ(s.innermost[1].bbox_max, glm::i64vec3(14, 4, 21));
+  expect_same(s.innermost, find_components(peeled(depth, 3)).parts);
 }
 
 TEST(Cleanup, RemovesIsolatedVoxelsLinesAndOptionallySheets) {

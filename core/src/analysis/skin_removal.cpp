@@ -109,6 +109,28 @@ DenseVolume<Depth> peel_depth(const BitVolume& volume, int threads, PeelMetric m
   return d;
 }
 
+namespace {
+
+// peeled(), reading only the z layers `only` marks (all without it).
+BitVolume peeled_in(const DenseVolume<Depth>& depth, std::uint32_t layers, int threads, const std::vector<char>* only) {
+  const Grid& g = depth.grid();
+  BitVolume out(g);
+  parallel_for(0, g.dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k) {
+      if (only && !(*only)[static_cast<std::size_t>(k)]) continue;
+      for (std::int64_t j = 0; j < g.dims.y; ++j) {
+        const Depth* line = &depth.at(0, j, k);
+        std::uint64_t* row = out.row(j, k);
+        for (std::int64_t i = 0; i < g.dims.x; ++i)
+          if (line[i] > layers) row[i >> 6] |= std::uint64_t{1} << (i & 63);
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
 PeelSummary summarize_peeling(const DenseVolume<Depth>& depth, int threads) {
   // Each layer's counts alone, then added: integers, in any order.
   const std::int64_t nz = depth.grid().dims.z;
@@ -131,23 +153,19 @@ PeelSummary summarize_peeling(const DenseVolume<Depth>& depth, int threads) {
     for (std::size_t d = 0; d < c.size(); ++d) s.voxels_per_layer[d] += c[d];
   }
   s.max_depth = static_cast<std::uint32_t>(s.voxels_per_layer.size());
-  if (s.max_depth > 0) s.innermost = find_components(peeled(depth, s.max_depth - 1, threads)).parts;
+  if (s.max_depth > 0) {
+    // The innermost voxels lie only in the z layers as deep as the deepest
+    // (a layer's counts end at its deepest voxel): the others are left out
+    // of the scan, not of the result.
+    std::vector<char> deepest(static_cast<std::size_t>(nz), 0);
+    for (std::int64_t k = 0; k < nz; ++k) deepest[static_cast<std::size_t>(k)] = counts[static_cast<std::size_t>(k)].size() == s.max_depth;
+    s.innermost = find_components(peeled_in(depth, s.max_depth - 1, threads, &deepest), threads).parts;
+  }
   return s;
 }
 
 BitVolume peeled(const DenseVolume<Depth>& depth, std::uint32_t layers, int threads) {
-  const Grid& g = depth.grid();
-  BitVolume out(g);
-  parallel_for(0, g.dims.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < g.dims.y; ++j) {
-        const Depth* line = &depth.at(0, j, k);
-        std::uint64_t* row = out.row(j, k);
-        for (std::int64_t i = 0; i < g.dims.x; ++i)
-          if (line[i] > layers) row[i >> 6] |= std::uint64_t{1} << (i & 63);
-      }
-  });
-  return out;
+  return peeled_in(depth, layers, threads, nullptr);
 }
 
 }  // namespace voxd
