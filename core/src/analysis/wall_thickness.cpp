@@ -330,8 +330,10 @@ void smooth_medial_values(const BitVolume& centres, std::vector<Medial>& medial,
 // test (inside a wall, neighbours' nearest empty voxels lie on one side),
 // so this pass, half the reads of testing all six neighbours of every voxel
 // and each site decoded once along a row, is most of finding medial voxels.
-std::array<BitVolume, 3> opposed_pairs(const BitVolume& solid, const DenseVolume<std::uint32_t>& nearest, int threads,
-                                       const detail::ProgressSpan& progress) {
+// It also stores each filled voxel's depth in `depths` (store_depths: the
+// site it decodes anyway gives it).
+std::array<BitVolume, 3> opposed_pairs(const BitVolume& solid, const DenseVolume<std::uint32_t>& nearest,
+                                       DenseVolume<float>& depths, int threads, const detail::ProgressSpan& progress) {
   const Grid& grid = solid.grid();
   const glm::i64vec3 d = grid.dims;
   const PaddedIndex padded(grid);
@@ -349,12 +351,14 @@ std::array<BitVolume, 3> opposed_pairs(const BitVolume& solid, const DenseVolume
                                            k + 1 < d.z ? solid.row(j, k + 1) : nullptr};
         const std::uint32_t* up_sites[2] = {row_sites + d.x, row_sites + d.x * d.y};
         std::uint64_t* out[3] = {pairs[0].row(j, k), pairs[1].row(j, k), pairs[2].row(j, k)};
+        float* depth_row = depths.slab(k) + j * d.x;
         detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
           std::uint32_t fp_index = row_sites[a];
           glm::i64vec3 fp = padded.at(fp_index);
           for (std::int64_t i = a; i < b; ++i) {
             const glm::i64vec3 p{i, j, k};
             const glm::i64vec3 u = fp - p;
+            depth_row[i] = -static_cast<float>(norm2(u));
             const std::uint64_t bit = std::uint64_t{1} << (i & 63);
             // Along x the next voxel's site is the next voxel's own: decoded once.
             std::uint32_t next_index = fp_index;
@@ -415,14 +419,16 @@ struct MedialCandidates {
 
 // The medial voxels: each with its ball (its own distance to the surface)
 // and the wall's thickness there (the mean over the pairs it is part of).
-// Also marks them in `centres`.
+// Also marks them in `centres`, and stores every filled voxel's depth in
+// `depths` (as `out` holds them, below).
 std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std::uint32_t>& nearest,
-                                  BitVolume& centres, int threads, const detail::ProgressSpan& progress) {
+                                  DenseVolume<float>& depths, BitVolume& centres, int threads,
+                                  const detail::ProgressSpan& progress) {
   const Grid& grid = solid.grid();
   const glm::i64vec3 d = grid.dims;
   const PaddedIndex padded(grid);
   const double cos_separation = std::cos(kWallSeparationDegrees * 3.14159265358979323846 / 180.0);
-  const std::array<BitVolume, 3> pairs = opposed_pairs(solid, nearest, threads, progress.part(0.0, 0.8));
+  const std::array<BitVolume, 3> pairs = opposed_pairs(solid, nearest, depths, threads, progress.part(0.0, 0.8));
   const MedialCandidates candidates{solid, pairs};
   std::mutex mutex;
   std::vector<Medial> balls;
@@ -511,22 +517,8 @@ std::vector<Medial> medial_voxels(const BitVolume& solid, const DenseVolume<std:
 // (the squared distance to its nearest empty voxel, at least 1), so the
 // feature transform's memory can be reused for the nearest medial voxels
 // while the depths stay at hand. Walls are at least half a voxel thick, so
-// a negative value is a voxel still to paint.
-void store_depths(const BitVolume& solid, const DenseVolume<std::uint32_t>& nearest, DenseVolume<float>& out,
-                  int threads) {
-  const glm::i64vec3 d = solid.grid().dims;
-  const PaddedIndex padded(solid.grid());
-  parallel_for(0, d.z, std::max<std::int64_t>(1, d.z / (threads * 8)), threads, [&](std::int64_t k0, std::int64_t k1) {
-    for (std::int64_t k = k0; k < k1; ++k)
-      for (std::int64_t j = 0; j < d.y; ++j)
-        detail::for_each_row_run(solid.row(j, k), solid.row_words(), d.x, false, [&](std::int64_t a, std::int64_t b) {
-          float* row = out.slab(k) + j * d.x;
-          for (std::int64_t i = a; i < b; ++i)
-            row[i] = -static_cast<float>(norm2(padded.at(nearest.at(i, j, k)) - glm::i64vec3{i, j, k}));
-        });
-  });
-}
-
+// a negative value is a voxel still to paint. opposed_pairs stores them,
+// from the nearest empty voxels it decodes anyway.
 inline std::int64_t depth2_of(const DenseVolume<float>& out, std::int64_t x, std::int64_t y, std::int64_t z) {
   return static_cast<std::int64_t>(-out.at(x, y, z));
 }
@@ -670,10 +662,10 @@ DenseVolume<float> wall_thickness(const BitVolume& solid, int threads, JobContro
   if (grid.voxel_count() == 0) return out;
   DenseVolume<std::uint32_t> nearest = detail::nearest_empty_voxels(solid, nthreads, control, 0.0, 0.3);
   BitVolume centres(grid);
-  std::vector<Medial> medial = medial_voxels(solid, nearest, centres, nthreads, progress.part(0.3, 0.45));
+  // Also stores the depths in `out` (see store_depths).
+  std::vector<Medial> medial = medial_voxels(solid, nearest, out, centres, nthreads, progress.part(0.3, 0.45));
   const MedialIndex index(centres, medial);
   smooth_medial_values(centres, medial, index, nthreads);
-  store_depths(solid, nearest, out, nthreads);
   detail::nearest_marked_voxels(centres, nearest, &solid, nthreads, control, 0.45, 0.65);
   const BitVolume left = paint_nearest_walls(solid, nearest, medial, index, out, nthreads, progress.part(0.65, 0.75));
   nearest = {};
