@@ -13,15 +13,57 @@
 #       every slice function at 512^3 on the CPU's threads (all of them,
 #       VOXD_THREADS to pin) and on the GPU, and prints the speed-ups.
 #       Results (gtest and benchmark JSON) go to RESULTS_DIR (default $OUT
-#       when set, else ./gpu-results).
+#       when set, else ./gpu-results). Then `scaling`, below: the lent GPU
+#       machines have 16 CPU cores.
+#   bench/gpu/check.sh scaling PACK_DIR [RESULTS_DIR]
+#       issue #39 on the machine's cores, GPU or not (about a minute): each
+#       stage of the analysis report on the torus at 512^3 on 2 and 16
+#       threads, and the solid straight to its RLE at 2048^3 on 2 and 16
+#       threads, its chunks encoded by the writer and where they are made;
+#       prints medians and speed-ups from 2 to 16 threads.
 set -euo pipefail
+
+scaling() {
+  local root=$1 results=$2 status=0
+  timeout 240 "$root/bin/analysis_stages_bench" --benchmark_filter='torus/res:512/threads:(2|16)/' \
+    --benchmark_report_aggregates_only=true --benchmark_out="$results/analysis_stages.json" \
+    --benchmark_out_format=json > /dev/null || status=1
+  for t in 2 16; do
+    VOXD_THREADS=$t timeout 60 "$root/bin/stages_bench" --benchmark_filter='BM_VoxelizeRunsToRle/2048/' \
+      --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+      --benchmark_out="$results/runs_to_rle_$t.json" --benchmark_out_format=json > /dev/null || status=1
+  done
+  python3 - "$results" <<'PY' | tee "$results/scaling.txt"
+import json, os, re, sys
+results = sys.argv[1]
+def medians(path, key):
+    if not os.path.exists(path): return {}
+    out = {}
+    for b in json.load(open(path))["benchmarks"]:
+        if b.get("aggregate_name") == "median": out[key(b["name"])] = b["real_time"]
+    return out
+stages = medians(f"{results}/analysis_stages.json",
+                 lambda n: tuple(re.match(r"BM_(\w+)/torus/res:\d+/threads:(\d+)/", n).groups()))
+print(f"{'stage (torus 512^3)':34} {'2 threads ms':>13} {'16 threads ms':>14} {'speed-up':>9}")
+for stage in sorted({s for s, _ in stages}):
+    a, b = stages.get((stage, "2")), stages.get((stage, "16"))
+    if a and b: print(f"{stage:34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
+runs = {t: medians(f"{results}/runs_to_rle_{t}.json", lambda n: n.split("/")[2]) for t in ("2", "16")}
+for arg, how in (("0", "RLE encoded by the writer"), ("1", "RLE encoded where made")):
+    a, b = runs["2"].get(arg), runs["16"].get(arg)
+    if a and b: print(f"{'solid 2048^3, ' + how:34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
+PY
+  return $status
+}
+
 
 case "${1:-}" in
   pack)
     build=$2 out=$3
     stage=$(mktemp -d); trap 'rm -rf "$stage"' EXIT
     mkdir -p "$stage/bin" "$stage/lib" "$out"
-    for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench; do
+    for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench bench/analysis_stages_bench \
+      bench/stages_bench; do
       cp "$build/$exe" "$stage/bin/"
       # The C and C++ runtimes stay behind: the GPU machine has its own, newer.
       # (grep finds nothing to keep for an executable of system libraries only.)
@@ -69,10 +111,21 @@ for function, r in runs.items():
     print(f"{function:22} {cpu:9.1f} {gpu:9.1f} {kernel:10.2f} {copy:9.2f} {cpu / gpu:6.1f}x "
           f"{(cpu - solid) / max(kernel, 1e-9):7.1f}x")
 PY
+    scaling "$root" "$results" || status=1
     exit $status
     ;;
+  scaling)
+    pack=$2
+    results=${3:-${OUT:-./gpu-results}}
+    mkdir -p "$results"
+    root=$(mktemp -d)
+    tar -C "$root" -xJf "$pack/pack.tar.xz"
+    export LD_LIBRARY_PATH="$root/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    echo "CPU threads: $(nproc)" | tee "$results/cpu.txt"
+    scaling "$root" "$results"
+    ;;
   *)
-    sed -n '2,17p' "$0" >&2
+    sed -n '2,23p' "$0" >&2
     exit 2
     ;;
 esac
