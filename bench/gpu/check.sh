@@ -23,6 +23,16 @@
 #       prints medians and speed-ups from 2 to 16 threads.
 set -euo pipefail
 
+# Unpacks PACK_DIR's pack into `root` with its libraries on the path, and
+# sets `results` (RESULTS_DIR, default $OUT when set, else ./gpu-results).
+unpack() {
+  results=${2:-${OUT:-./gpu-results}}
+  mkdir -p "$results"
+  root=$(mktemp -d)
+  tar -C "$root" -xJf "$1/pack.tar.xz"
+  export LD_LIBRARY_PATH="$root/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+}
+
 scaling() {
   local root=$1 results=$2 status=0
   timeout 240 "$root/bin/analysis_stages_bench" --benchmark_filter='torus/res:512/threads:(2|16)/' \
@@ -75,12 +85,7 @@ case "${1:-}" in
     echo "$out/pack.tar.xz: $(du -h "$out/pack.tar.xz" | cut -f1)"
     ;;
   run)
-    pack=$2
-    results=${3:-${OUT:-./gpu-results}}
-    mkdir -p "$results"
-    root=$(mktemp -d)
-    tar -C "$root" -xJf "$pack/pack.tar.xz"
-    export LD_LIBRARY_PATH="$root/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    unpack "$2" "${3:-}"
     if ! nvidia-smi -L >/dev/null 2>&1; then
       echo "check.sh run: no GPU here (nvidia-smi finds none); run it on a machine with an NVIDIA GPU" >&2
       exit 1
@@ -115,12 +120,7 @@ PY
     exit $status
     ;;
   scaling)
-    pack=$2
-    results=${3:-${OUT:-./gpu-results}}
-    mkdir -p "$results"
-    root=$(mktemp -d)
-    tar -C "$root" -xJf "$pack/pack.tar.xz"
-    export LD_LIBRARY_PATH="$root/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    unpack "$2" "${3:-}"
     echo "CPU threads: $(nproc)" | tee "$results/cpu.txt"
     scaling "$root" "$results"
     ;;

@@ -157,12 +157,8 @@ TEST(Components, RandomVolumesMatchABruteForceFloodFill) {
   for (int trial = 0; trial < 40; ++trial) {
     const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 70 + 1), static_cast<std::int64_t>(rng() % 13 + 1),
                             static_cast<std::int64_t>(rng() % 11 + 1));
-    BitVolume v(unit_grid(dims));
     const double density = 0.15 + 0.7 * (rng() % 100) / 100.0;
-    std::bernoulli_distribution fill(density);
-    for (std::int64_t k = 0; k < dims.z; ++k)
-      for (std::int64_t j = 0; j < dims.y; ++j)
-        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+    const BitVolume v = test::random_volume(dims, density, rng);
     const std::vector<Found> parts = brute_force_regions(v, false), voids = brute_force_regions(v, true);
     // In memory on 1, 2 or 3 threads, and from the volume's stored runs in
     // slabs of 1 and 4 layers: every region's count, box and centroid.
@@ -205,12 +201,8 @@ TEST(Components, LayersLabelledApartAndJoinedAreTheRegionsOfOneThreadInTheSameOr
   for (int trial = 0; trial < 30; ++trial) {
     const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 40 + 1), static_cast<std::int64_t>(rng() % 12 + 1),
                             static_cast<std::int64_t>(rng() % 57 + 8));
-    BitVolume v(unit_grid(dims));
     const double density = 0.2 + 0.6 * (rng() % 100) / 100.0;
-    std::bernoulli_distribution fill(density);
-    for (std::int64_t k = 0; k < dims.z; ++k)
-      for (std::int64_t j = 0; j < dims.y; ++j)
-        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+    const BitVolume v = test::random_volume(dims, density, rng);
     const std::vector<Found> parts = brute_force_regions(v, false), voids = brute_force_regions(v, true);
     const ComponentReport one = find_components(v, 1);
     ASSERT_EQ(found_of(one.parts), parts) << "trial " << trial;

@@ -123,11 +123,7 @@ TEST(SkinRemoval, PeelDepthEqualsLayerByLayerErosionOnRandomVolumes) {
   for (int trial = 0; trial < 30; ++trial) {
     const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 80 + 1), static_cast<std::int64_t>(rng() % 20 + 1),
                             static_cast<std::int64_t>(rng() % 15 + 1));
-    BitVolume v(unit_grid(dims));
-    std::bernoulli_distribution fill(0.6 + 0.39 * (rng() % 100) / 100.0);
-    for (std::int64_t k = 0; k < dims.z; ++k)
-      for (std::int64_t j = 0; j < dims.y; ++j)
-        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+    const BitVolume v = test::random_volume(dims, 0.6 + 0.39 * (rng() % 100) / 100.0, rng);
     const auto want = erode_layers(v);
     for (const int threads : {1, 3}) EXPECT_EQ(peel_depth(v, threads).values(), want) << "trial " << trial << " threads " << threads;
   }
@@ -186,11 +182,7 @@ TEST(SkinRemoval, InnermostRegionsAreThoseOfTheWholeVolumePeeledToTheDeepest) {
   for (int trial = 0; trial < 20; ++trial) {
     const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 40 + 3), static_cast<std::int64_t>(rng() % 20 + 3),
                             static_cast<std::int64_t>(rng() % 30 + 3));
-    BitVolume v(unit_grid(dims));
-    std::bernoulli_distribution fill(0.75 + 0.24 * (rng() % 100) / 100.0);
-    for (std::int64_t k = 0; k < dims.z; ++k)
-      for (std::int64_t j = 0; j < dims.y; ++j)
-        for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+    const BitVolume v = test::random_volume(dims, 0.75 + 0.24 * (rng() % 100) / 100.0, rng);
     const auto depth = peel_depth(v, 2);
     const PeelSummary s = summarize_peeling(depth, 2);
     if (s.max_depth == 0) continue;

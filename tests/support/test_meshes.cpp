@@ -23,6 +23,15 @@ std::uint32_t add_vertex(Mesh& m, glm::dvec3 p) {
 
 }  // namespace
 
+BitVolume random_volume(const glm::i64vec3& dims, double density, std::mt19937& rng) {
+  BitVolume v(unit_grid(dims));
+  std::bernoulli_distribution fill(density);
+  for (std::int64_t k = 0; k < dims.z; ++k)
+    for (std::int64_t j = 0; j < dims.y; ++j)
+      for (std::int64_t i = 0; i < dims.x; ++i) v.set(i, j, k, fill(rng));
+  return v;
+}
+
 BitVolume solid_of(const Mesh& mesh, double voxel) {
   GridRequest r;
   r.kind = GridRequest::Kind::voxel_size;

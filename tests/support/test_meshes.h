@@ -2,6 +2,7 @@
 // Meshes with known answers, generated in code (tests and benchmarks).
 // All closed meshes are outward oriented (counter-clockwise seen from outside).
 #include <cstdint>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,9 @@ inline Grid unit_grid(glm::i64vec3 dims) { return make_grid(dims); }
 inline Grid unit_grid(std::int64_t nx, std::int64_t ny, std::int64_t nz, glm::dvec3 origin = glm::dvec3(0.0)) {
   return make_grid({nx, ny, nz}, origin);
 }
+// A volume of unit voxels each filled with probability `density`, drawn
+// from `rng` in memory order (x fastest, then y, then z).
+BitVolume random_volume(const glm::i64vec3& dims, double density, std::mt19937& rng);
 // `resolution` voxels along the mesh's longest axis, `padding` more around.
 // The mesh's parity solid on voxels of `voxel` with 2 empty voxels around.
 BitVolume solid_of(const Mesh& mesh, double voxel);
