@@ -7,11 +7,13 @@
 #       shared libraries they need that a bare machine lacks into
 #       OUT_DIR/pack.tar.xz (BUILD_DIR built with -DVOXD_CUDA=ON)
 #   bench/gpu/check.sh run PACK_DIR [RESULTS_DIR]
-#       unpacks PACK_DIR/pack.tar.xz and runs: the gpu tests (the kernel's
-#       bytes against the CPU's, every slice function, three meshes, odd
-#       grids, slab by slab), the host-side tests, then the benchmark of
-#       every slice function at 512^3 on the CPU's threads (all of them,
-#       VOXD_THREADS to pin) and on the GPU, and prints the speed-ups.
+#       unpacks PACK_DIR/pack.tar.xz and runs: the gpu tests (the kernels'
+#       bytes against the CPU's: every slice function, three meshes, odd
+#       grids, slab by slab; every coverage sampling, four meshes, whole,
+#       in slabs and streamed), the host-side tests, then the benchmarks of
+#       every slice function at 512^3 and of exact coverage at 512^3 and
+#       1024^3 on the CPU's threads (all of them, VOXD_THREADS to pin) and
+#       on the GPU, and prints the speed-ups.
 #       Results (gtest and benchmark JSON) go to RESULTS_DIR (default $OUT
 #       when set, else ./gpu-results). Then `scaling`, below: the lent GPU
 #       machines have 16 CPU cores.
@@ -73,7 +75,7 @@ case "${1:-}" in
     stage=$(mktemp -d); trap 'rm -rf "$stage"' EXIT
     mkdir -p "$stage/bin" "$stage/lib" "$out"
     for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench bench/analysis_stages_bench \
-      bench/stages_bench; do
+      bench/stages_bench tests/coverage_cuda_test tests/coverage_device_test bench/coverage_device_bench; do
       cp "$build/$exe" "$stage/bin/"
       # The C and C++ runtimes stay behind: the GPU machine has its own, newer.
       # (grep finds nothing to keep for an executable of system libraries only.)
@@ -115,6 +117,29 @@ for function, r in runs.items():
     solid = gpu - kernel - copy  # the solid and the rest, made on the CPU either way
     print(f"{function:22} {cpu:9.1f} {gpu:9.1f} {kernel:10.2f} {copy:9.2f} {cpu / gpu:6.1f}x "
           f"{(cpu - solid) / max(kernel, 1e-9):7.1f}x")
+PY
+    timeout 120 "$root/bin/coverage_cuda_test" --gtest_output="json:$results/coverage_cuda_test.json" || status=1
+    timeout 60 "$root/bin/coverage_device_test" --gtest_filter='-CoverageWithoutGpu.*' \
+      --gtest_output="json:$results/coverage_device_test.json" || status=1
+    timeout 150 "$root/bin/coverage_device_bench" --benchmark_filter='BM_CoverageDevice/0/(512|1024)/' \
+      --benchmark_min_time=0.3 --benchmark_out="$results/coverage_device_bench.json" --benchmark_out_format=json ||
+      status=1
+    python3 - "$results/coverage_device_bench.json" <<'PY' | tee -a "$results/speedups.txt"
+import json, sys
+runs = {}
+for b in json.load(open(sys.argv[1]))["benchmarks"]:
+    if b.get("error_occurred"):
+        print("error:", b["name"], b.get("error_message")); continue
+    n = b["name"].split("/")[2]
+    sampling, device = b["label"].split()
+    runs.setdefault((sampling, n), {})[device] = b
+print(f"{'coverage':22} {'cpu ms':>9} {'gpu ms':>9} {'kernel ms':>10} {'copy ms':>9} {'whole':>7} {'kernels':>8}")
+for (sampling, n), r in runs.items():
+    if "cpu" not in r or "cuda" not in r: continue
+    cpu, gpu = r["cpu"]["real_time"], r["cuda"]["real_time"]
+    kernel, copy = r["cuda"]["gpu_kernel_ms"], r["cuda"]["gpu_copy_ms"]
+    print(f"{sampling + ' ' + n + '^3':22} {cpu:9.1f} {gpu:9.1f} {kernel:10.2f} {copy:9.2f} {cpu / gpu:6.1f}x "
+          f"{cpu / max(kernel, 1e-9):7.1f}x")
 PY
     scaling "$root" "$results" || status=1
     exit $status

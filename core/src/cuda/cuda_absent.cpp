@@ -6,6 +6,7 @@
 
 #include "voxd/compute_device.h"
 #include "voxd/error.h"
+#include "voxelize/coverage_device.h"
 #include "voxelize/slice_device.h"
 
 namespace voxd {
@@ -26,6 +27,9 @@ const std::string& cuda_unavailable_reason() {
 
 namespace detail {
 std::unique_ptr<SliceSlabDevice> make_cuda_slab_device(std::uint64_t&) {
+  throw Error(ErrorCode::invalid_argument, cuda_unavailable_reason());
+}
+std::unique_ptr<CoverageSlabDevice> make_cuda_coverage_device(std::uint64_t&) {
   throw Error(ErrorCode::invalid_argument, cuda_unavailable_reason());
 }
 }  // namespace detail

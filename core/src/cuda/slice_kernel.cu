@@ -10,6 +10,7 @@
 
 #include "voxd/compute_device.h"
 #include "voxd/error.h"
+#include "cuda/cuda_support.h"
 #include "voxelize/slice_device.h"
 
 namespace voxd::detail {
@@ -30,28 +31,8 @@ __global__ void colour_slab_kernel(SliceShadeParams params, SliceVoxelFrame fram
     colour_slab_voxel(params, frame, bits, row_words, nx, ny, k0, index, out);
 }
 
-// A CUDA call that must succeed: what failed and CUDA's words for it.
-void check(cudaError_t status, const char* what) {
-  if (status == cudaSuccess) return;
-  const std::string message = std::string("CUDA ") + what + " failed: " + cudaGetErrorString(status);
-  if (status == cudaErrorMemoryAllocation)
-    throw Error(ErrorCode::limit_exceeded, message + " (lower the GPU memory budget, or use device cpu)");
-  throw std::runtime_error(message);
-}
-
-template <class T>
-struct DeviceBuffer {
-  T* data = nullptr;
-  DeviceBuffer() = default;
-  DeviceBuffer(const DeviceBuffer&) = delete;
-  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
-  ~DeviceBuffer() {
-    if (data) cudaFree(data);
-  }
-  void allocate(std::size_t count, const char* what) {
-    if (count > 0) check(cudaMalloc(reinterpret_cast<void**>(&data), count * sizeof(T)), what);
-  }
-};
+using cuda::check;
+using cuda::DeviceBuffer;
 
 class CudaSlabDevice final : public SliceSlabDevice {
  public:
@@ -148,12 +129,7 @@ class CudaSlabDevice final : public SliceSlabDevice {
 
 std::unique_ptr<SliceSlabDevice> make_cuda_slab_device(std::uint64_t& budget) {
   if (const std::string& why = cuda_unavailable_reason(); !why.empty()) throw Error(ErrorCode::invalid_argument, why);
-  check(cudaSetDevice(0), "selection of GPU 0");
-  if (budget == 0) {
-    std::size_t free = 0, total = 0;
-    check(cudaMemGetInfo(&free, &total), "query of the GPU's free memory");
-    budget = free / 4 * 3;
-  }
+  cuda::select_gpu(budget);
   return std::make_unique<CudaSlabDevice>();
 }
 

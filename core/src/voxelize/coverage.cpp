@@ -5,12 +5,16 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <stdexcept>
 #include <vector>
 
 #include "voxd/bit_slabs.h"
+#include "voxd/detail/coverage_gpu.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
+#include "voxelize/coverage_device.h"
 #include "voxelize/coverage_runs.h"
+#include "voxelize/fixed_point.h"
 #include "voxelize/fixed_point_mesh.h"
 #include "voxelize/row_rays.h"
 #include "voxelize/splitmix.h"
@@ -18,22 +22,12 @@
 namespace voxd {
 namespace {
 
-using detail::kFixedOne;
 using detail::RayCrossing;
-using detail::splitmix_hash;
-using detail::unit_interval;
 
 class CoverageVoxelizer {
  public:
   CoverageVoxelizer(const Mesh& mesh, const Grid& grid, const CoverageOptions& options)
-      : fixed_(mesh, grid), grid_(grid), options_(options), k_(options.rays) {
-    // Regular offsets of the rays inside a column, in fixed point relative
-    // to the column centre: (a + 1/2) / k - 1/2 voxel.
-    for (int a = 0; a < k_; ++a) {
-      regular_.push_back(static_cast<std::int64_t>(
-          std::llround(((a + 0.5) / k_ - 0.5) * static_cast<double>(kFixedOne))));
-    }
-  }
+      : fixed_(mesh, grid), grid_(grid), options_(options), k_(options.rays), rays_(detail::coverage_ray_pattern(options)) {}
 
   const detail::FixedMesh& fixed() const { return fixed_; }
 
@@ -45,7 +39,7 @@ class CoverageVoxelizer {
         k0, k1, control,
         [&](std::int64_t k, Events&) {
           return [this, k](std::int64_t j, int r, std::int64_t& pu, std::int64_t& pv) {
-            ray_position(j, k, r / k_, r % k_, pu, pv);
+            detail::coverage_ray_position(rays_, j, k, r / k_, r % k_, pu, pv);
           };
         },
         [&](std::int64_t k, const std::vector<RayCrossing>& crossings, Events& events) {
@@ -60,21 +54,6 @@ class CoverageVoxelizer {
   }
 
  private:
-  // The ray's position in fixed point (u = y, v = z) for column j, row k.
-  void ray_position(std::int64_t j, std::int64_t k, int a, int b, std::int64_t& pu, std::int64_t& pv) const {
-    if (options_.sampling != CoverageSampling::stochastic) {
-      pu = j * kFixedOne + regular_[static_cast<std::size_t>(a)];
-      pv = k * kFixedOne + regular_[static_cast<std::size_t>(b)];
-      return;
-    }
-    const std::uint64_t ray = static_cast<std::uint64_t>(k) << 20 ^ static_cast<std::uint64_t>(a * k_ + b);
-    const std::uint64_t h = splitmix_hash(
-        options_.seed ^ splitmix_hash(static_cast<std::uint64_t>(j) * 0x100000001b3ull ^ splitmix_hash(ray)));
-    const double one = static_cast<double>(kFixedOne);
-    pu = j * kFixedOne + static_cast<std::int64_t>(std::floor(((a + unit_interval(h)) / k_ - 0.5) * one));
-    pv = k * kFixedOne + static_cast<std::int64_t>(std::floor(((b + unit_interval(splitmix_hash(h))) / k_ - 0.5) * one));
-  }
-
   // One column: its rays' inside runs, integrated (exact) or sampled
   // (uniform) into the column's voxels.
   void fill_column(const RayCrossing* begin, const RayCrossing* end, float* row, detail::RunEvents& events) const {
@@ -91,24 +70,73 @@ class CoverageVoxelizer {
   Grid grid_;
   CoverageOptions options_;
   int k_;
-  std::vector<std::int64_t> regular_;
+  detail::CoverageRayPattern rays_;
 };
 
+int thread_count(const CoverageOptions& options) { return options.threads > 0 ? options.threads : default_thread_count(); }
 
-void check_options(const CoverageOptions& options) {
+// Where options.device sends the work: the GPU when it resolves to cuda (an
+// error there if device is cuda; automatic leaves what the GPU fails to the
+// CPU, whose floats are the same, unless `handed_on` says that slabs have
+// already gone to the caller), else nothing and the CPU's code runs.
+template <typename OnGpu>
+bool ran_on_gpu(const CoverageOptions& options, const Grid& grid, CoverageRunReport* report, const OnGpu& on_gpu,
+                const bool& handed_on = false) {
+  if (coverage_device_for(options, grid) == ComputeDevice::cuda) {
+    if (options.device == ComputeDevice::cuda) {
+      on_gpu();
+      return true;
+    }
+    try {
+      on_gpu();
+      return true;
+    } catch (const Error& e) {
+      if (e.code() == ErrorCode::cancelled || handed_on) throw;
+    } catch (const std::runtime_error&) {
+      if (handed_on) throw;
+    }
+  }
+  if (report) *report = CoverageRunReport{};
+  return false;
+}
+
+}  // namespace
+
+namespace detail {
+CoverageRayPattern coverage_ray_pattern(const CoverageOptions& options) {
+  CoverageRayPattern p;
+  p.k = options.rays;
+  p.stochastic = options.sampling == CoverageSampling::stochastic;
+  p.seed = options.seed;
+  // Regular offsets of the rays inside a column, in fixed point relative
+  // to the column centre: (a + 1/2) / k - 1/2 voxel.
+  for (int a = 0; a < p.k; ++a)
+    p.regular[a] = static_cast<std::int64_t>(std::llround(((a + 0.5) / p.k - 0.5) * static_cast<double>(kFixedOne)));
+  return p;
+}
+}  // namespace detail
+
+void validate(const CoverageOptions& options) {
   if (options.rays < 1 || options.rays > 64)
     throw Error(ErrorCode::invalid_argument, "coverage rays must be 1 to 64 per column side, got " + std::to_string(options.rays));
   if (options.points < 1 || options.points > 256)
     throw Error(ErrorCode::invalid_argument, "coverage points must be 1 to 256 per voxel, got " + std::to_string(options.points));
 }
 
-int thread_count(const CoverageOptions& options) { return options.threads > 0 ? options.threads : default_thread_count(); }
-
-}  // namespace
+ComputeDevice coverage_device_for(const CoverageOptions& options, const Grid& grid) {
+  if (options.device != ComputeDevice::automatic) return options.device;
+  return grid.voxel_count() >= (std::uint64_t{1} << 21) && cuda_unavailable_reason().empty() ? ComputeDevice::cuda
+                                                                                             : ComputeDevice::cpu;
+}
 
 DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
-                                     JobControl* control) {
-  check_options(options);
+                                     JobControl* control, CoverageRunReport* report) {
+  validate(options);
+  std::optional<DenseVolume<float>> gpu;
+  if (ran_on_gpu(options, grid, report, [&] {
+        gpu.emplace(detail::voxelize_coverage_on(detail::CoverageBackend::cuda, mesh, grid, options, control, report));
+      }))
+    return std::move(*gpu);
   DenseVolume<float> out(grid, 0.0f);
   if (grid.voxel_count() == 0) return out;
   const CoverageVoxelizer v(mesh, grid, options);
@@ -118,8 +146,24 @@ DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const C
 }
 
 void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
-                                std::int64_t slab_layers, const CoverageSlabConsumer& consume, JobControl* control) {
-  check_options(options);
+                                std::int64_t slab_layers, const CoverageSlabConsumer& consume, JobControl* control,
+                                CoverageRunReport* report) {
+  validate(options);
+  // A GPU that fails before its first slab leaves the work to the CPU; one
+  // that fails later fails the work, since its slabs are gone.
+  bool handed_on = false;
+  if (ran_on_gpu(
+          options, grid, report,
+          [&] {
+            detail::voxelize_coverage_streamed_on(detail::CoverageBackend::cuda, mesh, grid, options, slab_layers,
+                                                  [&](std::int64_t k0, const DenseVolume<float>& slab) {
+                                                    handed_on = true;
+                                                    consume(k0, slab);
+                                                  },
+                                                  control, report);
+          },
+          handed_on))
+    return;
   if (grid.voxel_count() == 0) return;
   const std::int64_t nz = grid.dims.z;
   const int threads = thread_count(options);

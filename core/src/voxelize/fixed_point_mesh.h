@@ -15,13 +15,9 @@
 
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
+#include "voxelize/fixed_point.h"
 
 namespace voxd::detail {
-
-inline constexpr int kFixedBits = 20;
-inline constexpr std::int64_t kFixedOne = std::int64_t{1} << kFixedBits;
-// Keeps every product in the scan converter inside __int128 with margin.
-inline constexpr std::int64_t kFixedLimit = std::int64_t{1} << 60;
 
 using FixedPoint = std::array<std::int64_t, 3>;
 
@@ -59,9 +55,5 @@ class FixedMesh {
   glm::dvec3 origin_;
   double scale_;
 };
-
-// floor(q / kFixedOne) and ceil(q / kFixedOne) (C++20 >> is arithmetic).
-inline std::int64_t floor_fixed(std::int64_t q) { return q >> kFixedBits; }
-inline std::int64_t ceil_fixed(std::int64_t q) { return -((-q) >> kFixedBits); }
 
 }  // namespace voxd::detail

@@ -5,8 +5,7 @@
 // per column).
 //
 // Exactness: ray positions are fixed-point (voxelize/fixed_point_mesh.h)
-// and tested against the triangle with integer edge functions, ties broken
-// by simulation of simplicity as in the parity scan converter, so a ray
+// and tested against the triangle as voxelize/ray_triangle.h says, so a ray
 // through a shared edge or vertex of a closed mesh crosses it exactly once.
 #include <algorithm>
 #include <atomic>
@@ -17,6 +16,7 @@
 #include "voxd/parallel.h"
 #include "voxd/progress.h"
 #include "voxelize/fixed_point_mesh.h"
+#include "voxelize/ray_triangle.h"
 #include "voxelize/triangle_bins.h"
 
 namespace voxd::detail {
@@ -28,14 +28,6 @@ struct RayCrossing {
   std::int32_t ray;     // the ray's index within its column
   double x;
 };
-
-// Sign of an edge function after displacing the point by (eps, eps^2) in
-// (u, v): never zero for a non-degenerate edge (simulation of simplicity).
-inline int displaced_sign(__int128 e, std::int64_t du, std::int64_t dv) {
-  if (e != 0) return e > 0 ? 1 : -1;
-  if (dv != 0) return dv > 0 ? -1 : 1;
-  return du > 0 ? 1 : -1;
-}
 
 // Sorts a row's crossings by column, then ray, then x.
 inline void sort_crossings(std::vector<RayCrossing>& crossings) {
@@ -51,41 +43,19 @@ inline void sort_crossings(std::vector<RayCrossing>& crossings) {
 template <typename RayPosition>
 void cross_row_rays(const FixedMesh& fixed, std::uint32_t t, std::int64_t k, std::int64_t j_begin, std::int64_t j_end,
                     int rays, const RayPosition& position, std::vector<RayCrossing>& out) {
-  using i128 = __int128;
   const auto& tri = fixed.triangles()[t];
   const FixedPoint A = fixed.vertex(tri[0]), B = fixed.vertex(tri[1]), C = fixed.vertex(tri[2]);
-  const std::int64_t au = A[1], av = A[2], bu = B[1], bv = B[2], cu = C[1], cv = C[2];
-  const i128 det = static_cast<i128>(bu - au) * (cv - av) - static_cast<i128>(bv - av) * (cu - au);
-  if (det == 0) return;  // edge-on to the rays
-  const int sigma = det > 0 ? 1 : -1;
-  const std::int64_t minu = std::min({au, bu, cu}), maxu = std::max({au, bu, cu});
-  const std::int64_t minv = std::min({av, bv, cv}), maxv = std::max({av, bv, cv});
-  const std::int64_t half = kFixedOne / 2;
-  if (maxv < k * kFixedOne - half || minv >= k * kFixedOne + half) return;
-  const std::int64_t j0 = std::max<std::int64_t>(j_begin, floor_fixed(minu + half));
-  const std::int64_t j1 = std::min<std::int64_t>(j_end - 1, floor_fixed(maxu + half));
-  if (j0 > j1) return;
-  // The plane: x(u, v) = ax + gu (u - au) + gv (v - av), as in the parity
-  // scan converter (voxelize/column_scan.h).
-  const double e1x = static_cast<double>(B[0] - A[0]), e1u = static_cast<double>(bu - au), e1v = static_cast<double>(bv - av);
-  const double e2x = static_cast<double>(C[0] - A[0]), e2u = static_cast<double>(cu - au), e2v = static_cast<double>(cv - av);
-  const double nx = static_cast<double>(det);
-  const double gu = -(e1v * e2x - e1x * e2v) / nx, gv = -(e1x * e2u - e1u * e2x) / nx;
-  const std::int64_t P[3][2] = {{au, av}, {bu, bv}, {cu, cv}};
+  RayTriangle triangle;
+  std::int64_t j0, j1;
+  if (!make_ray_triangle(A.data(), B.data(), C.data(), triangle) || !row_columns(triangle, k, j_begin, j_end, j0, j1))
+    return;
+  plane(triangle);
   for (std::int64_t j = j0; j <= j1; ++j)
     for (int r = 0; r < rays; ++r) {
       std::int64_t pu, pv;
       position(j, r, pu, pv);
-      if (pu < minu || pu > maxu || pv < minv || pv > maxv) continue;
-      bool inside = true;
-      for (int e = 0; e < 3 && inside; ++e) {
-        const std::int64_t du = P[(e + 1) % 3][0] - P[e][0], dv = P[(e + 1) % 3][1] - P[e][1];
-        const i128 f = static_cast<i128>(du) * (pv - P[e][1]) - static_cast<i128>(dv) * (pu - P[e][0]);
-        inside = sigma * displaced_sign(f, du, dv) > 0;
-      }
-      if (!inside) continue;
-      const double x = static_cast<double>(A[0]) + gu * static_cast<double>(pu - au) + gv * static_cast<double>(pv - av);
-      out.push_back({static_cast<std::int32_t>(j), r, x / static_cast<double>(kFixedOne) + 0.5});
+      double x;
+      if (cross_ray(triangle, pu, pv, x)) out.push_back({static_cast<std::int32_t>(j), r, x});
     }
 }
 

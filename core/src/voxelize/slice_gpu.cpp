@@ -10,6 +10,7 @@
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 #include "voxd/voxelize/voxelize.h"
+#include "voxelize/gpu_gate.h"
 #include "voxelize/slice_device.h"
 
 namespace voxd::detail {
@@ -45,13 +46,6 @@ class HostSlabDevice final : public SliceSlabDevice {
   const SliceShading* shading_ = nullptr;
   SlabShape shape_;
 };
-
-// One colouring at a time holds the GPU: each sizes its slabs from the
-// memory free when it starts, which two at once would both count.
-std::mutex& gpu_gate() {
-  static std::mutex gate;
-  return gate;
-}
 
 }  // namespace
 

@@ -18,11 +18,7 @@
 
 #include <cstdint>
 
-#if defined(__CUDACC__)
-#define VOXD_HD __host__ __device__
-#else
-#define VOXD_HD
-#endif
+#include "voxelize/host_device.h"
 
 namespace voxd::detail {
 

@@ -25,6 +25,7 @@
 #include <functional>
 
 #include "voxd/bit_volume.h"
+#include "voxd/compute_device.h"
 #include "voxd/dense_volume.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
@@ -45,12 +46,32 @@ struct CoverageOptions {
   int points = 4;           // m: points per voxel along a ray (uniform only), 1..256
   std::uint64_t seed = 1;   // stochastic ray placement
   int threads = 0;          // 0 = all cores
+  // Where the coverages are computed (voxd/compute_device.h): the same
+  // floats, bit for bit, on either. automatic takes the GPU for grids of
+  // 2^21 voxels or more and the CPU when the GPU fails them (its memory
+  // taken by others, a CUDA error).
+  ComputeDevice device = ComputeDevice::cpu;
+  // Bytes of GPU memory the work may hold at once; grids that need more go
+  // slab by slab. 0 = three quarters of the GPU's free memory.
+  std::uint64_t gpu_memory = 0;
 };
 
+// Throws Error(invalid_argument), naming the option, for rays or points out
+// of range.
+void validate(const CoverageOptions& options);
+
+// What a run of the coverage voxelizer did (where, and on a GPU how).
+using CoverageRunReport = DeviceRunReport;
+
+// The device options.device resolves to for `grid`: cpu or cuda (automatic
+// as above; cuda stays cuda, available or not).
+ComputeDevice coverage_device_for(const CoverageOptions& options, const Grid& grid);
+
 // Coverage in [0, 1] per voxel. Throws Error(invalid_argument) for rays or
-// points out of range. `control` may be null.
+// points out of range, and for device cuda where cuda_unavailable_reason()
+// is not empty. `control` and `report` may be null.
 DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
-                                     JobControl* control = nullptr);
+                                     JobControl* control = nullptr, CoverageRunReport* report = nullptr);
 
 // voxelize_coverage() slab by slab in z order (Thon et al.'s "limited only by
 // disk size"): each slab of `slab_layers` z layers (the last one shorter) is
@@ -58,10 +79,11 @@ DenseVolume<float> voxelize_coverage(const Mesh& mesh, const Grid& grid, const C
 // voxelize_coverage()'s for those layers, and its memory reused after. Peak
 // memory is the mesh, its triangle bins and one slab of floats. Throws as
 // voxelize_coverage(); progress runs over the rows, cancellation between them.
+// On a GPU a slab is at most what its memory budget holds.
 using CoverageSlabConsumer = std::function<void(std::int64_t k0, const DenseVolume<float>& slab)>;
 void voxelize_coverage_streamed(const Mesh& mesh, const Grid& grid, const CoverageOptions& options,
                                 std::int64_t slab_layers, const CoverageSlabConsumer& consume,
-                                JobControl* control = nullptr);
+                                JobControl* control = nullptr, CoverageRunReport* report = nullptr);
 
 // Thon's byte: round(255 * coverage). `threads` 0 = all cores.
 DenseVolume<std::uint8_t> coverage_bytes(const DenseVolume<float>& coverage, int threads = 0);

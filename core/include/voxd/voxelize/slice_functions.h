@@ -165,14 +165,7 @@ struct SliceOptions {
 };
 
 // What a run of voxelize_slice did, for the job's record and the benchmarks.
-struct SliceRunReport {
-  ComputeDevice device = ComputeDevice::cpu;  // where the colours were computed (cpu or cuda)
-  std::int64_t slabs = 0;                     // GPU: slabs of z layers, one after another
-  std::uint64_t gpu_bytes = 0;                // GPU: memory held at once, as planned
-  std::uint64_t gpu_measured_bytes = 0;       // GPU: the free memory its allocations took, measured
-  double gpu_kernel_ms = 0.0;                 // GPU: time in the colouring kernel
-  double gpu_copy_ms = 0.0;                   // GPU: time copying solids in and colours out
-};
+using SliceRunReport = DeviceRunReport;
 
 // The device options.device resolves to for `grid`: cpu or cuda (automatic
 // as above; cuda stays cuda, available or not).
