@@ -53,6 +53,9 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
     refuse_inside_test(val, job, name());
   }
 
+  // The coverages (the bits of a threshold are made from them on the CPU).
+  bool runs_on_gpu() const override { return true; }
+
   std::optional<ValueVolume> value_type(const JobParams& params) const override {
     const CoverageParams& c = options(params);
     if (c.threshold) return std::nullopt;
@@ -74,9 +77,10 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
 
   JobVolumes run(const ModeInput& in) const override {
     const CoverageParams& c = options(in.params);
-    DenseVolume<float> coverage = voxelize_coverage(in.mesh, in.grid, engine_options(in), in.control);
+    CoverageRunReport report;
+    DenseVolume<float> coverage = voxelize_coverage(in.mesh, in.grid, engine_options(in), in.control, &report);
     JobVolumes result;
-    result.values_info = values_info(c, covered_voxels(coverage, in.threads), in.grid);
+    result.values_info = values_info(c, covered_voxels(coverage, in.threads), in.grid, report);
     if (c.threshold)
       result.solid = std::make_shared<const BitVolume>(coverage_threshold(coverage, *c.threshold));
     else if (c.float_values)
@@ -94,6 +98,7 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
                               const ValueSlabConsumer& values) const override {
     const CoverageParams& c = options(in.params);
     CoveredVoxels covered;
+    CoverageRunReport report;
     voxelize_coverage_streamed(in.mesh, in.grid, engine_options(in), slab_layers,
                                [&](std::int64_t k0, const DenseVolume<float>& slab) {
                                  covered.add(slab, in.threads);
@@ -104,8 +109,8 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
                                  else
                                    values(k0, ValueVolume(coverage_bytes(slab, in.threads)));
                                },
-                               in.control);
-    return values_info(c, covered.total(), in.grid);
+                               in.control, &report);
+    return values_info(c, covered.total(), in.grid, report);
   }
 
   // A slab's floats, and beside them its bytes or bits, or the floats' copy
@@ -128,13 +133,16 @@ class CoverageMode final : public ModeWithOptions<CoverageParams> {
   static CoverageOptions engine_options(const ModeInput& in) {
     CoverageOptions o = options(in.params).options;
     o.threads = in.threads;
+    o.device = in.params.device.value_or(ComputeDevice::automatic);
     return o;
   }
 
-  static nlohmann::json values_info(const CoverageParams& c, double covered, const Grid& grid) {
+  static nlohmann::json values_info(const CoverageParams& c, double covered, const Grid& grid,
+                                    const CoverageRunReport& report) {
     json info = {{"quantity", "coverage"},
                  {"sampling", to_string(c.options.sampling)},
-                 {"covered_volume", covered * grid.voxel_volume()}};
+                 {"covered_volume", covered * grid.voxel_volume()},
+                 {"device", to_string(report.device)}};
     if (c.threshold)
       info["threshold"] = *c.threshold;
     else

@@ -93,6 +93,7 @@ TEST(JobParams, DeviceIsAChoiceThatOnlyAModeWithAGpuPathTakesAsCuda) {
   EXPECT_TRUE(parse_job_params(json{{"mode", "slice"}, {"slice", {{"function", "rock"}}}, {"device", "cuda"}})
                   .device == ComputeDevice::cuda);
   EXPECT_EQ(parse_job_params(json{{"device", "cpu"}}).device, ComputeDevice::cpu);
+  EXPECT_EQ(parse_job_params(json{{"mode", "coverage"}, {"device", "cuda"}}).device, ComputeDevice::cuda);
   EXPECT_TRUE(has_error(errors_of(json{{"mode", "sdf"}, {"device", "cuda"}}), "/device",
                         "mode \"sdf\" runs only on the CPU; drop \"device\" or use auto or cpu"));
   EXPECT_TRUE(has_error(errors_of(json{{"device", "cuda"}}), "/device", "mode \"solid\" runs only on the CPU"));

@@ -43,6 +43,28 @@ TEST_F(ComputeDeviceTest, AutoRunsOnTheCpuWithTheSameBytesAndSaysWhere) {
   EXPECT_TRUE(bytes == volume(cpu, "?format=raw"));
 }
 
+// Coverage takes a device too: auto, past the 2^21 voxels where a GPU
+// would take it, gives the CPU's bytes and says so; cuda is refused at
+// admission.
+TEST_F(ComputeDeviceTest, CoverageAutoRunsOnTheCpuAndCudaIsRefused) {
+  start({}, kNoGpu);
+  const auto mesh = to_binary_stl(make_torus({0, 0, 0}, 1.0, 0.45, 40, 20));
+  const auto coverage_job = [](const std::string& device) {
+    return R"({"grid":{"resolution":200},"mode":"coverage","coverage":{"rays":2},"device":")" + device + R"("})";
+  };
+  const std::string automatic = finished(submit(mesh, coverage_job("auto")));
+  const std::string cpu = finished(submit(mesh, coverage_job("cpu")));
+  const json status = expect_json(http().Get(("/v1/jobs/" + automatic).c_str()), 200, "JobStatus");
+  EXPECT_EQ(status.at("values").at("device"), "cpu");
+  EXPECT_EQ(status.at("values").at("quantity"), "coverage");
+  const std::string bytes = volume(automatic, "?format=raw");
+  EXPECT_GE(bytes.size(), std::size_t{1} << 21);
+  EXPECT_TRUE(bytes == volume(cpu, "?format=raw"));
+  const json p = expect_problem(post_multipart(http(), "/v1/jobs", mesh, "part.stl", coverage_job("cuda")), 422,
+                                "invalid-params");
+  EXPECT_NE(std::string(p.at("detail")).find("use device auto or cpu"), std::string::npos) << p.dump();
+}
+
 TEST_F(ComputeDeviceTest, CudaWithoutAGpuIsRefusedSayingWhatToUse) {
   start({}, kNoGpu);
   const auto mesh = to_binary_stl(make_torus({0, 0, 0}, 1.0, 0.45, 24, 12));
