@@ -12,6 +12,7 @@
 #include <string>
 
 #include "bench_mesh.h"
+#include "device_counters.h"
 #include "voxd/compute_device.h"
 #include "voxd/voxelize/coverage.h"
 
@@ -34,18 +35,13 @@ void BM_CoverageDevice(benchmark::State& state) {
     return;
   }
   CoverageRunReport report;
-  double kernel_ms = 0, copy_ms = 0;
+  DeviceCounters counters;
   for (auto _ : state) {
     DenseVolume<float> c = voxelize_coverage(benchmark_mesh(), g, o, nullptr, &report);
     benchmark::DoNotOptimize(c.values().data());
-    kernel_ms += report.gpu_kernel_ms;
-    copy_ms += report.gpu_copy_ms;
+    counters.add(report);
   }
-  const double runs = static_cast<double>(state.iterations());
-  state.counters["gpu_kernel_ms"] = kernel_ms / runs;
-  state.counters["gpu_copy_ms"] = copy_ms / runs;
-  state.counters["slabs"] = static_cast<double>(report.slabs);
-  state.counters["passes"] = static_cast<double>(report.passes);
+  counters.set(state);
 }
 
 void samplings_sizes_devices(benchmark::internal::Benchmark* b) {

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "bench_mesh.h"
+#include "device_counters.h"
 #include "voxd/compute_device.h"
 #include "voxd/voxelize/slice_functions.h"
 
@@ -42,17 +43,13 @@ void BM_SliceDevice(benchmark::State& state) {
     return;
   }
   SliceRunReport report;
-  double kernel_ms = 0, copy_ms = 0;
+  DeviceCounters counters;
   for (auto _ : state) {
     DenseVolume<Rgba8> c = voxelize_slice(benchmark_mesh(), g, o, nullptr, &report);
     benchmark::DoNotOptimize(c.values().data());
-    kernel_ms += report.gpu_kernel_ms;
-    copy_ms += report.gpu_copy_ms;
+    counters.add(report);
   }
-  const double runs = static_cast<double>(state.iterations());
-  state.counters["gpu_kernel_ms"] = kernel_ms / runs;
-  state.counters["gpu_copy_ms"] = copy_ms / runs;
-  state.counters["slabs"] = static_cast<double>(report.slabs);
+  counters.set(state);
 }
 
 void functions_sizes_devices(benchmark::internal::Benchmark* b) {
