@@ -10,10 +10,11 @@
 #       unpacks PACK_DIR/pack.tar.xz and runs: the gpu tests (the kernels'
 #       bytes against the CPU's: every slice function, three meshes, odd
 #       grids, slab by slab; every coverage sampling, four meshes, whole,
-#       in slabs and streamed), the host-side tests, then the benchmarks of
-#       every slice function at 512^3 and of exact coverage at 512^3 and
-#       1024^3 on the CPU's threads (all of them, VOXD_THREADS to pin) and
-#       on the GPU, and prints the speed-ups.
+#       in slabs and streamed; every distance band option, three meshes),
+#       the host-side tests, then the benchmarks of every slice function at
+#       512^3, of exact coverage at 512^3 and 1024^3 and of the band SDF at
+#       512^3 on the CPU's threads (all of them, VOXD_THREADS to pin) and on
+#       the GPU, and prints the speed-ups.
 #       Results (gtest and benchmark JSON) go to RESULTS_DIR (default $OUT
 #       when set, else ./gpu-results). Then `scaling`, below: the lent GPU
 #       machines have 16 CPU cores.
@@ -75,7 +76,8 @@ case "${1:-}" in
     stage=$(mktemp -d); trap 'rm -rf "$stage"' EXIT
     mkdir -p "$stage/bin" "$stage/lib" "$out"
     for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench bench/analysis_stages_bench \
-      bench/stages_bench tests/coverage_cuda_test tests/coverage_device_test bench/coverage_device_bench; do
+      bench/stages_bench tests/coverage_cuda_test tests/coverage_device_test bench/coverage_device_bench \
+      tests/sdf_cuda_test tests/sdf_device_test bench/sdf_device_bench; do
       cp "$build/$exe" "$stage/bin/"
       # The C and C++ runtimes stay behind: the GPU machine has its own, newer.
       # (grep finds nothing to keep for an executable of system libraries only.)
@@ -140,6 +142,23 @@ for (sampling, n), r in runs.items():
     kernel, copy = r["cuda"]["gpu_kernel_ms"], r["cuda"]["gpu_copy_ms"]
     print(f"{sampling + ' ' + n + '^3':22} {cpu:9.1f} {gpu:9.1f} {kernel:10.2f} {copy:9.2f} {cpu / gpu:6.1f}x "
           f"{cpu / max(kernel, 1e-9):7.1f}x")
+PY
+    timeout 120 "$root/bin/sdf_cuda_test" --gtest_output="json:$results/sdf_cuda_test.json" || status=1
+    timeout 60 "$root/bin/sdf_device_test" --gtest_filter='-SdfWithoutGpu.*' \
+      --gtest_output="json:$results/sdf_device_test.json" || status=1
+    timeout 90 "$root/bin/sdf_device_bench" --benchmark_filter='BM_SdfDevice/512/' --benchmark_min_time=0.3 \
+      --benchmark_out="$results/sdf_device_bench.json" --benchmark_out_format=json || status=1
+    python3 - "$results/sdf_device_bench.json" <<'PY' | tee -a "$results/speedups.txt"
+import json, sys
+runs = {}
+for b in json.load(open(sys.argv[1]))["benchmarks"]:
+    if b.get("error_occurred"):
+        print("error:", b["name"], b.get("error_message")); continue
+    runs[b["label"]] = b
+if "cpu" in runs and "cuda" in runs:
+    cpu, gpu = runs["cpu"]["real_time"], runs["cuda"]["real_time"]
+    kernel, copy = runs["cuda"]["gpu_kernel_ms"], runs["cuda"]["gpu_copy_ms"]
+    print(f"{'band sdf 512^3':22} {cpu:9.1f} {gpu:9.1f} {kernel:10.2f} {copy:9.2f} {cpu / gpu:6.1f}x")
 PY
     scaling "$root" "$results" || status=1
     exit $status

@@ -7,6 +7,7 @@
 #include "voxd/compute_device.h"
 #include "voxd/error.h"
 #include "voxelize/coverage_device.h"
+#include "voxelize/sdf_device.h"
 #include "voxelize/slice_device.h"
 
 namespace voxd {
@@ -33,5 +34,11 @@ std::unique_ptr<CoverageSlabDevice> make_cuda_coverage_device(std::uint64_t&) {
   throw Error(ErrorCode::invalid_argument, cuda_unavailable_reason());
 }
 }  // namespace detail
+
+namespace sdf {
+std::unique_ptr<SdfBandDevice> make_cuda_sdf_device(std::uint64_t&) {
+  throw Error(ErrorCode::invalid_argument, cuda_unavailable_reason());
+}
+}  // namespace sdf
 
 }  // namespace voxd

@@ -1,6 +1,7 @@
 // Signed distance field: the narrow band by scattering triangles to voxels
 // (Jones 1996), exact nearest-triangle queries for the rest of the grid when
 // asked, the sign from the solid voxelization. See voxd/voxelize/sdf.h.
+#include "voxd/detail/sdf_gpu.h"
 #include "voxd/detail/sdf_tuning.h"
 #include "voxd/voxelize/sdf.h"
 
@@ -14,6 +15,7 @@
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -94,8 +96,15 @@ double point_triangle_distance2(const dvec3& p, const dvec3& a, const dvec3& b, 
 
 namespace {
 
+// `band_on`: where the band is computed, the CPU's scatter when empty.
 DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
-                               const detail::SdfTuning& tuning, BitVolume* solid_out);
+                               const detail::SdfTuning& tuning, BitVolume* solid_out,
+                               std::optional<detail::SdfBackend> band_on = std::nullopt,
+                               DeviceRunReport* report = nullptr);
+DenseVolume<float> finish_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                              const detail::SdfTuning& tuning, const BandSetup& s, float clamped, int threads,
+                              const detail::ProgressSpan& progress, double band_end, BitVolume solid,
+                              DenseVolume<float> values, BitVolume* solid_out);
 
 BandSetup band_setup(const Grid& grid, const SdfOptions& options) {
   if (!(options.band > 0.0) || !std::isfinite(options.band))
@@ -124,6 +133,8 @@ inline void negate_nonzero(float* row, std::int64_t begin, std::int64_t end) {
 }  // namespace
 
 std::optional<std::string> sdf_slabs_refusal(const SdfOptions& options) {
+  if (options.device == ComputeDevice::cuda)
+    return "device cuda computes the band of the whole grid at once; only the CPU goes slab by slab (device auto or cpu)";
   if (options.full) return "the full field's nearest-triangle queries need the whole grid; only the band goes slab by slab";
   if (options.inside != InsideTest::parity)
     return "the " + std::string(to_string(options.inside)) + " inside test needs the whole grid; only parity signs slab by slab";
@@ -201,15 +212,48 @@ void signed_distance_field_slabs(const Mesh& mesh, const Grid& grid, const SdfOp
   progress.report(1.0);
 }
 
-DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
-                                         JobControl* control) {
-  return compute_sdf(mesh, grid, options, control, detail::SdfTuning{}, nullptr);
+ComputeDevice sdf_device_for(const SdfOptions& options, const Grid& grid) {
+  if (options.device != ComputeDevice::automatic) return options.device;
+  return grid.voxel_count() >= (std::uint64_t{1} << 21) && cuda_unavailable_reason().empty() ? ComputeDevice::cuda
+                                                                                             : ComputeDevice::cpu;
 }
 
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
-                                         JobControl* control, BitVolume* solid) {
+                                         JobControl* control) {
+  return signed_distance_field(mesh, grid, options, control, nullptr, nullptr);
+}
+
+DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                                         JobControl* control, BitVolume* solid, DeviceRunReport* report) {
+  if (sdf_device_for(options, grid) == ComputeDevice::cuda) {
+    if (options.device == ComputeDevice::cuda)
+      return compute_sdf(mesh, grid, options, control, detail::SdfTuning{}, solid, detail::SdfBackend::cuda, report);
+    // automatic: a GPU that cannot take the band (its memory taken by
+    // others, a CUDA failure) leaves the field to the CPU, whose bits are
+    // the same; the report says where it ran. Cancellation is not a failure.
+    try {
+      return compute_sdf(mesh, grid, options, control, detail::SdfTuning{}, solid, detail::SdfBackend::cuda, report);
+    } catch (const Error& e) {
+      if (e.code() == ErrorCode::cancelled) throw;
+    } catch (const std::runtime_error&) {
+    }
+  }
+  if (report) *report = DeviceRunReport{};
   return compute_sdf(mesh, grid, options, control, detail::SdfTuning{}, solid);
 }
+
+namespace detail {
+DenseVolume<float> signed_distance_field_on(SdfBackend backend, const Mesh& mesh, const Grid& grid,
+                                            const SdfOptions& options, JobControl* control, BitVolume* solid,
+                                            DeviceRunReport* report) {
+  return compute_sdf(mesh, grid, options, control, SdfTuning{}, solid, backend, report);
+}
+
+std::uint64_t sdf_scene_bytes(const Mesh& mesh, const Grid& grid, const SdfOptions& options) {
+  const BandSetup s = band_setup(grid, options);
+  return sdf::scene_bytes(mesh, grid, s, clamped_value(options, s));
+}
+}  // namespace detail
 
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
                                          JobControl* control, const detail::SdfTuning& tuning) {
@@ -219,18 +263,35 @@ DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, con
 namespace {
 
 DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options, JobControl* control,
-                               const detail::SdfTuning& tuning, BitVolume* solid_out) {
+                               const detail::SdfTuning& tuning, BitVolume* solid_out,
+                               std::optional<detail::SdfBackend> band_on, DeviceRunReport* report) {
   const BandSetup s = band_setup(grid, options);
   const float clamped = clamped_value(options, s);
   const int threads = options.threads > 0 ? options.threads : default_thread_count();
   const detail::ProgressSpan progress{control, 0.0, 1.0};
 
-  if (grid.voxel_count() == 0) return DenseVolume<float>(grid, clamped);
+  if (grid.voxel_count() == 0) {
+    if (report) *report = DeviceRunReport{};
+    return DenseVolume<float>(grid, clamped);
+  }
+  const double band_end = options.full ? 0.25 : 1.0;
+  DenseVolume<float> values;
+  if (band_on) {
+    // A GPU asked for and missing is the user's to fix, before any work.
+    if (*band_on == detail::SdfBackend::cuda && !cuda_unavailable_reason().empty())
+      throw Error(ErrorCode::invalid_argument, cuda_unavailable_reason());
+    BitVolume solid = solid_for_sign(mesh, grid, options, progress.part(0.0, 0.15));
+    values = DenseVolume<float>(grid, DenseVolume<float>::Uninitialized{});  // the device writes every voxel
+    sdf::band_on_device(*band_on, mesh, grid, s, clamped, threads, options.gpu_memory, values,
+                        progress.part(0.15, band_end), report);
+    return finish_sdf(mesh, grid, options, tuning, s, clamped, threads, progress, band_end, std::move(solid),
+                      std::move(values), solid_out);
+  }
+  if (report) *report = DeviceRunReport{};
   // The output is filled on a thread of its own meanwhile: one thread
   // writing every value (and, first touch, faulting every page in) is a
   // sizeable part of the band's time at 512^3 (~0.4 GB), and the solid and
   // the clusters keep the other cores busy.
-  DenseVolume<float> values;
   std::exception_ptr fill_error;
   std::thread filler([&] {
     try {
@@ -245,13 +306,21 @@ DenseVolume<float> compute_sdf(const Mesh& mesh, const Grid& grid, const SdfOpti
       if (thread.joinable()) thread.join();
     }
   } join{filler};
-  const double band_end = options.full ? 0.25 : 1.0;
   BitVolume solid = solid_for_sign(mesh, grid, options, progress.part(0.0, 0.15));
   const sdf::BandPlan plan = sdf::plan_band(mesh, grid, s, threads);
   filler.join();
   if (fill_error) std::rethrow_exception(fill_error);
   progress.check_cancelled();
   sdf::scatter_band(mesh, grid, s, plan, threads, values, progress.part(0.15, band_end));
+  return finish_sdf(mesh, grid, options, tuning, s, clamped, threads, progress, band_end, std::move(solid),
+                    std::move(values), solid_out);
+}
+
+// After the band: the full field's queries where asked, then the sign.
+DenseVolume<float> finish_sdf(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
+                              const detail::SdfTuning& tuning, const BandSetup& s, float clamped, int threads,
+                              const detail::ProgressSpan& progress, double band_end, BitVolume solid,
+                              DenseVolume<float> values, BitVolume* solid_out) {
   if (options.full) {
     const detail::ProgressSpan rest = progress.part(band_end, 1.0);
     if (tuning.nearest == detail::SdfTuning::Nearest::embree) {

@@ -12,7 +12,9 @@
 #include <glm/vec3.hpp>
 
 #include "analysis/progress_span.h"
+#include "voxd/compute_device.h"
 #include "voxd/dense_volume.h"
+#include "voxd/detail/sdf_gpu.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
 
@@ -113,5 +115,14 @@ void scatter_band_chunk(const Mesh& mesh, const Grid& g, const BandSetup& s, con
 // disjoint z-slabs, so the result does not depend on their number.
 void scatter_band(const Mesh& mesh, const Grid& g, const BandSetup& s, const BandPlan& plan, int threads,
                   DenseVolume<float>& values, const detail::ProgressSpan& progress);
+
+// The same band values computed on a device (sdf_gpu.cpp): every voxel of
+// `values` written, the unsigned distance in the output unit or `clamped`,
+// slab by slab within `gpu_memory` bytes (0: see detail::signed_distance_field_on).
+void band_on_device(detail::SdfBackend backend, const Mesh& mesh, const Grid& grid, const BandSetup& s, float clamped,
+                    int threads, std::uint64_t gpu_memory, DenseVolume<float>& values,
+                    const detail::ProgressSpan& progress, DeviceRunReport* report);
+// Bytes of what the device holds of the mesh (detail::sdf_scene_bytes).
+std::uint64_t scene_bytes(const Mesh& mesh, const Grid& grid, const BandSetup& s, float clamped);
 
 }  // namespace voxd::sdf

@@ -45,6 +45,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "voxd/compute_device.h"
 #include "voxd/dense_volume.h"
 #include "voxd/grid.h"
 #include "voxd/mesh.h"
@@ -70,7 +71,20 @@ struct SdfOptions {
   bool model_units = true;                 // false: values in voxels (distance / voxel_size)
   InsideTest inside = InsideTest::parity;  // the solid that gives the sign
   int threads = 0;                         // 0 = all cores
+  // Where the band is computed (voxd/compute_device.h): the same bits on
+  // either; the solid that signs it and the full field's queries are made
+  // on the CPU. automatic takes the GPU for grids of 2^21 voxels or more and
+  // the CPU when the GPU fails them (its memory taken by others, a CUDA
+  // error). Slab by slab (signed_distance_field_slabs) is the CPU's alone.
+  ComputeDevice device = ComputeDevice::cpu;
+  // Bytes of GPU memory the band may hold at once; grids that need more go
+  // slab by slab. 0 = three quarters of the GPU's free memory.
+  std::uint64_t gpu_memory = 0;
 };
+
+// The device options.device resolves to for `grid`: cpu or cuda (automatic
+// as above; cuda stays cuda, available or not).
+ComputeDevice sdf_device_for(const SdfOptions& options, const Grid& grid);
 
 // Throws Error(invalid_argument) when band is not a positive finite number
 // (or the grid's voxel size is not). `control` may be null; when given,
@@ -81,14 +95,16 @@ DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, con
                                          JobControl* control = nullptr);
 // The same, also handing back in `solid` the solid voxelization that signed
 // it, voxelize(mesh, grid, {solid, options.inside}), so a caller that needs
-// both (a job keeps the solid for its analyses) voxelizes once.
+// both (a job keeps the solid for its analyses) voxelizes once, and in
+// `report` where the band was computed. Either may be null.
 DenseVolume<float> signed_distance_field(const Mesh& mesh, const Grid& grid, const SdfOptions& options,
-                                         JobControl* control, BitVolume* solid);
+                                         JobControl* control, BitVolume* solid, DeviceRunReport* report = nullptr);
 
 // The band slab by slab, for outputs written as they come (an RLE, where the
 // clamped background is a handful of runs): never the whole float volume,
 // whose fresh pages alone cost about as much as the band (0.4 GB at 512^3).
-// Why options cannot (the full field, the vote or winding sign), else nullopt.
+// Why options cannot (the full field, the vote or winding sign, device
+// cuda), else nullopt.
 std::optional<std::string> sdf_slabs_refusal(const SdfOptions& options);
 // First the solid that signs the field, as runs (every layer, in z order, to
 // `solid`), then the field's slabs (to `values`, each a DenseVolume<float>
