@@ -8,6 +8,7 @@
 #include "api/job_params.h"
 #include "api/param_validator.h"
 #include "api/result_json.h"
+#include "voxd/compute_device.h"
 
 namespace voxd::api {
 namespace {
@@ -61,6 +62,7 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
   static SdfOptions engine_options(const JobParams& params) {
     SdfOptions o = options(params);
     o.inside = params.inside;
+    o.device = params.device.value_or(ComputeDevice::automatic);
     return o;
   }
 
@@ -76,6 +78,9 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
 
   std::optional<ValueVolume> value_type(const JobParams&) const override { return ValueVolume(DenseVolume<float>()); }
 
+  // The band; the solid that signs it is made on the CPU.
+  bool runs_on_gpu() const override { return true; }
+
   // One float per voxel; the field holds its own solid for the sign beside the job's.
   std::uint64_t memory_estimate(const Grid& grid, const JobParams& params) const override {
     return bit_volumes_memory(grid, VoxelMode::solid, params.inside) +
@@ -88,10 +93,12 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
     o.threads = in.threads;
     JobVolumes result;
     BitVolume solid;
-    DenseVolume<float> sdf = signed_distance_field(in.mesh, in.grid, o, in.control, &solid);
+    DeviceRunReport report;
+    DenseVolume<float> sdf = signed_distance_field(in.mesh, in.grid, o, in.control, &solid, &report);
     result.solid = std::make_shared<const BitVolume>(std::move(solid));
     const auto [lo, hi] = value_range(sdf);
     result.values_info = values_info(o, lo, hi);
+    result.values_info["device"] = to_string(report.device);
     result.values = std::make_shared<const ValueVolume>(std::move(sdf));
     return result;
   }
@@ -101,7 +108,12 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
   std::optional<std::string> streaming_refusal(const JobParams& params) const override {
     return sdf_slabs_refusal(engine_options(params));
   }
-  bool faster_in_slabs(const JobParams& params) const override { return !streaming_refusal(params); }
+  // Unless a GPU may take the band: it makes the whole grid's at once.
+  bool faster_in_slabs(const JobParams& params) const override {
+    const bool gpu = params.device.value_or(ComputeDevice::automatic) == ComputeDevice::automatic &&
+                     cuda_unavailable_reason().empty();
+    return !streaming_refusal(params) && !gpu;
+  }
 
   nlohmann::json run_streamed(const ModeInput& in, std::int64_t, const BitSlabConsumer& bits,
                               const ValueSlabConsumer& values) const override {
@@ -117,7 +129,9 @@ class SdfMode final : public ModeWithOptions<SdfParams> {
           values(k0, slab);
         },
         in.control);
-    return values_info(o, lo, hi);
+    json info = values_info(o, lo, hi);
+    info["device"] = to_string(ComputeDevice::cpu);
+    return info;
   }
 
   // What a streamed NRRD's header says, before the values exist: what the

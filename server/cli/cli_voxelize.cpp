@@ -66,10 +66,10 @@ volume to OUT ("-" for standard output).
                          (value = offset + scale * level, both in the header)
   --threads N            worker threads (default: all cores)
   --device D             auto (default) | cpu | cuda: where a slice job's
-                         colours and a coverage job's coverages are computed
-                         (auto: a CUDA GPU, where one is, for coverage and the
-                         noise functions on grids of 2^21 voxels or more);
-                         the same bytes on either
+                         colours, a coverage job's coverages and an sdf job's
+                         band are computed (auto: a CUDA GPU, where one is,
+                         for coverage, sdf and the noise functions on grids
+                         of 2^21 voxels or more); the same bytes on either
   --streaming S          auto (default) | on | off: voxelize slab by slab and
                          write each slab as it is done, in bounded memory
                          (modes of bits with the parity inside test, and

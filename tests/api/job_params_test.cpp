@@ -94,8 +94,9 @@ TEST(JobParams, DeviceIsAChoiceThatOnlyAModeWithAGpuPathTakesAsCuda) {
                   .device == ComputeDevice::cuda);
   EXPECT_EQ(parse_job_params(json{{"device", "cpu"}}).device, ComputeDevice::cpu);
   EXPECT_EQ(parse_job_params(json{{"mode", "coverage"}, {"device", "cuda"}}).device, ComputeDevice::cuda);
-  EXPECT_TRUE(has_error(errors_of(json{{"mode", "sdf"}, {"device", "cuda"}}), "/device",
-                        "mode \"sdf\" runs only on the CPU; drop \"device\" or use auto or cpu"));
+  EXPECT_EQ(parse_job_params(json{{"mode", "sdf"}, {"device", "cuda"}}).device, ComputeDevice::cuda);
+  EXPECT_TRUE(has_error(errors_of(json{{"mode", "palette"}, {"device", "cuda"}}), "/device",
+                        "mode \"palette\" runs only on the CPU; drop \"device\" or use auto or cpu"));
   EXPECT_TRUE(has_error(errors_of(json{{"device", "cuda"}}), "/device", "mode \"solid\" runs only on the CPU"));
   EXPECT_TRUE(has_error(errors_of(json{{"device", "gpu"}}), "/device", R"(must be one of "auto", "cpu", "cuda")"));
   EXPECT_TRUE(has_error(errors_of(json{{"device", 1}}), "/device", "got number"));

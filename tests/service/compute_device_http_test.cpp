@@ -65,6 +65,29 @@ TEST_F(ComputeDeviceTest, CoverageAutoRunsOnTheCpuAndCudaIsRefused) {
   EXPECT_NE(std::string(p.at("detail")).find("use device auto or cpu"), std::string::npos) << p.dump();
 }
 
+// So does sdf: auto's band is the CPU's here, the same floats as cpu's,
+// and values.device says so, streamed or not.
+TEST_F(ComputeDeviceTest, SdfAutoRunsOnTheCpuWithTheSameFloatsAndSaysWhere) {
+  start({}, kNoGpu);
+  const auto mesh = to_binary_stl(make_torus({0, 0, 0}, 1.0, 0.45, 40, 20));
+  const auto sdf_job = [](const std::string& device, const std::string& streaming) {
+    return R"({"grid":{"resolution":200},"mode":"sdf","sdf":{"band":2},"streaming":")" + streaming +
+           R"(","device":")" + device + R"("})";
+  };
+  const std::string automatic = finished(submit(mesh, sdf_job("auto", "off")));
+  const std::string cpu = finished(submit(mesh, sdf_job("cpu", "off")));
+  const std::string streamed = finished(submit(mesh, sdf_job("auto", "on")));
+  for (const std::string& id : {automatic, streamed}) {
+    const json status = expect_json(http().Get(("/v1/jobs/" + id).c_str()), 200, "JobStatus");
+    EXPECT_EQ(status.at("values").at("device"), "cpu") << status.dump();
+    EXPECT_EQ(status.at("values").at("quantity"), "signed distance");
+  }
+  const std::string bytes = volume(automatic, "?format=raw");
+  EXPECT_GE(bytes.size(), std::size_t{4} << 21);
+  EXPECT_TRUE(bytes == volume(cpu, "?format=raw"));
+  EXPECT_TRUE(bytes == volume(streamed, "?format=raw"));
+}
+
 TEST_F(ComputeDeviceTest, CudaWithoutAGpuIsRefusedSayingWhatToUse) {
   start({}, kNoGpu);
   const auto mesh = to_binary_stl(make_torus({0, 0, 0}, 1.0, 0.45, 24, 12));
@@ -85,12 +108,12 @@ TEST_F(ComputeDeviceTest, AModeThatRunsOnlyOnTheCpuRefusesCudaAtItsField) {
   start({}, kNoGpu);
   const auto mesh = to_binary_stl(make_torus({0, 0, 0}, 1.0, 0.45, 24, 12));
   const json p = expect_problem(post_multipart(http(), "/v1/jobs", mesh, "part.stl",
-                                               R"({"grid":{"resolution":20},"mode":"sdf","device":"cuda"})"),
+                                               R"({"grid":{"resolution":20},"mode":"palette","device":"cuda"})"),
                                 422, "invalid-params");
   ASSERT_TRUE(p.contains("errors")) << p.dump();
   EXPECT_EQ(p.at("errors").at(0).at("path"), "/device");
   EXPECT_EQ(p.at("errors").at(0).at("message"),
-            R"(mode "sdf" runs only on the CPU; drop "device" or use auto or cpu)");
+            R"(mode "palette" runs only on the CPU; drop "device" or use auto or cpu)");
   expect_problem(post_multipart(http(), "/v1/jobs", mesh, "part.stl", R"({"mode":"slice","slice":{"function":"rock"},"device":"gpu"})"),
                  422, "invalid-params");
 }
