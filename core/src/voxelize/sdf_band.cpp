@@ -46,7 +46,10 @@ inline dvec3 corner(const Mesh& mesh, std::size_t tri, int c) { return dvec3(mes
 // lower it; only then is the exact distance computed. Once the nearer
 // triangles have been by, the sphere skips most voxels (the plane alone does
 // not: along a curved surface the neighbours' planes pass close to a voxel).
-void scatter_triangle(const Triangle& t, const Grid& g, const BandSetup& s, std::int64_t z0, std::int64_t z1,
+//
+// Out of line: inlined into scatter_band_chunk (as GCC chose once the
+// triangle became a template) it ran 3.7% more instructions at 128^3.
+[[gnu::noinline]] void scatter_triangle(const Triangle& t, const Grid& g, const BandSetup& s, std::int64_t z0, std::int64_t z1,
                       DenseVolume<float>& values, std::int64_t z_origin) {
   const IndexSpace index_of(g);
   const double band = s.band * index_of.inv_voxel, band2 = band * band;  // voxels
