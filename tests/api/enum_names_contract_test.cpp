@@ -2,6 +2,7 @@
 // published contract lists them again for clients. This holds the two equal,
 // in order, so a name added to one and not the other fails here, not in a
 // client's validator.
+#include <algorithm>
 #include <fstream>
 #include <set>
 #include <string>
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/analysis_request.h"
+#include "api/job_mode.h"
 #include "api/job_params.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/mesh_io/mesh_decode.h"
@@ -82,6 +84,26 @@ TEST(EnumNames, TheJobParametersSchemaListsTheEnginesNames) {
   EXPECT_EQ(contract_enum(s, "/properties/slice/properties/function"), table(kSliceFunctionNames));
   EXPECT_EQ(contract_enum(s, "/properties/analyses/items/oneOf/1/properties/measure"), table(kRadiographyMeasureNames));
   EXPECT_EQ(contract_enum(s, "/$defs/peel_metric"), table(kPeelMetricNames));
+}
+
+// The modes the schema refuses "device": "cuda" for are exactly those
+// whose work runs only on the CPU (JobMode::runs_on_gpu): a client that
+// validates against the contract is refused where voxd would refuse it.
+TEST(EnumNames, TheJobParametersSchemaRefusesCudaForTheModesThatRunOnlyOnTheCpu) {
+  const json s = schema("job-params.schema.json");
+  std::vector<std::string> cpu_only;
+  for (const json& rule : s.at("allOf")) {
+    const json mode = rule.value("if", json::object()).value("properties", json::object()).value("mode", json::object());
+    if (mode.contains("enum") && rule.at("then").dump().find("cuda") != std::string::npos)
+      cpu_only = mode.at("enum").get<std::vector<std::string>>();
+  }
+  std::vector<std::string> expected;
+  for (const api::JobMode* mode : api::job_modes())
+    if (!mode->runs_on_gpu()) expected.emplace_back(mode->name());
+  std::sort(cpu_only.begin(), cpu_only.end());
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(cpu_only, expected);
+  EXPECT_FALSE(expected.empty());
 }
 
 TEST(EnumNames, TheOpenApiDocumentListsTheServicesNames) {

@@ -38,6 +38,10 @@ invalid = [
     {"mode": "coverage", "coverage": {"points": 8}},
     {"mode": "coverage", "coverage": {"sampling": "exact", "seed": 3}},
     {"mode": "coverage", "coverage": {"threshold": 0.5, "values": "f32"}},
+    {"device": "cuda"},
+    {"mode": "surface", "device": "cuda"},
+    {"mode": "palette", "device": "cuda"},
+    {"mode": "slice", "slice": {"function": "rock"}, "device": "gpu"},
 ]
 # Palette and slice jobs voxd accepts; the schema must too.
 valid = [
@@ -54,6 +58,11 @@ valid = [
                                                                "tetra-x0y1z0": [{"object": "corner", "min_similarity": 0.9},
                                                                                 {"object": "brick", "min_similarity": 0.5}]}}},
     {"mode": "slice", "slice": {"function": "single_color"}},
+    {"mode": "slice", "slice": {"function": "rock"}, "device": "cuda"},
+    {"mode": "coverage", "device": "cuda"},
+    {"mode": "sdf", "device": "cuda"},
+    {"mode": "solid", "device": "cpu"},
+    {"device": "auto"},
     {"mode": "slice", "inside": "vote", "slice": {"function": "single_color", "color": [10, 20, 30]}},
     {"mode": "slice", "slice": {"function": "single_color", "color": [10, 20, 30, 1]}},
     {"mode": "slice", "slice": {"function": "single_color", "color": "#A0b0C0"}},

@@ -205,8 +205,12 @@ await runPageTest(work, async (browser, base) => {
   assert.ok(downloaded.equals(fromApi), `downloaded ${downloaded.length} bytes differ from the API's ${fromApi.length}`);
   await shot(page, 'downloads');
 
-  // 8. A distance field's job shows its zero level set (surface nets).
+  // 8. A distance field's job shows its zero level set (surface nets), and
+  // says where its band was computed: on the CPU asked for (the form sends
+  // the device chosen).
   await page.selectOption('#mode', 'sdf');
+  assert.ok(await page.isVisible('#device'), 'no device offered for sdf');
+  await page.selectOption('#device', 'cpu');
   await page.fill('#resolution', '48');
   await page.uncheck('#want-report');
   await page.uncheck('#want-radiography');
@@ -214,6 +218,9 @@ await runPageTest(work, async (browser, base) => {
   await page.click('#submit');
   await page.waitForFunction((before) => document.getElementById('job-id').textContent !== before, jobId);
   await page.waitForFunction(() => document.getElementById('job-state').textContent === 'succeeded', null, { timeout: 120000 });
+  const sdfStatus = await (await fetch(`${base}/v1/jobs/${await page.$eval('#job-id', (e) => e.textContent)}`)).json();
+  assert.equal(sdfStatus.params.device, 'cpu');
+  await page.waitForFunction(() => document.getElementById('job-device').textContent === 'computed on: cpu');
   await page.click('button[data-tab=view3d]');
   await page.waitForFunction(() => /zero level set: \d+ triangles/.test(document.getElementById('view-info').textContent),
                              null, { timeout: 60000 });
@@ -238,6 +245,8 @@ await runPageTest(work, async (browser, base) => {
   for (const mode of modes) {
     await page.selectOption('#mode', mode);
     assert.equal(await page.$eval('#inside', (e) => e.disabled), mode === 'coverage' || mode === 'palette', mode);
+    // A device only where a GPU could do the work (JobMode::runs_on_gpu).
+    assert.equal(await page.isVisible('#device'), ['coverage', 'sdf', 'slice'].includes(mode), mode);
     if (mode === 'slice')  // custom takes its lookup from an uploaded image
       assert.ok((await page.$$eval('#mode-options select option', (o) => o.map((x) => x.value))).includes('custom'));
     await page.setInputFiles('#mesh-file', meshPath);

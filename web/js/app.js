@@ -230,6 +230,22 @@ function modesWithoutInside() {
   return out;
 }
 
+// The modes the schema refuses "device": "cuda" for: their work runs only
+// on the CPU, so the form offers them no device.
+function modesOnTheCpuOnly() {
+  for (const rule of schema.allOf || []) {
+    const modes = rule.if?.properties?.mode?.enum;
+    if (modes && rule.then?.properties?.device) return new Set(modes);
+  }
+  return new Set();
+}
+
+function showDevice(modeName) {
+  const takes = !modesOnTheCpuOnly().has(modeName);
+  $('device').disabled = !takes;
+  $('device').closest('label').hidden = !takes;
+}
+
 function showInside(modeName) {
   const takes = !modesWithoutInside().has(modeName);
   $('inside').disabled = !takes;
@@ -246,19 +262,24 @@ async function loadSchema() {
   fillSelect($('mode'), p.mode.enum, p.mode.default);
   fillSelect($('inside'), p.inside.enum, p.inside.default);
   fillSelect($('units'), p.units.enum, p.units.default);
+  // Unset, the job takes the service's own device (voxd serve --device).
+  $('device').replaceChildren(new Option('service default', ''), ...p.device.enum.map((d) => new Option(d, d)));
   const byResolution = p.grid.oneOf.find((g) => g.required.includes('resolution')).properties.resolution;
   Object.assign($('resolution'), { min: byResolution.minimum, max: Math.min(byResolution.maximum, 4096), value: 128 });
   $('mode').onchange = () => {
     optionInputs($('mode').value);
     showInside($('mode').value);
+    showDevice($('mode').value);
   };
   optionInputs($('mode').value);
   showInside($('mode').value);
+  showDevice($('mode').value);
 }
 
 function jobParams() {
   const params = { mode: $('mode').value, units: $('units').value };
   if (!modesWithoutInside().has(params.mode)) params.inside = $('inside').value;
+  if (!$('device').disabled && $('device').value) params.device = $('device').value;
   const kind = document.querySelector('input[name=grid-kind]:checked').value;
   params.grid = kind === 'resolution' ? { resolution: Number($('resolution').value) }
                                       : { voxel_size: Number($('voxel-size').value) };
@@ -360,6 +381,8 @@ function showJobNotes(job) {
   $('job-inside').textContent = !inside ? ''
     : `inside test: ${inside.test}` + (inside.chosen === 'auto' ? `, chosen from the mesh: ${inside.reason}`
                                                               : inside.reason ? ` (${inside.reason})` : ', as asked');
+  // Where a GPU could have done the work: where it was done.
+  $('job-device').textContent = job.values?.device ? `computed on: ${job.values.device}` : '';
   $('job-warnings').replaceChildren(...(job.warnings || []).map((w) => {
     const li = Object.assign(document.createElement('li'), { className: 'warning', textContent: w.message });
     li.dataset.code = w.code;
