@@ -557,7 +557,8 @@ TEST(ThicknessRegions, RunsFindTheFloodFillsRegionsForAnyThreadCount) {
         if (probes[p] < rank_of_voxel.size()) want_probe[p] = rank_of_voxel[probes[p]];
       }
       std::vector<ThicknessRegion> first;
-      for (const int threads : {1, 2, 3, 8}) {
+      // 16: layers cut into runs of two or three, joined apart.
+      for (const int threads : {1, 2, 3, 8, 16}) {
         std::vector<std::uint32_t> probe_regions;
         const auto got = find_thickness_regions(t, kind, threshold, min_voxels, &probes, &probe_regions, threads);
         ASSERT_EQ(got.size(), want.size()) << fill << " " << threads;
@@ -593,7 +594,7 @@ TEST(ThicknessRegions, OnePassOfManyQueriesFindsEachQuerysFloodRegions) {
                                                   {ThicknessRegionKind::thick, 2.0f},
                                                   {ThicknessRegionKind::thin, 0.1f}};
   const std::uint64_t min_voxels = 2;
-  for (const int threads : {1, 3}) {
+  for (const int threads : {1, 3, 16}) {
     const auto got = find_thickness_regions(t, queries, min_voxels, threads);
     ASSERT_EQ(got.size(), queries.size());
     for (std::size_t q = 0; q < queries.size(); ++q) {

@@ -260,7 +260,7 @@ std::vector<QueryRuns> scan_runs(const DenseVolume<float>& thickness, const std:
 std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::i64vec3& d, ThicknessRegionKind kind,
                                         std::uint64_t min_voxels, std::size_t voxel_count,
                                         const std::vector<std::size_t>* probes,
-                                        std::vector<std::uint32_t>* probe_regions) {
+                                        std::vector<std::uint32_t>* probe_regions, int threads) {
   const bool thin = kind == ThicknessRegionKind::thin;
   const std::int64_t rows = d.y * d.z;
   const std::vector<Run>& runs = found_runs.runs;
@@ -278,15 +278,43 @@ std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::
     for (; it != last && it->begin < r.end + 1; ++it)
       regions.join(static_cast<std::uint32_t>(run), static_cast<std::uint32_t>(it - runs.begin()));
   };
-  for (std::int64_t k = 0; k < d.z; ++k)
+  // Row (j, k)'s runs joined to row j - 1's and, with `below`, to layer k - 1's.
+  const auto link_row = [&](std::int64_t j, std::int64_t k, bool below) {
+    const std::int64_t row = j + d.y * k;
+    for (std::uint64_t run = row_start[static_cast<std::size_t>(row)]; run < row_start[static_cast<std::size_t>(row) + 1]; ++run) {
+      if (j > 0) link(run, row - 1);
+      if (below)
+        for (std::int64_t jj = std::max<std::int64_t>(0, j - 1); jj <= std::min(d.y - 1, j + 1); ++jj) link(run, jj + d.y * (k - 1));
+    }
+  };
+  // The layers in runs of layers, one a thread, joined apart: a run of
+  // layers joins only its own runs' sets, so the threads never touch one
+  // set. Then each run of layers' first layer to the layer below, in order.
+  // A set's root is its smallest run whatever the order of the joins
+  // (UnionFind), so the regions are the same on any number of threads.
+  const std::int64_t parts = std::clamp<std::int64_t>(d.z / 2, 1, threads > 0 ? threads : default_thread_count());
+  parallel_for(0, parts, 1, threads, [&](std::int64_t p0, std::int64_t p1) {
+    for (std::int64_t p = p0; p < p1; ++p)
+      for (std::int64_t k = d.z * p / parts; k < d.z * (p + 1) / parts; ++k)
+        for (std::int64_t j = 0; j < d.y; ++j) link_row(j, k, k > d.z * p / parts);
+  });
+  for (std::int64_t p = 1; p < parts; ++p) {
+    const std::int64_t k = d.z * p / parts;
     for (std::int64_t j = 0; j < d.y; ++j) {
       const std::int64_t row = j + d.y * k;
-      for (std::uint64_t run = row_start[static_cast<std::size_t>(row)]; run < row_start[static_cast<std::size_t>(row) + 1]; ++run) {
-        if (j > 0) link(run, row - 1);
-        if (k > 0)
-          for (std::int64_t jj = std::max<std::int64_t>(0, j - 1); jj <= std::min(d.y - 1, j + 1); ++jj) link(run, jj + d.y * (k - 1));
-      }
+      for (std::uint64_t run = row_start[static_cast<std::size_t>(row)]; run < row_start[static_cast<std::size_t>(row) + 1]; ++run)
+        for (std::int64_t jj = std::max<std::int64_t>(0, j - 1); jj <= std::min(d.y - 1, j + 1); ++jj) link(run, jj + d.y * (k - 1));
     }
+  }
+  // Every run's root, on every thread: reading the finished forest only.
+  std::vector<std::uint32_t> root_of(static_cast<std::size_t>(total));
+  parallel_for(0, static_cast<std::int64_t>(total), std::int64_t{1} << 16, threads, [&](std::int64_t a, std::int64_t b) {
+    for (auto run = static_cast<std::uint32_t>(a); run < static_cast<std::uint32_t>(b); ++run) {
+      std::uint32_t x = run;
+      while (regions.parent[x] != x) x = regions.parent[x];
+      root_of[run] = x;
+    }
+  });
 
   // Each region's sums, gathered at its root (the run it starts with).
   std::vector<std::uint32_t> region_of(static_cast<std::size_t>(total));
@@ -294,7 +322,7 @@ std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::
   for (std::int64_t row = 0; row < rows; ++row) {
     const std::int64_t j = row % d.y, k = row / d.y;
     for (std::uint64_t run = row_start[static_cast<std::size_t>(row)]; run < row_start[static_cast<std::size_t>(row) + 1]; ++run) {
-      const std::uint32_t root = regions.find(static_cast<std::uint32_t>(run));
+      const std::uint32_t root = root_of[static_cast<std::size_t>(run)];
       // The root is the region's first run in scan order (the smaller id
       // always stays the root), so its region was numbered when met.
       if (root == run) {
@@ -368,7 +396,8 @@ std::vector<ThicknessRegion> find_thickness_regions(const DenseVolume<float>& th
                                                     const std::vector<std::size_t>* probes,
                                                     std::vector<std::uint32_t>* probe_regions, int threads) {
   const std::vector<QueryRuns> runs = scan_runs(thickness, {{kind, threshold_voxels}}, threads);
-  return regions_of(runs[0], thickness.grid().dims, kind, min_voxels, thickness.values().size(), probes, probe_regions);
+  return regions_of(runs[0], thickness.grid().dims, kind, min_voxels, thickness.values().size(), probes, probe_regions,
+                    threads);
 }
 
 std::vector<std::vector<ThicknessRegion>> find_thickness_regions(const DenseVolume<float>& thickness,
@@ -379,7 +408,7 @@ std::vector<std::vector<ThicknessRegion>> find_thickness_regions(const DenseVolu
   out.reserve(queries.size());
   for (std::size_t q = 0; q < queries.size(); ++q) {
     out.push_back(regions_of(runs[q], thickness.grid().dims, queries[q].kind, min_voxels, thickness.values().size(),
-                             nullptr, nullptr));
+                             nullptr, nullptr, threads));
     runs[q] = QueryRuns{};
   }
   return out;
