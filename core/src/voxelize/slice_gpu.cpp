@@ -116,6 +116,7 @@ DenseVolume<Rgba8> voxelize_slice_on(SliceBackend backend, const Mesh& mesh, con
   if (report) {
     report->device = backend == SliceBackend::cuda ? ComputeDevice::cuda : ComputeDevice::cpu;
     report->slabs = plan.slabs;
+    report->passes = plan.slabs;  // a kernel pass a slab
     report->gpu_bytes = plan.device_bytes;
     report->gpu_kernel_ms = device->kernel_ms();
     report->gpu_copy_ms = device->copy_ms();
