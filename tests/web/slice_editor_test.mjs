@@ -87,11 +87,17 @@ await runPageTest(work, async (browser, base) => {
               `second (the last took ${await page.$eval('#slice-timing', (e) => e.dataset.lastMs)} ms); ${views} views in all`);
   // The requests' own times, as the browser saw them (the rest of an update
   // is the page decoding and drawing the pictures).
-  const fetched = await page.evaluate(() => performance.getEntriesByType('resource')
-    .filter((e) => /\/section\?.*colour=slice/.test(e.name)).map((e) => e.duration).sort((a, b) => a - b));
+  const requests = await page.evaluate(() => performance.getEntriesByType('resource')
+    .filter((e) => /\/section\?.*colour=slice/.test(e.name)).map((e) => ({ url: e.name, ms: e.duration })));
+  const fetched = requests.map((r) => r.ms).sort((a, b) => a - b);
   console.log(`the section requests took ${fetched[Math.floor(fetched.length / 2)].toFixed(0)} ms (median of ${fetched.length})`);
   assert.ok(during >= 3, `only ${during} updates while dragging`);
-  assert.ok(during < moves + 5, 'updates are not coalesced: more than the slider moved');
+  assert.ok(during <= moves + 1, `updates are not coalesced: ${during} for ${moves} slider moves`);
+  // A drag step reaches the editor more than once (the slider's input, the
+  // form's input and change); a section already shown is not asked for
+  // again, however slow the service (CI's 2 cores are).
+  const repeated = requests.filter((r, i) => i > 0 && r.url === requests[i - 1].url).length;
+  assert.equal(repeated, 0, `${repeated} section requests repeat the one before`);
 
   // Settled: the pictures are the last options', as the API gives them,
   // and no value the slider reached was refused.

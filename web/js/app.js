@@ -635,7 +635,8 @@ const sliceEditor = (() => {
       const range = Object.assign(document.createElement('input'), { type: 'range', min, max, step, className: 'drag' });
       range.dataset.drags = number.dataset.option;
       range.value = number.value || number.placeholder;
-      range.oninput = () => { number.value = range.value; update(); };
+      // The form's own input listener (below) makes the update.
+      range.oninput = () => { number.value = range.value; };
       number.addEventListener('input', () => { range.value = number.value; });
       number.after(range);
     }
@@ -655,9 +656,12 @@ const sliceEditor = (() => {
 
   // Each picture on its own loop: one request in flight, the latest
   // options next, once, so dragging never queues stale pictures and the
-  // section is not held up by the view.
+  // section is not held up by the view. A picture already shown for the
+  // same job, query and options is not asked for again: a drag step can
+  // reach here more than once (input, then change on release), and a slow
+  // service must not be sent each step twice.
   function loop(kind, query, counter, settled = () => {}) {
-    let busy = false, again = false;
+    let busy = false, again = false, shown = null;
     async function run() {
       if (!job) return;
       // custom needs its lookup image first.
@@ -670,8 +674,12 @@ const sliceEditor = (() => {
       try {
         do {
           again = false;
+          const q = query(), slice = encodeURIComponent(JSON.stringify(options()));
+          const key = `${job.id}?${q}&${slice}`;
+          if (key === shown) continue;
           const started = performance.now();
-          await image(kind, query(), encodeURIComponent(JSON.stringify(options())));
+          await image(kind, q, slice);
+          shown = key;
           const ms = performance.now() - started;
           counter.dataset.updates = String(Number(counter.dataset.updates || 0) + 1);
           counter.dataset.lastMs = ms.toFixed(1);
