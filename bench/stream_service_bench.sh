@@ -8,7 +8,8 @@
 #   bench/stream_service_bench.sh [BUILD_DIR] [RESOLUTION]
 #   STEPS   the steps after the job, of: volume radiography analysis preview
 #           thickness (default: all)
-#   KEEP    a folder to copy the analysis report into (analysis.json)
+#   KEEP    a folder to copy the analysis report and the previews into
+#           (analysis.json, top.png, side.png), to compare two builds' bytes
 set -euo pipefail
 build="${1:-build}"
 res="${2:-8192}"
@@ -53,6 +54,7 @@ if want preview; then
   t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=%2Bz" -o "$work/top.png"; step "preview +z (two passes)" "$t0"
   t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=-x" -o "$work/side.png"; step "preview -x (two passes)" "$t0"
   for png in top side; do
+    [[ -n "${KEEP:-}" ]] && cp "$work/$png.png" "$KEEP/$png.png"
     python3 -c 'import struct,sys; d=open(sys.argv[1],"rb").read(); w,h=struct.unpack(">II",d[16:24]); print(f"  {sys.argv[2]}: {w} x {h} pixels, {len(d)/2**20:.1f} MiB")' "$work/$png.png" "$png"
   done
 fi

@@ -468,6 +468,62 @@ TEST(SlabAnalyses, PreviewsFromEverySideAreExactlyTheInMemoryOnes) {
           if (layers == 7) {
             EXPECT_EQ(preview_png(got, g, view, {}), preview_png(s.volume, view, nullptr, {}));
           }
+          // The same stored volume read as runs: the same image.
+          PreviewRenderer from_runs(g, view, 2);
+          read_rle_run_slabs(s.rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.find(k0, slab); });
+          read_rle_run_slabs(s.rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.shade(k0, slab); });
+          const PreviewImage runs = from_runs.take();
+          EXPECT_EQ(runs.voxel, expected.voxel);
+          EXPECT_EQ(runs.shade, expected.shade);
+          ASSERT_EQ(runs.normal.size(), expected.normal.size());
+          EXPECT_EQ(std::memcmp(runs.normal.data(), expected.normal.data(), runs.normal.size() * sizeof(glm::vec3)), 0);
+        }
+      }
+  }
+}
+
+// Random voxels filling the grid to its faces: rays blocked at the first
+// layer, runs open at the last, neighbours outside the grid, single-voxel
+// runs and gaps, each slab size's seams.
+TEST(SlabAnalyses, PreviewsOfRandomVolumesFromRunsAndBitsAreTheInMemoryOnes) {
+  std::uint64_t state = 0x9e3779b97f4a7c15u;
+  const auto next = [&] {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return state;
+  };
+  for (const double density : {0.2, 0.5, 0.85}) {
+    Grid g;
+    g.dims = {37 + static_cast<std::int64_t>(density * 40), 29, 23};
+    g.voxel_size = 0.5;
+    BitVolume volume(g);
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j)
+        for (std::int64_t i = 0; i < g.dims.x; ++i)
+          if (static_cast<double>(next() % 1000) < density * 1000) volume.set(i, j, k, true);
+    VectorSink sink;
+    write_rle(volume, sink);
+    for (int axis = 0; axis < 3; ++axis)
+      for (bool from_positive : {true, false}) {
+        const View view{axis, from_positive};
+        const PreviewImage expected = render_preview(volume, view, 1);
+        for (std::int64_t r = 0; r < expected.height; ++r)
+          for (std::int64_t c = 0; c < expected.width; ++c)
+            ASSERT_EQ(expected.voxel[static_cast<std::size_t>(r * expected.width + c)], first_filled(volume, view, c, r));
+        for (std::int64_t layers : {std::int64_t{1}, std::int64_t{2}, std::int64_t{5}, g.dims.z}) {
+          SCOPED_TRACE(to_string(view) + " density " + std::to_string(density) + " layers " + std::to_string(layers));
+          PreviewRenderer from_bits(g, view, 2), from_runs(g, view, 2);
+          read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.find(k0, slab); });
+          read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.shade(k0, slab); });
+          read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.find(k0, slab); });
+          read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.shade(k0, slab); });
+          for (const PreviewImage& got : {from_bits.take(), from_runs.take()}) {
+            EXPECT_EQ(got.voxel, expected.voxel);
+            EXPECT_EQ(got.shade, expected.shade);
+            ASSERT_EQ(got.normal.size(), expected.normal.size());
+            EXPECT_EQ(std::memcmp(got.normal.data(), expected.normal.data(), got.normal.size() * sizeof(glm::vec3)), 0);
+          }
         }
       }
   }
@@ -482,6 +538,22 @@ TEST(SlabAnalyses, PreviewRefusesSlabsOutOfOrderOrAPassMissing) {
   renderer.find(0, s.volume);
   EXPECT_THROW(renderer.take(), std::logic_error);  // shade() has not run
   EXPECT_THROW(PreviewRenderer(g, View{3, true}), Error);
+  // A pass takes its slabs one way: its seam is kept as bits or as runs.
+  PreviewRenderer mixed(g, View{2, true});
+  Grid half = g;
+  half.dims.z = g.dims.z / 2;
+  BitVolume lower(half);
+  for (std::int64_t k = 0; k < half.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; ++i) lower.set(i, j, k, s.volume.get(i, j, k));
+  mixed.find(0, lower);
+  half.dims.z = g.dims.z - half.dims.z;
+  try {
+    mixed.find(g.dims.z / 2, RunSlab(half));
+    ADD_FAILURE() << "a pass took bits then runs";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("all its slabs as bits or all as runs"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include <glm/geometric.hpp>
 
@@ -65,6 +66,70 @@ glm::vec3 neighbour_normal(const glm::i64vec3& d, const Filled& filled, std::int
 }
 
 bool bit_of(const std::uint64_t* row, std::int64_t i) { return (row[i >> 6] >> (i & 63)) & 1u; }
+
+using Runs = std::span<const std::uint32_t>;
+
+// Calls f(b, e) for each maximal range [b, e) of voxels in a's runs and not
+// in b's (both as RunSlab rows: increasing bounds): where a run of a begins
+// or ends against b, the cost the runs', not the voxels'.
+template <typename F>
+void for_each_difference(Runs a, Runs b, const F& f) {
+  std::size_t y = 0;
+  for (std::size_t x = 0; x < a.size(); x += 2) {
+    std::uint32_t begin = a[x];
+    const std::uint32_t end = a[x + 1];
+    while (y < b.size() && b[y + 1] <= begin) y += 2;  // b's runs wholly before this one
+    for (std::size_t z = y; begin < end; z += 2) {
+      if (z >= b.size() || b[z] >= end) {
+        f(begin, end);
+        break;
+      }
+      if (b[z] > begin) f(begin, b[z]);
+      begin = std::max(begin, b[z + 1]);
+    }
+  }
+}
+
+// Bits i - 1, i and i + 1 of a row of runs (bit 0 for i - 1): one search,
+// then a step or two.
+unsigned three_bits(Runs row, std::int64_t i) {
+  std::size_t pos = static_cast<std::size_t>(
+      std::upper_bound(row.begin(), row.end(), static_cast<std::uint32_t>(std::max<std::int64_t>(i - 1, 0))) - row.begin());
+  if (i == 0) pos = 0;  // x = -1 precedes every bound
+  unsigned bits = 0;
+  for (std::int64_t x = i - 1; x <= i + 1; ++x) {
+    while (pos < row.size() && static_cast<std::int64_t>(row[pos]) <= x) ++pos;
+    if (pos & 1u) bits |= 1u << (x - (i - 1));
+  }
+  return bits;
+}
+
+// The words of `w` covering [begin, end), as a mask within word w.
+std::uint64_t range_mask(std::int64_t w, std::int64_t begin, std::int64_t end) {
+  const std::int64_t lo = std::max(begin, w * 64) - w * 64, hi = std::min(end, w * 64 + 64) - w * 64;
+  const std::uint64_t upto = hi == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << hi) - 1;
+  return upto & ~((std::uint64_t{1} << lo) - 1);
+}
+
+// The last `layers` layers of the slabs seen so far: those of `slab`, after
+// those of `kept` (the previous seam) when the slab is thinner; empty rows
+// for layers before the grid's first.
+RunSlab last_layers(const RunSlab& kept, const RunSlab& slab, std::int64_t layers) {
+  const std::int64_t ny = slab.grid().dims.y, n = slab.grid().dims.z, kept_layers = kept.grid().dims.z;
+  std::vector<Runs> rows;
+  rows.reserve(static_cast<std::size_t>(ny * layers));
+  for (std::int64_t l = n - layers; l < n; ++l)
+    for (std::int64_t j = 0; j < ny; ++j)
+      rows.push_back(l >= 0 ? slab.row(j, l) : kept_layers + l >= 0 ? kept.row(j, kept_layers + l) : Runs{});
+  Grid grid = slab.grid();
+  grid.dims.z = layers;
+  RunSlab out(grid);
+  for (const Runs row : rows) {
+    for (std::size_t r = 0; r < row.size(); r += 2) out.add_run(row[r], row[r + 1]);
+    out.end_row();
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -129,8 +194,23 @@ struct PreviewRenderer::State {
   void find_x(std::int64_t k0, const BitVolume& slab);
   void find_y(std::int64_t k0, const BitVolume& slab);
   void find_z(std::int64_t k0, const BitVolume& slab);
+  void find_x(std::int64_t k0, const RunSlab& slab);
+  void find_y(std::int64_t k0, const RunSlab& slab);
+  void find_z(std::int64_t k0, const RunSlab& slab);
   void sort_by_layer();
+  // The raw normals of the pixels whose visible voxel lies in layers
+  // [k0 - 1, k0 + n - 1) (all of them at the top); normal_of(v) gives voxel
+  // v's.
+  template <typename NormalOf>
+  void shade_layers(std::int64_t k0, std::int64_t n, const NormalOf& normal_of);
   void light();
+  // A pass takes all its slabs as bits or all as runs (its seam is kept so).
+  enum class Kind { none, bits, runs };
+  static void check_kind(Kind& pass, Kind slab, const char* name) {
+    if (pass != Kind::none && pass != slab)
+      throw std::logic_error(std::string("PreviewRenderer::") + name + ": a pass takes all its slabs as bits or all as runs");
+    pass = slab;
+  }
 
   Grid grid;
   View view;
@@ -147,6 +227,8 @@ struct PreviewRenderer::State {
   std::int64_t found_to = 0, shaded_to = 0;  // layers each pass has seen
   std::vector<std::uint64_t> last_layer;     // find along z: the layer before the slab
   std::vector<std::uint64_t> before[2];      // shade: layers shaded_to - 2 and shaded_to - 1
+  RunSlab last_runs, before_runs;            // the same seams for slabs of runs
+  Kind find_kind = Kind::none, shade_kind = Kind::none;
   // shade: the pixels by their visible voxel's layer (a counting sort).
   std::vector<std::int64_t> layer_start;
   std::vector<std::uint32_t> by_layer;
@@ -247,6 +329,81 @@ void PreviewRenderer::State::find_z(std::int64_t k0, const BitVolume& slab) {
   }
 }
 
+// The same three from runs: the row's first or last run; the runs walked
+// from the camera side; the differences of each row's runs from the layer
+// before's (where runs begin and end along z).
+void PreviewRenderer::State::find_x(std::int64_t k0, const RunSlab& slab) {
+  parallel_for(k0, k0 + slab.grid().dims.z, 1, threads, [&](std::int64_t a, std::int64_t b) {
+    for (std::int64_t k = a; k < b; ++k) {
+      const std::int64_t r = along_up(k);
+      for (std::int64_t c = 0; c < width; ++c) {
+        const std::int64_t j = along_right(c);
+        const Runs row = slab.row(j, k - k0);
+        if (row.empty()) continue;
+        const std::int64_t i = view.from_positive ? std::int64_t{row.back()} - 1 : std::int64_t{row.front()};
+        see(static_cast<std::size_t>(r * width + c), i, j, k, view.from_positive ? n_depth - 1 - i : i);
+      }
+    }
+  });
+}
+
+void PreviewRenderer::State::find_y(std::int64_t k0, const RunSlab& slab) {
+  parallel_for(k0, k0 + slab.grid().dims.z, 1, threads, [&](std::int64_t a, std::int64_t b) {
+    std::vector<std::uint64_t> found(static_cast<std::size_t>(words));
+    for (std::int64_t k = a; k < b; ++k) {
+      const std::int64_t r = along_up(k);
+      std::fill(found.begin(), found.end(), 0);
+      std::int64_t remaining = nx;
+      for (std::int64_t s = 0; s < n_depth && remaining > 0; ++s) {
+        const std::int64_t j = view.from_positive ? n_depth - 1 - s : s;
+        const Runs row = slab.row(j, k - k0);
+        for (std::size_t x = 0; x < row.size(); x += 2) {
+          const std::int64_t begin = row[x], end = row[x + 1];
+          for (std::int64_t w = begin / 64; w * 64 < end; ++w) {
+            std::uint64_t fresh = range_mask(w, begin, end) & ~found[static_cast<std::size_t>(w)];
+            if (!fresh) continue;
+            found[static_cast<std::size_t>(w)] |= fresh;
+            remaining -= std::popcount(fresh);
+            for (; fresh; fresh &= fresh - 1) {
+              const std::int64_t i = w * 64 + std::countr_zero(fresh);
+              see(static_cast<std::size_t>(r * width + along_right(i)), i, j, k, s);
+            }
+          }
+        }
+      }
+    }
+  });
+}
+
+void PreviewRenderer::State::find_z(std::int64_t k0, const RunSlab& slab) {
+  const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
+  const bool from_top = view.from_positive;
+  parallel_for(0, ny, 8, threads, [&](std::int64_t j0, std::int64_t j1) {
+    for (std::int64_t j = j0; j < j1; ++j) {
+      const std::int64_t r = along_up(j);
+      const auto pixel = [&](std::int64_t i) { return static_cast<std::size_t>(r * width + along_right(i)); };
+      for (std::int64_t k = k0; k < k1; ++k) {
+        const Runs cur = slab.row(j, k - k0);
+        const Runs prev = k > k0 ? slab.row(j, k - 1 - k0) : k0 > 0 ? last_runs.row(j, 0) : Runs{};
+        if (!from_top) {
+          for_each_difference(cur, prev, [&](std::int64_t b, std::int64_t e) {
+            for (std::int64_t i = b; i < e; ++i)
+              if (depth[pixel(i)] < 0) see(pixel(i), i, j, k, k);
+          });
+        } else {
+          for_each_difference(prev, cur, [&](std::int64_t b, std::int64_t e) {
+            for (std::int64_t i = b; i < e; ++i) see(pixel(i), i, j, k - 1, n_depth - k);
+          });
+          if (k == nz - 1)
+            for (std::size_t x = 0; x < cur.size(); x += 2)
+              for (std::int64_t i = cur[x]; i < cur[x + 1]; ++i) see(pixel(i), i, j, k, 0);
+        }
+      }
+    }
+  });
+  if (k1 < nz) last_runs = last_layers(last_runs, slab, 1);
+}
+
 void PreviewRenderer::State::sort_by_layer() {
   layer_start.assign(static_cast<std::size_t>(nz + 1), 0);
   const std::int64_t per_layer = nx * ny;
@@ -308,8 +465,8 @@ PreviewRenderer::~PreviewRenderer() = default;
 
 namespace {
 
-void check_slab(const Grid& grid, std::int64_t expected_k0, std::int64_t k0, const BitVolume& slab, const char* pass) {
-  const glm::i64vec3 d = slab.grid().dims;
+void check_slab(const Grid& grid, std::int64_t expected_k0, std::int64_t k0, const Grid& slab, const char* pass) {
+  const glm::i64vec3 d = slab.dims;
   if (k0 != expected_k0 || d.x != grid.dims.x || d.y != grid.dims.y || k0 + d.z > grid.dims.z)
     throw std::logic_error(std::string("PreviewRenderer::") + pass + ": slabs must come in z order, whole layers of the grid");
 }
@@ -318,7 +475,8 @@ void check_slab(const Grid& grid, std::int64_t expected_k0, std::int64_t k0, con
 
 void PreviewRenderer::find(std::int64_t k0, const BitVolume& slab) {
   State& s = *state_;
-  check_slab(s.grid, s.found_to, k0, slab, "find");
+  check_slab(s.grid, s.found_to, k0, slab.grid(), "find");
+  State::check_kind(s.find_kind, State::Kind::bits, "find");
   if (s.pixels > 0) {
     if (s.view.axis == 0) s.find_x(k0, slab);
     else if (s.view.axis == 1) s.find_y(k0, slab);
@@ -327,38 +485,91 @@ void PreviewRenderer::find(std::int64_t k0, const BitVolume& slab) {
   s.found_to = k0 + slab.grid().dims.z;
 }
 
-void PreviewRenderer::shade(std::int64_t k0, const BitVolume& slab) {
+void PreviewRenderer::find(std::int64_t k0, const RunSlab& slab) {
   State& s = *state_;
-  if (s.found_to != s.nz) throw std::logic_error("PreviewRenderer::shade before find() has seen every layer");
-  check_slab(s.grid, s.shaded_to, k0, slab, "shade");
-  const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
-  s.shaded_to = k1;
-  if (s.pixels == 0) return;
-  if (k0 == 0) s.sort_by_layer();
+  check_slab(s.grid, s.found_to, k0, slab.grid(), "find");
+  State::check_kind(s.find_kind, State::Kind::runs, "find");
+  if (s.pixels > 0) {
+    if (s.view.axis == 0) s.find_x(k0, slab);
+    else if (s.view.axis == 1) s.find_y(k0, slab);
+    else s.find_z(k0, slab);
+  }
+  s.found_to = k0 + slab.grid().dims.z;
+}
+
+template <typename NormalOf>
+void PreviewRenderer::State::shade_layers(std::int64_t k0, std::int64_t n, const NormalOf& normal_of) {
+  const std::int64_t k1 = k0 + n;
+  if (k0 == 0) sort_by_layer();
   // The pixels seeing layers lo..hi: the layer left from the slab before
   // (it needed this slab's first), and this slab's but its last (it needs
   // the next slab's first), all of them at the top.
-  const std::int64_t lo = k0 > 0 ? k0 - 1 : 0, hi = k1 == s.nz ? k1 - 1 : k1 - 2;
-  if (hi >= lo) {
-    const std::uint64_t* layer_before[2] = {s.before[0].data(), s.before[1].data()};
-    const auto filled = [&](std::int64_t a, std::int64_t b, std::int64_t c) {
-      if (c >= k0) return slab.get(a, b, c - k0);
-      return bit_of(layer_before[c - (k0 - 2)] + b * s.words, a);
-    };
-    const std::int64_t p0 = s.layer_start[static_cast<std::size_t>(lo)], p1 = s.layer_start[static_cast<std::size_t>(hi + 1)];
-    parallel_for(p0, p1, 1024, s.threads, [&](std::int64_t a, std::int64_t b) {
-      for (std::int64_t q = a; q < b; ++q) {
-        const std::size_t p = s.by_layer[static_cast<std::size_t>(q)];
-        const std::int64_t v = s.img.voxel[p];
-        s.raw[p] = neighbour_normal(s.dims, filled, v % s.nx, (v / s.nx) % s.ny, v / (s.nx * s.ny), -s.forward);
-      }
-    });
-  }
+  const std::int64_t lo = k0 > 0 ? k0 - 1 : 0, hi = k1 == nz ? k1 - 1 : k1 - 2;
+  if (hi < lo) return;
+  const std::int64_t p0 = layer_start[static_cast<std::size_t>(lo)], p1 = layer_start[static_cast<std::size_t>(hi + 1)];
+  parallel_for(p0, p1, 1024, threads, [&](std::int64_t a, std::int64_t b) {
+    for (std::int64_t q = a; q < b; ++q) {
+      const std::size_t p = by_layer[static_cast<std::size_t>(q)];
+      raw[p] = normal_of(img.voxel[p]);
+    }
+  });
+}
+
+void PreviewRenderer::shade(std::int64_t k0, const BitVolume& slab) {
+  State& s = *state_;
+  if (s.found_to != s.nz) throw std::logic_error("PreviewRenderer::shade before find() has seen every layer");
+  check_slab(s.grid, s.shaded_to, k0, slab.grid(), "shade");
+  State::check_kind(s.shade_kind, State::Kind::bits, "shade");
+  const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
+  s.shaded_to = k1;
+  if (s.pixels == 0) return;
+  const std::uint64_t* layer_before[2] = {s.before[0].data(), s.before[1].data()};
+  const auto filled = [&](std::int64_t a, std::int64_t b, std::int64_t c) {
+    if (c >= k0) return slab.get(a, b, c - k0);
+    return bit_of(layer_before[c - (k0 - 2)] + b * s.words, a);
+  };
+  s.shade_layers(k0, n, [&](std::int64_t v) {
+    return neighbour_normal(s.dims, filled, v % s.nx, (v / s.nx) % s.ny, v / (s.nx * s.ny), -s.forward);
+  });
   if (k1 < s.nz) {
     // The two layers the next slab's seam needs.
     if (n >= 2) s.before[0].assign(slab.slab(n - 2), slab.slab(n - 2) + s.layer_words());
     else s.before[0] = std::move(s.before[1]);
     s.before[1].assign(slab.slab(n - 1), slab.slab(n - 1) + s.layer_words());
+  } else {
+    s.light();
+  }
+}
+
+void PreviewRenderer::shade(std::int64_t k0, const RunSlab& slab) {
+  State& s = *state_;
+  if (s.found_to != s.nz) throw std::logic_error("PreviewRenderer::shade before find() has seen every layer");
+  check_slab(s.grid, s.shaded_to, k0, slab.grid(), "shade");
+  State::check_kind(s.shade_kind, State::Kind::runs, "shade");
+  const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
+  s.shaded_to = k1;
+  if (s.pixels == 0) return;
+  const auto row = [&](std::int64_t b, std::int64_t c) {
+    return c >= k0 ? slab.row(b, c - k0) : s.before_runs.row(b, c - (k0 - 2));
+  };
+  s.shade_layers(k0, n, [&](std::int64_t v) {
+    const std::int64_t i = v % s.nx, j = (v / s.nx) % s.ny, k = v / (s.nx * s.ny);
+    // The 27 bits around the voxel from 9 rows (bit (dk, dj, di) + 1 each),
+    // then the same normal as from bits.
+    std::uint32_t around = 0;
+    for (std::int64_t dk = -1; dk <= 1; ++dk)
+      for (std::int64_t dj = -1; dj <= 1; ++dj) {
+        const std::int64_t b = j + dj, c = k + dk;
+        if (b < 0 || c < 0 || b >= s.ny || c >= s.nz) continue;
+        around |= three_bits(row(b, c), i) << (9 * (dk + 1) + 3 * (dj + 1));
+      }
+    const auto filled = [&](std::int64_t a, std::int64_t b, std::int64_t c) {
+      return (around >> (9 * (c - k + 1) + 3 * (b - j + 1) + (a - i + 1))) & 1u;
+    };
+    return neighbour_normal(s.dims, filled, i, j, k, -s.forward);
+  });
+  if (k1 < s.nz) {
+    s.before_runs = last_layers(s.before_runs, slab, 2);
   } else {
     s.light();
   }

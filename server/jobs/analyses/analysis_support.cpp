@@ -49,7 +49,7 @@ void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from
                      kStoredSlabLimits);
 }
 
-void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume) {
+void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double from, double to) {
   if (!in.output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
   const Grid& grid = in.job.grid;
   JobControl* control = in.control;
@@ -58,7 +58,8 @@ void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume) {
                      [&](std::int64_t k0, const RunSlab& slab) {
                        if (control) control->check_cancelled();
                        consume(k0, slab);
-                       if (control) control->set_progress(static_cast<double>(k0 + slab.grid().dims.z) / layers_total);
+                       const double done = static_cast<double>(k0 + slab.grid().dims.z) / layers_total;
+                       if (control) control->set_progress(from + (to - from) * done);
                      },
                      kStoredSlabLimits);
 }

@@ -33,7 +33,7 @@ void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from
 // The same as runs (voxd/run_slab.h), for analyses that work on runs: they
 // then cost the stored runs, not the grid's voxels. Slabs hold up to
 // kRunSlabRuns runs.
-void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume);
+void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double from = 0.0, double to = 1.0);
 // The same for a streamed job's stored values.
 void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume);
 

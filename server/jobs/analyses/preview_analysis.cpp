@@ -8,6 +8,7 @@
 #include "server/jobs/analyses/slice_editing_cache.h"
 #include "voxd/analysis/preview.h"
 #include "voxd/analysis/value_images.h"
+#include "voxd/encode/rle_slabs.h"
 
 namespace voxd::server {
 namespace {
@@ -50,21 +51,22 @@ class PreviewAnalysis final : public JobAnalysisKind {
   bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.colour == "none"; }
   bool shows_values(const api::AnalysisRequest& r) const override { return r.colour == "none"; }
 
-  // Two passes over the slabs: the visible voxels, then their normals.
+  // Two passes over the stored runs: the visible voxels, then their
+  // normals (the cost the runs', not the grid's bits').
   std::string over_slabs(const AnalysisInput& in) const override {
     const Grid& grid = in.job.grid;
     const View view = *parse_view(in.request.view);
     PreviewRenderer preview(grid, view);
-    replay(in, [&](std::int64_t k0, const BitVolume& slab) { preview.find(k0, slab); }, 0.0, 0.5);
-    replay(in, [&](std::int64_t k0, const BitVolume& slab) { preview.shade(k0, slab); }, 0.5, 1.0);
+    replay_runs(in, [&](std::int64_t k0, const RunSlab& slab) { preview.find(k0, slab); }, 0.0, 0.5);
+    replay_runs(in, [&](std::int64_t k0, const RunSlab& slab) { preview.shade(k0, slab); }, 0.5, 1.0);
     return to_bytes(preview_png(preview.take(), grid, view, image_text(in), max_side(in.request)));
   }
 
   // The visible voxels, depths, normals (raw and smoothed), shades, pixels
-  // sorted by layer, the RGB image and its PNG, and three layers of bits.
+  // sorted by layer, the RGB image and its PNG; a slab of runs
+  // (kRunSlabRuns of 8 bytes) and the seam's copy of its last layers.
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
-    return (8 + 4 + 12 + 12 + 4 + 4 + 3 + 3) * image_pixels(grid, parse_view(r.view)->axis) +
-           3 * bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+    return (8 + 4 + 12 + 12 + 4 + 4 + 3 + 3) * image_pixels(grid, parse_view(r.view)->axis) + 2 * kRunSlabRuns * 8;
   }
 
   std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest& r) const override {

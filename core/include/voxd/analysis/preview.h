@@ -14,6 +14,7 @@
 #include <glm/vec3.hpp>
 
 #include "voxd/bit_volume.h"
+#include "voxd/run_slab.h"
 
 namespace voxd {
 
@@ -71,6 +72,10 @@ PreviewImage render_preview(const BitVolume& volume, View view, int threads = 0)
 // the seam), then take(). The image is exactly render_preview()'s, which is
 // the one-slab case. Memory is the image's per-pixel arrays, one layer of
 // bits and two more in the second pass.
+// Slabs of runs (a stored RLE read as runs, voxd/run_slab.h) give the same
+// image at the cost of the runs, not of the grid's bits: the first pass
+// walks where runs begin and end, the second reads each visible voxel's 26
+// neighbours from 9 rows' runs. A pass takes all its slabs one way.
 class PreviewRenderer {
  public:
   // Throws like render_preview() for a bad axis or an image too large.
@@ -84,6 +89,8 @@ class PreviewRenderer {
   // std::logic_error out of order.
   void find(std::int64_t k0, const BitVolume& slab);
   void shade(std::int64_t k0, const BitVolume& slab);
+  void find(std::int64_t k0, const RunSlab& slab);
+  void shade(std::int64_t k0, const RunSlab& slab);
   // After both passes. Throws std::logic_error if layers are missing.
   PreviewImage take();
 
