@@ -511,18 +511,29 @@ TEST(SlabAnalyses, PreviewsOfRandomVolumesFromRunsAndBitsAreTheInMemoryOnes) {
         for (std::int64_t r = 0; r < expected.height; ++r)
           for (std::int64_t c = 0; c < expected.width; ++c)
             ASSERT_EQ(expected.voxel[static_cast<std::size_t>(r * expected.width + c)], first_filled(volume, view, c, r));
-        for (std::int64_t layers : {std::int64_t{1}, std::int64_t{2}, std::int64_t{5}, g.dims.z}) {
-          SCOPED_TRACE(to_string(view) + " density " + std::to_string(density) + " layers " + std::to_string(layers));
-          PreviewRenderer from_bits(g, view, 2), from_runs(g, view, 2);
-          read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.find(k0, slab); });
-          read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.shade(k0, slab); });
-          read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.find(k0, slab); });
-          read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.shade(k0, slab); });
-          for (const PreviewImage& got : {from_bits.take(), from_runs.take()}) {
-            EXPECT_EQ(got.voxel, expected.voxel);
-            EXPECT_EQ(got.shade, expected.shade);
-            ASSERT_EQ(got.normal.size(), expected.normal.size());
-            EXPECT_EQ(std::memcmp(got.normal.data(), expected.normal.data(), got.normal.size() * sizeof(glm::vec3)), 0);
+        // Full size, and shrunk as made (max_side) against shrink_preview
+        // of the full image: blocks of 2, 3 and 8 pixels a side.
+        for (const int max_side : {0, 40, 20, 9}) {
+          const int factor = shrink_factor(expected.width, expected.height, max_side);
+          const PreviewImage want = shrink_preview(expected, g, view, factor);
+          ASSERT_EQ(want.block, factor);
+          for (std::int64_t layers : {std::int64_t{1}, std::int64_t{2}, std::int64_t{5}, g.dims.z}) {
+            SCOPED_TRACE(to_string(view) + " density " + std::to_string(density) + " layers " + std::to_string(layers) +
+                         " max_side " + std::to_string(max_side));
+            PreviewRenderer from_bits(g, view, 2, max_side), from_runs(g, view, 2, max_side);
+            read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.find(k0, slab); });
+            read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.shade(k0, slab); });
+            read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.find(k0, slab); });
+            read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.shade(k0, slab); });
+            for (const PreviewImage& got : {from_bits.take(), from_runs.take(), render_preview(volume, view, 2, max_side)}) {
+              EXPECT_EQ(got.width, want.width);
+              EXPECT_EQ(got.height, want.height);
+              EXPECT_EQ(got.block, want.block);
+              EXPECT_EQ(got.voxel, want.voxel);
+              EXPECT_EQ(got.shade, want.shade);
+              ASSERT_EQ(got.normal.size(), want.normal.size());
+              EXPECT_EQ(std::memcmp(got.normal.data(), want.normal.data(), got.normal.size() * sizeof(glm::vec3)), 0);
+            }
           }
         }
       }

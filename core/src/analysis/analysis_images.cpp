@@ -183,18 +183,19 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const
   const int factor = shrink_factor(rendered.width, rendered.height, max_side);
   const PreviewImage shrunk = factor > 1 ? shrink_preview(rendered, g, view, factor) : PreviewImage{};
   const PreviewImage& preview = factor > 1 ? shrunk : rendered;
+  const int block = preview.block;  // rendered shrunk already (render_preview's max_side), or here
   const ViewBasis basis = view_basis(view);
   std::vector<PngText> chunks = {
       {"voxd:view", to_string(view)},
       {"voxd:right", signed_axis(basis.right_axis, basis.right_positive)},
       {"voxd:up", signed_axis(basis.up_axis, basis.up_positive)},
-      {"voxd:voxel_size", number_text(g.voxel_size * factor) + " model units per pixel"},
+      {"voxd:voxel_size", number_text(g.voxel_size * block) + " model units per pixel"},
       {"voxd:lighting",
        "Orthographic view of the first filled voxel on each ray, normals from its 26 neighbours (Patil & Ravi) "
        "smoothed over 3x3 pixels, lit from the viewer's upper left: shade = 0.2 + 0.8 max(0, n.L), up to 20% darker "
        "with depth."}};
-  if (factor > 1)
-    chunks.push_back({"voxd:shrunk", "each pixel a block of " + std::to_string(factor) + " x " + std::to_string(factor) +
+  if (block > 1)
+    chunks.push_back({"voxd:shrunk", "each pixel a block of " + std::to_string(block) + " x " + std::to_string(block) +
                                          " voxels, showing its nearest visible voxel"});
   const std::size_t pixels = preview.voxel.size();
   RgbImage image;
@@ -245,8 +246,8 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const
 std::vector<std::uint8_t> preview_png(const BitVolume& volume, View view, const DenseVolume<float>* thickness,
                                       std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), thickness, nullptr);
-  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, thickness, {}, std::move(text),
-                            max_side, threads);
+  return render_preview_png(render_preview(volume, view, threads, max_side), volume.grid(), view, thickness, {},
+                            std::move(text), max_side, threads);
 }
 
 std::vector<std::uint8_t> preview_png(const PreviewImage& preview, const Grid& grid, View view, std::vector<PngText> text,
@@ -258,14 +259,14 @@ std::vector<std::uint8_t> colour_preview_png(const BitVolume& volume, const Dens
                                              std::vector<PngText> text, int threads, int max_side) {
   check_preview_maps(volume.grid(), nullptr, &colours);
   const Rgba8* values = colours.values().data();
-  return render_preview_png(render_preview(volume, view, threads), volume.grid(), view, nullptr,
+  return render_preview_png(render_preview(volume, view, threads, max_side), volume.grid(), view, nullptr,
                             [values](std::int64_t voxel) { return values[voxel]; }, std::move(text), max_side, threads);
 }
 
 std::vector<std::uint8_t> slice_preview_png(const BitVolume& volume, const SliceColours& colours, View view,
                                             std::vector<PngText> text, int threads, int max_side) {
-  return slice_preview_png(render_preview(volume, view, threads), volume.grid(), colours, view, std::move(text), threads,
-                           max_side);
+  return slice_preview_png(render_preview(volume, view, threads, max_side), volume.grid(), colours, view, std::move(text),
+                           threads, max_side);
 }
 
 std::vector<std::uint8_t> slice_preview_png(const PreviewImage& preview, const Grid& grid, const SliceColours& colours,

@@ -162,7 +162,7 @@ ViewBasis view_basis(View v) {
 }
 
 struct PreviewRenderer::State {
-  State(const Grid& g, View v, int t)
+  State(const Grid& g, View v, int t, int max_side)
       : grid(g), view(v), basis(view_basis(v)), threads(t), dims(g.dims), nx(dims.x), ny(dims.y), nz(dims.z),
         n_right(dims[basis.right_axis]), n_up(dims[basis.up_axis]), n_depth(dims[v.axis]),
         words((nx + 63) / 64),
@@ -174,10 +174,34 @@ struct PreviewRenderer::State {
     img.height = size.height;
     width = img.width;
     pixels = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height);
+    factor = pixels > 0 ? shrink_factor(img.width, img.height, max_side) : 1;
     img.voxel.assign(pixels, -1);
-    img.shade.assign(pixels, 0.0f);
-    img.normal.assign(pixels, glm::vec3(0.0f));
+    if (factor == 1) {  // shrunk, the shades and normals are only the blocks'
+      img.shade.assign(pixels, 0.0f);
+      img.normal.assign(pixels, glm::vec3(0.0f));
+    }
     depth.assign(pixels, -1);
+  }
+
+  // What shade() computes a raw normal for, a target: a visible pixel, or
+  // (shrunk) each block's 3x3 pixels around its chosen one (target
+  // 9 block + 3 (dr + 1) + dc + 1) that its smoothing takes in.
+  std::size_t target_count() const { return factor == 1 ? pixels : chosen.size() * 9; }
+  std::int64_t target_pixel(std::size_t t) const {
+    if (factor == 1) return static_cast<std::int64_t>(t);
+    const auto o = static_cast<std::int64_t>(t % 9);
+    return chosen[t / 9] + (o / 3 - 1) * width + o % 3 - 1;
+  }
+  // Whether pixel q is smoothed into pixel p's normal (q next to p).
+  bool smoothed_into(std::size_t q, std::size_t p) const { return depth[q] >= 0 && std::abs(depth[q] - depth[p]) <= 2; }
+  bool needed(std::size_t t) const {
+    if (factor == 1) return img.voxel[t] >= 0;
+    const std::int64_t p = chosen[t / 9];
+    if (p < 0) return false;
+    const auto o = static_cast<std::int64_t>(t % 9);
+    const std::int64_t r = p / width + o / 3 - 1, c = p % width + o % 3 - 1;
+    return r >= 0 && c >= 0 && r < img.height && c < width &&
+           smoothed_into(static_cast<std::size_t>(r * width + c), static_cast<std::size_t>(p));
   }
 
   // Column <-> coordinate along the right axis, row <-> coordinate along up
@@ -197,6 +221,7 @@ struct PreviewRenderer::State {
   void find_x(std::int64_t k0, const RunSlab& slab);
   void find_y(std::int64_t k0, const RunSlab& slab);
   void find_z(std::int64_t k0, const RunSlab& slab);
+  void choose();
   void sort_by_layer();
   // The raw normals of the pixels whose visible voxel lies in layers
   // [k0 - 1, k0 + n - 1) (all of them at the top); normal_of(v) gives voxel
@@ -223,7 +248,13 @@ struct PreviewRenderer::State {
   PreviewImage img;
   // Distance of the visible voxel from the camera side, in voxels; -1 = background.
   std::vector<std::int32_t> depth;
-  std::vector<glm::vec3> raw;  // the unsmoothed normals
+  std::vector<glm::vec3> raw;  // the unsmoothed normals, a target's each
+  // Shrunk (max_side): each pixel of `out` stands for a block of factor x
+  // factor rendered ones and shows the block's chosen pixel (its nearest
+  // visible voxel, as shrink_preview), whose normal alone is smoothed and lit.
+  int factor = 1;
+  std::vector<std::int64_t> chosen;  // a block's chosen pixel, -1 for none
+  PreviewImage out;
   std::int64_t found_to = 0, shaded_to = 0;  // layers each pass has seen
   std::vector<std::uint64_t> last_layer;     // find along z: the layer before the slab
   std::vector<std::uint64_t> before[2];      // shade: layers shaded_to - 2 and shaded_to - 1
@@ -404,18 +435,49 @@ void PreviewRenderer::State::find_z(std::int64_t k0, const RunSlab& slab) {
   if (k1 < nz) last_runs = last_layers(last_runs, slab, 1);
 }
 
+// Shrunk: each block's chosen pixel, as shrink_preview picks it (the least
+// depth is the nearest voxel; ties: the first in row order).
+void PreviewRenderer::State::choose() {
+  out.width = (img.width + factor - 1) / factor;
+  out.height = (img.height + factor - 1) / factor;
+  out.block = factor;
+  const auto blocks = static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height);
+  out.voxel.assign(blocks, -1);
+  out.shade.assign(blocks, 0.0f);
+  out.normal.assign(blocks, glm::vec3(0.0f));
+  chosen.assign(blocks, -1);
+  parallel_for(0, out.height, 4, threads, [&](std::int64_t b0, std::int64_t b1) {
+    for (std::int64_t row = b0; row < b1; ++row)
+      for (std::int64_t col = 0; col < out.width; ++col) {
+        std::int64_t best = -1;
+        for (std::int64_t r = row * factor; r < std::min<std::int64_t>(img.height, (row + 1) * factor); ++r)
+          for (std::int64_t c = col * factor; c < std::min<std::int64_t>(width, (col + 1) * factor); ++c) {
+            const std::int64_t p = r * width + c;
+            if (depth[static_cast<std::size_t>(p)] >= 0 &&
+                (best < 0 || depth[static_cast<std::size_t>(p)] < depth[static_cast<std::size_t>(best)]))
+              best = p;
+          }
+        chosen[static_cast<std::size_t>(row * out.width + col)] = best;
+      }
+  });
+}
+
 void PreviewRenderer::State::sort_by_layer() {
+  if (factor > 1) choose();
   layer_start.assign(static_cast<std::size_t>(nz + 1), 0);
   const std::int64_t per_layer = nx * ny;
-  for (const std::int64_t v : img.voxel)
-    if (v >= 0) ++layer_start[static_cast<std::size_t>(v / per_layer + 1)];
+  const std::size_t targets = target_count();
+  const auto layer_of = [&](std::size_t t) {
+    return static_cast<std::size_t>(img.voxel[static_cast<std::size_t>(target_pixel(t))] / per_layer);
+  };
+  for (std::size_t t = 0; t < targets; ++t)
+    if (needed(t)) ++layer_start[layer_of(t) + 1];
   for (std::size_t k = 1; k < layer_start.size(); ++k) layer_start[k] += layer_start[k - 1];
   by_layer.resize(static_cast<std::size_t>(layer_start.back()));
   std::vector<std::int64_t> next(layer_start.begin(), layer_start.end() - 1);
-  for (std::size_t p = 0; p < pixels; ++p)
-    if (img.voxel[p] >= 0) by_layer[static_cast<std::size_t>(next[static_cast<std::size_t>(img.voxel[p] / per_layer)]++)] =
-        static_cast<std::uint32_t>(p);
-  raw.assign(pixels, glm::vec3(0.0f));
+  for (std::size_t t = 0; t < targets; ++t)
+    if (needed(t)) by_layer[static_cast<std::size_t>(next[layer_of(t)]++)] = static_cast<std::uint32_t>(t);
+  raw.assign(targets, glm::vec3(0.0f));
 }
 
 // Screen-space smoothing of the normals, then the lighting.
@@ -430,35 +492,55 @@ void PreviewRenderer::State::light() {
   const float depth_span = static_cast<float>(farthest - nearest);
 
   const glm::vec3 light = glm::normalize(-forward + 0.5f * up - 0.35f * right);
-  parallel_for(0, img.height, 8, threads, [&](std::int64_t r0, std::int64_t r1) {
-    for (std::int64_t r = r0; r < r1; ++r) {
-      for (std::int64_t c = 0; c < width; ++c) {
-        const std::size_t p = static_cast<std::size_t>(r * width + c);
-        const std::int32_t d0 = depth[p];
-        if (d0 < 0) continue;
-        // Screen-space smoothing hides the voxel staircase; the depth test
-        // keeps a silhouette from averaging with a surface far behind it.
-        glm::vec3 sum(0.0f);
-        for (std::int64_t rr = std::max<std::int64_t>(r - 1, 0); rr <= std::min<std::int64_t>(r + 1, img.height - 1); ++rr) {
-          for (std::int64_t cc = std::max<std::int64_t>(c - 1, 0); cc <= std::min<std::int64_t>(c + 1, width - 1); ++cc) {
-            const std::size_t q = static_cast<std::size_t>(rr * width + cc);
-            if (depth[q] >= 0 && std::abs(depth[q] - d0) <= 2) sum += raw[q];
-          }
-        }
-        const float len = glm::length(sum);
-        const glm::vec3 n = len < 1e-4f ? raw[p] : sum / len;
-        const float t = depth_span > 0.0f ? static_cast<float>(d0 - nearest) / depth_span : 0.0f;
-        const float shade = (0.2f + 0.8f * std::max(0.0f, glm::dot(n, light))) * (1.0f - 0.2f * t);
-        img.normal[p] = n;
-        img.shade[p] = std::clamp(shade, 0.0f, 1.0f);
+  // Pixel (r, c)'s normal and shade into normal and shade; raw_of(rr, cc)
+  // the raw normal of a pixel around it.
+  const auto lit = [&](std::int64_t r, std::int64_t c, const auto& raw_of, glm::vec3& normal, float& shade) {
+    const std::size_t p = static_cast<std::size_t>(r * width + c);
+    const std::int32_t d0 = depth[p];
+    // Screen-space smoothing hides the voxel staircase; the depth test
+    // keeps a silhouette from averaging with a surface far behind it.
+    glm::vec3 sum(0.0f);
+    for (std::int64_t rr = std::max<std::int64_t>(r - 1, 0); rr <= std::min<std::int64_t>(r + 1, img.height - 1); ++rr) {
+      for (std::int64_t cc = std::max<std::int64_t>(c - 1, 0); cc <= std::min<std::int64_t>(c + 1, width - 1); ++cc) {
+        if (smoothed_into(static_cast<std::size_t>(rr * width + cc), p)) sum += raw_of(rr, cc);
       }
+    }
+    const float len = glm::length(sum);
+    const glm::vec3 n = len < 1e-4f ? raw_of(r, c) : sum / len;
+    const float t = depth_span > 0.0f ? static_cast<float>(d0 - nearest) / depth_span : 0.0f;
+    normal = n;
+    shade = std::clamp((0.2f + 0.8f * std::max(0.0f, glm::dot(n, light))) * (1.0f - 0.2f * t), 0.0f, 1.0f);
+  };
+  if (factor == 1) {
+    parallel_for(0, img.height, 8, threads, [&](std::int64_t r0, std::int64_t r1) {
+      const auto raw_of = [&](std::int64_t rr, std::int64_t cc) { return raw[static_cast<std::size_t>(rr * width + cc)]; };
+      for (std::int64_t r = r0; r < r1; ++r)
+        for (std::int64_t c = 0; c < width; ++c) {
+          const std::size_t p = static_cast<std::size_t>(r * width + c);
+          if (depth[p] >= 0) lit(r, c, raw_of, img.normal[p], img.shade[p]);
+        }
+    });
+    return;
+  }
+  // Shrunk: each block's chosen pixel, from the raw normals kept for it.
+  parallel_for(0, static_cast<std::int64_t>(chosen.size()), 4096, threads, [&](std::int64_t b0, std::int64_t b1) {
+    for (std::int64_t b = b0; b < b1; ++b) {
+      const std::int64_t p = chosen[static_cast<std::size_t>(b)];
+      if (p < 0) continue;
+      const std::int64_t r = p / width, c = p % width;
+      const auto raw_of = [&](std::int64_t rr, std::int64_t cc) {
+        return raw[static_cast<std::size_t>(9 * b + 3 * (rr - r + 1) + cc - c + 1)];
+      };
+      const auto q = static_cast<std::size_t>(b);
+      out.voxel[q] = img.voxel[static_cast<std::size_t>(p)];
+      lit(r, c, raw_of, out.normal[q], out.shade[q]);
     }
   });
 }
 
-PreviewRenderer::PreviewRenderer(const Grid& grid, View view, int threads) {
+PreviewRenderer::PreviewRenderer(const Grid& grid, View view, int threads, int max_side) {
   check_axis(view.axis);
-  state_ = std::make_unique<State>(grid, view, threads);
+  state_ = std::make_unique<State>(grid, view, threads, max_side);
 }
 
 PreviewRenderer::~PreviewRenderer() = default;
@@ -509,8 +591,8 @@ void PreviewRenderer::State::shade_layers(std::int64_t k0, std::int64_t n, const
   const std::int64_t p0 = layer_start[static_cast<std::size_t>(lo)], p1 = layer_start[static_cast<std::size_t>(hi + 1)];
   parallel_for(p0, p1, 1024, threads, [&](std::int64_t a, std::int64_t b) {
     for (std::int64_t q = a; q < b; ++q) {
-      const std::size_t p = by_layer[static_cast<std::size_t>(q)];
-      raw[p] = normal_of(img.voxel[p]);
+      const std::size_t t = by_layer[static_cast<std::size_t>(q)];
+      raw[t] = normal_of(img.voxel[static_cast<std::size_t>(target_pixel(t))]);
     }
   });
 }
@@ -579,11 +661,13 @@ PreviewImage PreviewRenderer::take() {
   State& s = *state_;
   if (s.pixels > 0 && (s.found_to != s.nz || s.shaded_to != s.nz))
     throw std::logic_error("PreviewRenderer::take before both passes have seen every layer");
-  return std::move(s.img);
+  if (s.factor == 1) return std::move(s.img);
+  if (s.chosen.empty()) s.choose();  // no layers: every block background
+  return std::move(s.out);
 }
 
-PreviewImage render_preview(const BitVolume& volume, View view, int threads) {
-  PreviewRenderer renderer(volume.grid(), view, threads);
+PreviewImage render_preview(const BitVolume& volume, View view, int threads, int max_side) {
+  PreviewRenderer renderer(volume.grid(), view, threads, max_side);
   if (volume.grid().dims.z > 0) {
     renderer.find(0, volume);
     renderer.shade(0, volume);

@@ -29,6 +29,7 @@ PreviewImage shrink_preview(const PreviewImage& image, const Grid& grid, View vi
   PreviewImage out;
   out.width = (image.width + factor - 1) / factor;
   out.height = (image.height + factor - 1) / factor;
+  out.block = image.block * factor;
   const auto pixels = static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height);
   out.voxel.assign(pixels, -1);
   out.shade.assign(pixels, 0.0f);

@@ -56,17 +56,22 @@ class PreviewAnalysis final : public JobAnalysisKind {
   std::string over_slabs(const AnalysisInput& in) const override {
     const Grid& grid = in.job.grid;
     const View view = *parse_view(in.request.view);
-    PreviewRenderer preview(grid, view);
+    PreviewRenderer preview(grid, view, 0, max_side(in.request));  // shrunk as it is made
     replay_runs(in, [&](std::int64_t k0, const RunSlab& slab) { preview.find(k0, slab); }, 0.0, 0.5);
     replay_runs(in, [&](std::int64_t k0, const RunSlab& slab) { preview.shade(k0, slab); }, 0.5, 1.0);
     return to_bytes(preview_png(preview.take(), grid, view, image_text(in), max_side(in.request)));
   }
 
-  // The visible voxels, depths, normals (raw and smoothed), shades, pixels
-  // sorted by layer, the RGB image and its PNG; a slab of runs
-  // (kRunSlabRuns of 8 bytes) and the seam's copy of its last layers.
+  // The visible voxels and depths, then at full size (no `size`) normals
+  // (raw and smoothed), shades, pixels sorted by layer, the RGB image and
+  // its PNG; shrunk, those of the blocks only (9 raw normals a block); a
+  // slab of runs (kRunSlabRuns of 8 bytes) and the seam's copy of its last
+  // layers.
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
-    return (8 + 4 + 12 + 12 + 4 + 4 + 3 + 3) * image_pixels(grid, parse_view(r.view)->axis) + 2 * kRunSlabRuns * 8;
+    const std::uint64_t pixels = image_pixels(grid, parse_view(r.view)->axis);
+    const std::uint64_t per_pixel = r.size == 0 ? 8 + 4 + 12 + 12 + 4 + 4 + 3 + 3 : 8 + 4;
+    return per_pixel * pixels + 2 * kRunSlabRuns * 8 +
+           (r.size == 0 ? 0 : (8 + 12 + 4 + 8 + 9 * (12 + 4) + 3 + 3) * r.size * r.size);
   }
 
   std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest& r) const override {

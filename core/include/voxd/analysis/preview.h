@@ -44,7 +44,8 @@ struct ViewBasis {
 ViewBasis view_basis(View v);
 
 struct PreviewImage {
-  int width = 0, height = 0;        // width = dims[right_axis], height = dims[up_axis]
+  int width = 0, height = 0;        // width = dims[right_axis], height = dims[up_axis], over block
+  int block = 1;                    // each pixel a block x block of voxel-sized ones (shrink_preview)
   std::vector<std::int64_t> voxel;  // per pixel (row-major): linear index i + nx*(j + ny*k) of the visible voxel, -1 = background
   std::vector<float> shade;         // per pixel: lighting factor in [0, 1]; 0 for background
   std::vector<glm::vec3> normal;    // per pixel: unit normal used for lighting (world axes), zero for background
@@ -61,7 +62,12 @@ struct PreviewImage {
 // `threads` 0 = all cores; the result does not depend on it. Throws
 // Error(invalid_argument) for an axis outside 0..2 and Error(limit_exceeded)
 // for an image over INT_MAX pixels.
-PreviewImage render_preview(const BitVolume& volume, View view, int threads = 0);
+// With max_side > 0 the image is shrink_preview(render_preview(...),
+// shrink_factor(width, height, max_side)) exactly, but made directly: only
+// the blocks' chosen pixels are smoothed and lit, and only the raw normals
+// their smoothing takes in are computed (at 8192^3 under a tenth of them),
+// and the full-size shades and normals are never held.
+PreviewImage render_preview(const BitVolume& volume, View view, int threads = 0, int max_side = 0);
 
 // render_preview() of a volume that arrives slab by slab in z order (a stored
 // result replayed from its RLE), in two passes over the slabs: find() every
@@ -78,8 +84,9 @@ PreviewImage render_preview(const BitVolume& volume, View view, int threads = 0)
 // neighbours from 9 rows' runs. A pass takes all its slabs one way.
 class PreviewRenderer {
  public:
-  // Throws like render_preview() for a bad axis or an image too large.
-  PreviewRenderer(const Grid& grid, View view, int threads = 0);
+  // Throws like render_preview() for a bad axis or an image too large;
+  // max_side as render_preview()'s.
+  PreviewRenderer(const Grid& grid, View view, int threads = 0, int max_side = 0);
   ~PreviewRenderer();
   PreviewRenderer(const PreviewRenderer&) = delete;
   PreviewRenderer& operator=(const PreviewRenderer&) = delete;
