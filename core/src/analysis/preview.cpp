@@ -175,8 +175,8 @@ struct PreviewRenderer::State {
     width = img.width;
     pixels = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height);
     factor = pixels > 0 ? shrink_factor(img.width, img.height, max_side) : 1;
-    img.voxel.assign(pixels, -1);
-    if (factor == 1) {  // shrunk, the shades and normals are only the blocks'
+    if (factor == 1) {  // shrunk, the pixels keep only their depths
+      img.voxel.assign(pixels, -1);
       img.shade.assign(pixels, 0.0f);
       img.normal.assign(pixels, glm::vec3(0.0f));
     }
@@ -211,8 +211,19 @@ struct PreviewRenderer::State {
   std::size_t layer_words() const { return static_cast<std::size_t>(words * ny); }
 
   void see(std::size_t p, std::int64_t i, std::int64_t j, std::int64_t k, std::int64_t distance) {
-    img.voxel[p] = i + nx * (j + ny * k);
+    if (factor == 1) img.voxel[p] = i + nx * (j + ny * k);
     depth[p] = static_cast<std::int32_t>(distance);
+  }
+  // Pixel p's visible voxel (it has one): kept at full size, else where its
+  // ray meets its depth.
+  std::int64_t voxel_at(std::size_t p) const {
+    if (factor == 1) return img.voxel[p];
+    const auto at = static_cast<std::int64_t>(p);
+    std::int64_t ijk[3];
+    ijk[basis.right_axis] = along_right(at % width);
+    ijk[basis.up_axis] = along_up(at / width);
+    ijk[view.axis] = view.from_positive ? n_depth - 1 - depth[p] : depth[p];
+    return ijk[0] + nx * (ijk[1] + ny * ijk[2]);
   }
 
   void find_x(std::int64_t k0, const BitVolume& slab);
@@ -468,7 +479,7 @@ void PreviewRenderer::State::sort_by_layer() {
   const std::int64_t per_layer = nx * ny;
   const std::size_t targets = target_count();
   const auto layer_of = [&](std::size_t t) {
-    return static_cast<std::size_t>(img.voxel[static_cast<std::size_t>(target_pixel(t))] / per_layer);
+    return static_cast<std::size_t>(voxel_at(static_cast<std::size_t>(target_pixel(t))) / per_layer);
   };
   for (std::size_t t = 0; t < targets; ++t)
     if (needed(t)) ++layer_start[layer_of(t) + 1];
@@ -532,7 +543,7 @@ void PreviewRenderer::State::light() {
         return raw[static_cast<std::size_t>(9 * b + 3 * (rr - r + 1) + cc - c + 1)];
       };
       const auto q = static_cast<std::size_t>(b);
-      out.voxel[q] = img.voxel[static_cast<std::size_t>(p)];
+      out.voxel[q] = voxel_at(static_cast<std::size_t>(p));
       lit(r, c, raw_of, out.normal[q], out.shade[q]);
     }
   });
@@ -592,7 +603,7 @@ void PreviewRenderer::State::shade_layers(std::int64_t k0, std::int64_t n, const
   parallel_for(p0, p1, 1024, threads, [&](std::int64_t a, std::int64_t b) {
     for (std::int64_t q = a; q < b; ++q) {
       const std::size_t t = by_layer[static_cast<std::size_t>(q)];
-      raw[t] = normal_of(img.voxel[static_cast<std::size_t>(target_pixel(t))]);
+      raw[t] = normal_of(voxel_at(static_cast<std::size_t>(target_pixel(t))));
     }
   });
 }

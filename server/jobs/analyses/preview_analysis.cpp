@@ -62,14 +62,14 @@ class PreviewAnalysis final : public JobAnalysisKind {
     return to_bytes(preview_png(preview.take(), grid, view, image_text(in), max_side(in.request)));
   }
 
-  // The visible voxels and depths, then at full size (no `size`) normals
+  // The depths, then at full size (no `size`) the visible voxels, normals
   // (raw and smoothed), shades, pixels sorted by layer, the RGB image and
   // its PNG; shrunk, those of the blocks only (9 raw normals a block); a
   // slab of runs (kRunSlabRuns of 8 bytes) and the seam's copy of its last
   // layers.
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
     const std::uint64_t pixels = image_pixels(grid, parse_view(r.view)->axis);
-    const std::uint64_t per_pixel = r.size == 0 ? 8 + 4 + 12 + 12 + 4 + 4 + 3 + 3 : 8 + 4;
+    const std::uint64_t per_pixel = r.size == 0 ? 8 + 4 + 12 + 12 + 4 + 4 + 3 + 3 : 4;
     return per_pixel * pixels + 2 * kRunSlabRuns * 8 +
            (r.size == 0 ? 0 : (8 + 12 + 4 + 8 + 9 * (12 + 4) + 3 + 3) * r.size * r.size);
   }

@@ -76,8 +76,9 @@ PreviewImage render_preview(const BitVolume& volume, View view, int threads = 0,
 // every slab again (the normals of the pixels whose visible voxel lies in it,
 // with the last two layers of the slab before kept for the neighbours across
 // the seam), then take(). The image is exactly render_preview()'s, which is
-// the one-slab case. Memory is the image's per-pixel arrays, one layer of
-// bits and two more in the second pass.
+// the one-slab case. Memory is the image's per-pixel arrays (shrunk by
+// max_side: a depth a pixel, 4 bytes, and the blocks'), one layer of bits
+// and two more in the second pass.
 // Slabs of runs (a stored RLE read as runs, voxd/run_slab.h) give the same
 // image at the cost of the runs, not of the grid's bits: the first pass
 // walks where runs begin and end, the second reads each visible voxel's 26
