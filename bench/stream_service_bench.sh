@@ -8,8 +8,9 @@
 #   bench/stream_service_bench.sh [BUILD_DIR] [RESOLUTION]
 #   STEPS   the steps after the job, of: volume radiography analysis preview
 #           thickness (default: all)
-#   KEEP    a folder to copy the analysis report and the previews into
-#           (analysis.json, top.png, side.png), to compare two builds' bytes
+#   KEEP    a folder to copy the analysis report, the radiographs and the
+#           previews into (analysis.json, z.png, x.json, y.png, top.png,
+#           side.png), to compare two builds' bytes
 set -euo pipefail
 build="${1:-build}"
 res="${2:-8192}"
@@ -43,7 +44,9 @@ fi
 # of bits to send: minutes of transfer, not a measure of the service.)
 if want radiography; then
   t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=z&measure=max" -o "$work/z.png"; step "radiography z (png16)" "$t0"
-  t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=x&measure=total&format=json" -o /dev/null; step "radiography x (json)" "$t0"
+  t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=x&measure=total&format=json" -o "$work/x.json"; step "radiography x (json)" "$t0"
+  t0=$(now); curl -sf "$url/v1/jobs/$id/radiography?axis=y&measure=min" -o "$work/y.png"; step "radiography y (png16)" "$t0"
+  [[ -n "${KEEP:-}" ]] && cp "$work/z.png" "$work/x.json" "$work/y.png" "$KEEP/"
 fi
 if want analysis; then
   t0=$(now); curl -sf "$url/v1/jobs/$id/analysis?thickness=false&skin=false" -o "$work/analysis.json"; step "mass properties, parts, voids" "$t0"

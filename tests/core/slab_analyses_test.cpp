@@ -339,12 +339,92 @@ TEST(SlabAnalyses, RadiographyAlongEachAxisIsExactlyTheInMemoryOne) {
         SCOPED_TRACE("axis " + std::to_string(axis) + " layers " + std::to_string(layers));
         RadiographyAccumulator image(s.volume.grid(), axis);
         read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { image.add(k0, slab, 2); });
-        const ThicknessImage got = image.take();
-        EXPECT_EQ(got.width, expected.width);
-        EXPECT_EQ(got.height, expected.height);
-        EXPECT_EQ(got.min, expected.min);
-        EXPECT_EQ(got.max, expected.max);
-        EXPECT_EQ(got.total, expected.total);
+        RadiographyAccumulator from_runs(s.volume.grid(), axis);
+        read_rle_run_slabs(s.rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.add(k0, slab, 2); });
+        for (const ThicknessImage& got : {image.take(), from_runs.take()}) {
+          EXPECT_EQ(got.width, expected.width);
+          EXPECT_EQ(got.height, expected.height);
+          EXPECT_EQ(got.min, expected.min);
+          EXPECT_EQ(got.max, expected.max);
+          EXPECT_EQ(got.total, expected.total);
+        }
+      }
+    }
+  }
+}
+
+// Random voxels filling the grid to its faces (runs open at the last layer,
+// single voxels, each slab size's seams), of `density`; its RLE alongside.
+Stored random_volume(double density, std::uint64_t seed) {
+  std::uint64_t state = seed;
+  const auto next = [&] {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return state;
+  };
+  Grid g;
+  g.dims = {37 + static_cast<std::int64_t>(density * 40), 29, 23};
+  g.voxel_size = 0.5;
+  Stored s{BitVolume(g), {}};
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; ++i)
+        if (static_cast<double>(next() % 1000) < density * 1000) s.volume.set(i, j, k, true);
+  VectorSink sink;
+  write_rle(s.volume, sink);
+  s.rle = std::move(sink.data);
+  return s;
+}
+
+// Against each ray walked voxel by voxel: the shortest and longest runs and
+// the filled voxels, for any slabs, as bits and as runs.
+TEST(SlabAnalyses, RadiographyOfRandomVolumesIsEachRayWalkedVoxelByVoxel) {
+  for (const double density : {0.2, 0.5, 0.85}) {
+    const Stored s = random_volume(density, 0x51ed2701f3a5c9b1u);
+    const glm::i64vec3 d = s.volume.grid().dims;
+    for (int axis = 0; axis < 3; ++axis) {
+      // Pixel (c, r): the other two axes in x, y, z order.
+      const int ca = axis == 0 ? 1 : 0, ra = axis == 2 ? 1 : 2;
+      ThicknessImage walked;
+      walked.width = static_cast<int>(d[ca]);
+      walked.height = static_cast<int>(d[ra]);
+      for (std::int64_t r = 0; r < d[ra]; ++r)
+        for (std::int64_t c = 0; c < d[ca]; ++c) {
+          std::uint32_t lo = 0, hi = 0, total = 0, run = 0;
+          for (std::int64_t t = 0; t <= d[axis]; ++t) {
+            std::int64_t ijk[3];
+            ijk[axis] = t;
+            ijk[ca] = c;
+            ijk[ra] = r;
+            if (t < d[axis] && s.volume.get(ijk[0], ijk[1], ijk[2])) {
+              ++run;
+              continue;
+            }
+            if (run > 0) {
+              lo = lo == 0 ? run : std::min(lo, run);
+              hi = std::max(hi, run);
+              total += run;
+            }
+            run = 0;
+          }
+          walked.min.push_back(lo);
+          walked.max.push_back(hi);
+          walked.total.push_back(total);
+        }
+      for (std::int64_t layers : {std::int64_t{1}, std::int64_t{2}, std::int64_t{5}, d.z}) {
+        SCOPED_TRACE("density " + std::to_string(density) + " axis " + std::to_string(axis) + " layers " +
+                     std::to_string(layers));
+        RadiographyAccumulator from_bits(s.volume.grid(), axis), from_runs(s.volume.grid(), axis);
+        read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.add(k0, slab, 2); });
+        read_rle_run_slabs(s.rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.add(k0, slab, 2); });
+        for (const ThicknessImage& got : {from_bits.take(), from_runs.take(), radiography(s.volume, axis, 2)}) {
+          EXPECT_EQ(got.width, walked.width);
+          EXPECT_EQ(got.height, walked.height);
+          EXPECT_EQ(got.min, walked.min);
+          EXPECT_EQ(got.max, walked.max);
+          EXPECT_EQ(got.total, walked.total);
+        }
       }
     }
   }
@@ -356,6 +436,19 @@ TEST(SlabAnalyses, RadiographyRefusesSlabsOutOfOrderOrMissing) {
   EXPECT_THROW(image.add(3, s.volume), std::logic_error);
   RadiographyAccumulator partial(s.volume.grid(), 2);
   EXPECT_THROW(partial.take(), std::logic_error);
+  // All slabs one way: the seam along z is kept as bits or as runs.
+  RadiographyAccumulator mixed(s.volume.grid(), 2);
+  Grid first = s.volume.grid();
+  first.dims.z = 1;
+  mixed.add(0, BitVolume(first));
+  Grid rest = s.volume.grid();
+  rest.dims.z -= 1;
+  try {
+    mixed.add(1, RunSlab(rest));
+    ADD_FAILURE() << "took bits then runs";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("all its slabs as bits or all as runs"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SlabAnalyses, PartsAndVoidsAreExactlyTheInMemoryOnes) {
@@ -486,24 +579,11 @@ TEST(SlabAnalyses, PreviewsFromEverySideAreExactlyTheInMemoryOnes) {
 // layer, runs open at the last, neighbours outside the grid, single-voxel
 // runs and gaps, each slab size's seams.
 TEST(SlabAnalyses, PreviewsOfRandomVolumesFromRunsAndBitsAreTheInMemoryOnes) {
-  std::uint64_t state = 0x9e3779b97f4a7c15u;
-  const auto next = [&] {
-    state ^= state << 13;
-    state ^= state >> 7;
-    state ^= state << 17;
-    return state;
-  };
   for (const double density : {0.2, 0.5, 0.85}) {
-    Grid g;
-    g.dims = {37 + static_cast<std::int64_t>(density * 40), 29, 23};
-    g.voxel_size = 0.5;
-    BitVolume volume(g);
-    for (std::int64_t k = 0; k < g.dims.z; ++k)
-      for (std::int64_t j = 0; j < g.dims.y; ++j)
-        for (std::int64_t i = 0; i < g.dims.x; ++i)
-          if (static_cast<double>(next() % 1000) < density * 1000) volume.set(i, j, k, true);
-    VectorSink sink;
-    write_rle(volume, sink);
+    const Stored s = random_volume(density, 0x9e3779b97f4a7c15u);
+    const Grid& g = s.volume.grid();
+    const BitVolume& volume = s.volume;
+    const std::vector<std::uint8_t>& rle = s.rle;
     for (int axis = 0; axis < 3; ++axis)
       for (bool from_positive : {true, false}) {
         const View view{axis, from_positive};
@@ -521,10 +601,10 @@ TEST(SlabAnalyses, PreviewsOfRandomVolumesFromRunsAndBitsAreTheInMemoryOnes) {
             SCOPED_TRACE(to_string(view) + " density " + std::to_string(density) + " layers " + std::to_string(layers) +
                          " max_side " + std::to_string(max_side));
             PreviewRenderer from_bits(g, view, 2, max_side), from_runs(g, view, 2, max_side);
-            read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.find(k0, slab); });
-            read_rle_bit_slabs(sink.data, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.shade(k0, slab); });
-            read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.find(k0, slab); });
-            read_rle_run_slabs(sink.data, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.shade(k0, slab); });
+            read_rle_bit_slabs(rle, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.find(k0, slab); });
+            read_rle_bit_slabs(rle, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.shade(k0, slab); });
+            read_rle_run_slabs(rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.find(k0, slab); });
+            read_rle_run_slabs(rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.shade(k0, slab); });
             for (const PreviewImage& got : {from_bits.take(), from_runs.take(), render_preview(volume, view, 2, max_side)}) {
               EXPECT_EQ(got.width, want.width);
               EXPECT_EQ(got.height, want.height);

@@ -12,6 +12,7 @@
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 #include "voxd/analysis/radiography.h"
+#include "run_rows.h"
 
 namespace voxd {
 namespace {
@@ -67,28 +68,9 @@ glm::vec3 neighbour_normal(const glm::i64vec3& d, const Filled& filled, std::int
 
 bool bit_of(const std::uint64_t* row, std::int64_t i) { return (row[i >> 6] >> (i & 63)) & 1u; }
 
-using Runs = std::span<const std::uint32_t>;
-
-// Calls f(b, e) for each maximal range [b, e) of voxels in a's runs and not
-// in b's (both as RunSlab rows: increasing bounds): where a run of a begins
-// or ends against b, the cost the runs', not the voxels'.
-template <typename F>
-void for_each_difference(Runs a, Runs b, const F& f) {
-  std::size_t y = 0;
-  for (std::size_t x = 0; x < a.size(); x += 2) {
-    std::uint32_t begin = a[x];
-    const std::uint32_t end = a[x + 1];
-    while (y < b.size() && b[y + 1] <= begin) y += 2;  // b's runs wholly before this one
-    for (std::size_t z = y; begin < end; z += 2) {
-      if (z >= b.size() || b[z] >= end) {
-        f(begin, end);
-        break;
-      }
-      if (b[z] > begin) f(begin, b[z]);
-      begin = std::max(begin, b[z + 1]);
-    }
-  }
-}
+using detail::for_each_difference;
+using detail::last_layers;
+using detail::Runs;
 
 // Bits i - 1, i and i + 1 of a row of runs (bit 0 for i - 1): one search,
 // then a step or two.
@@ -109,26 +91,6 @@ std::uint64_t range_mask(std::int64_t w, std::int64_t begin, std::int64_t end) {
   const std::int64_t lo = std::max(begin, w * 64) - w * 64, hi = std::min(end, w * 64 + 64) - w * 64;
   const std::uint64_t upto = hi == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << hi) - 1;
   return upto & ~((std::uint64_t{1} << lo) - 1);
-}
-
-// The last `layers` layers of the slabs seen so far: those of `slab`, after
-// those of `kept` (the previous seam) when the slab is thinner; empty rows
-// for layers before the grid's first.
-RunSlab last_layers(const RunSlab& kept, const RunSlab& slab, std::int64_t layers) {
-  const std::int64_t ny = slab.grid().dims.y, n = slab.grid().dims.z, kept_layers = kept.grid().dims.z;
-  std::vector<Runs> rows;
-  rows.reserve(static_cast<std::size_t>(ny * layers));
-  for (std::int64_t l = n - layers; l < n; ++l)
-    for (std::int64_t j = 0; j < ny; ++j)
-      rows.push_back(l >= 0 ? slab.row(j, l) : kept_layers + l >= 0 ? kept.row(j, kept_layers + l) : Runs{});
-  Grid grid = slab.grid();
-  grid.dims.z = layers;
-  RunSlab out(grid);
-  for (const Runs row : rows) {
-    for (std::size_t r = 0; r < row.size(); r += 2) out.add_run(row[r], row[r + 1]);
-    out.end_row();
-  }
-  return out;
 }
 
 }  // namespace

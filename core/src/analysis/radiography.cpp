@@ -17,6 +17,7 @@
 #include <string>
 
 #include "encode/bit_transpose.h"
+#include "run_rows.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
 
@@ -210,9 +211,79 @@ RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis)
   }
 }
 
+void RadiographyAccumulator::check_kind(Kind slab) {
+  if (kind_ != Kind::none && kind_ != slab)
+    throw std::logic_error("RadiographyAccumulator: takes all its slabs as bits or all as runs");
+  kind_ = slab;
+}
+
+void RadiographyAccumulator::add(std::int64_t k0, const RunSlab& slab, int threads) {
+  if (k0 != next_k_) throw std::logic_error("RadiographyAccumulator: slab at layer " + std::to_string(k0) +
+                                            " where layer " + std::to_string(next_k_) + " was expected");
+  check_kind(Kind::runs);
+  const glm::i64vec3 d = slab.grid().dims;
+  next_k_ += d.z;
+  if (d.z == 0 || image_.min.empty()) return;
+  const Maps maps = maps_of(image_);
+  using detail::for_each_difference;
+  if (axis_ == 0) {  // a ray is a row: its runs are the row's
+    parallel_for(0, d.z, 4, threads, [&](std::int64_t a, std::int64_t b) {
+      for (std::int64_t kk = a; kk < b; ++kk)
+        for (std::int64_t j = 0; j < d.y; ++j) {
+          const detail::Runs row = slab.row(j, kk);
+          const RayPixel px = maps.at(static_cast<std::size_t>((k0 + kk) * d.y + j));
+          for (std::size_t r = 0; r < row.size(); r += 2) px.add_run(row[r + 1] - row[r]);
+        }
+    });
+    return;
+  }
+  if (axis_ == 1) {  // a layer's rays cross its rows: runs begin and end where rows differ
+    parallel_for(0, d.z, 1, threads, [&](std::int64_t a, std::int64_t b) {
+      std::vector<std::uint32_t> start(static_cast<std::size_t>(d.x));
+      for (std::int64_t kk = a; kk < b; ++kk) {
+        const Maps layer = maps.from(static_cast<std::size_t>((k0 + kk) * d.x));
+        detail::Runs before;
+        for (std::int64_t j = 0; j <= d.y; ++j) {
+          const detail::Runs row = j < d.y ? slab.row(j, kk) : detail::Runs{};
+          const auto at = static_cast<std::uint32_t>(j);
+          for_each_difference(row, before, [&](std::uint32_t b0, std::uint32_t e0) {
+            std::fill(start.begin() + b0, start.begin() + e0, at);
+          });
+          for_each_difference(before, row, [&](std::uint32_t b0, std::uint32_t e0) {
+            for (std::uint32_t i = b0; i < e0; ++i) layer.at(i).add_run(at - start[i]);
+          });
+          before = row;
+        }
+      }
+    });
+    return;
+  }
+  // Along z the rows differ from the layer before's, the first from the
+  // last slab's last layer.
+  parallel_for(0, d.y, 16, threads, [&](std::int64_t j0, std::int64_t j1) {
+    for (std::int64_t j = j0; j < j1; ++j) {
+      const std::size_t pixel0 = static_cast<std::size_t>(j * d.x);
+      for (std::int64_t kk = 0; kk < d.z; ++kk) {
+        const auto k = static_cast<std::uint32_t>(k0 + kk);
+        const detail::Runs row = slab.row(j, kk);
+        const detail::Runs before = kk > 0 ? slab.row(j, kk - 1) : k0 > 0 ? last_runs_.row(j, 0) : detail::Runs{};
+        for_each_difference(row, before, [&](std::uint32_t b0, std::uint32_t e0) {
+          std::fill(run_start_.begin() + static_cast<std::ptrdiff_t>(pixel0 + b0),
+                    run_start_.begin() + static_cast<std::ptrdiff_t>(pixel0 + e0), k);
+        });
+        for_each_difference(before, row, [&](std::uint32_t b0, std::uint32_t e0) {
+          for (std::uint32_t i = b0; i < e0; ++i) maps.at(pixel0 + i).add_run(k - run_start_[pixel0 + i]);
+        });
+      }
+    }
+  });
+  last_runs_ = detail::last_layers(last_runs_, slab, 1);
+}
+
 void RadiographyAccumulator::add(std::int64_t k0, const BitVolume& slab, int threads) {
   if (k0 != next_k_) throw std::logic_error("RadiographyAccumulator: slab at layer " + std::to_string(k0) +
                                             " where layer " + std::to_string(next_k_) + " was expected");
+  check_kind(Kind::bits);
   const glm::i64vec3 d = slab.grid().dims;
   next_k_ += d.z;
   if (d.z == 0 || image_.min.empty()) return;
@@ -251,7 +322,18 @@ ThicknessImage RadiographyAccumulator::take() {
   if (next_k_ != grid_.dims.z)
     throw std::logic_error("RadiographyAccumulator: " + std::to_string(next_k_) + " of " +
                            std::to_string(grid_.dims.z) + " layers were added");
-  if (axis_ == 2 && !image_.min.empty()) {  // runs still open reach the top of the grid
+  if (axis_ == 2 && !image_.min.empty() && kind_ == Kind::runs && grid_.dims.z > 0) {
+    const Maps maps = maps_of(image_);
+    const auto top = static_cast<std::uint32_t>(grid_.dims.z);
+    for (std::int64_t j = 0; j < grid_.dims.y; ++j) {
+      const detail::Runs open = last_runs_.row(j, 0);
+      for (std::size_t r = 0; r < open.size(); r += 2)
+        for (std::uint32_t i = open[r]; i < open[r + 1]; ++i) {
+          const std::size_t p = static_cast<std::size_t>(j * grid_.dims.x) + i;
+          maps.at(p).add_run(top - run_start_[p]);
+        }
+    }
+  } else if (axis_ == 2 && !image_.min.empty()) {  // runs still open reach the top of the grid
     const Maps maps = maps_of(image_);
     const std::int64_t words = (grid_.dims.x + 63) / 64;
     const auto top = static_cast<std::uint32_t>(grid_.dims.z);
@@ -264,6 +346,7 @@ ThicknessImage RadiographyAccumulator::take() {
   }
   run_start_ = {};
   last_layer_ = {};
+  last_runs_ = {};
   return std::move(image_);
 }
 

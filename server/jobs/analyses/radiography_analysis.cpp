@@ -2,6 +2,7 @@
 #include "server/jobs/analyses/analysis_support.h"
 
 #include "server/jobs/job_store.h"
+#include "voxd/encode/rle_slabs.h"
 
 namespace voxd::server {
 namespace {
@@ -17,15 +18,18 @@ class RadiographyAnalysis final : public JobAnalysisKind {
 
   bool streams_over_slabs(const api::AnalysisRequest& r) const override { return r.peel == 0; }
 
+  // Over the stored runs: the cost is the runs and where rays' runs begin
+  // and end, not the grid's bits.
   std::string over_slabs(const AnalysisInput& in) const override {
     RadiographyAccumulator image(in.job.grid, in.request.axis);
-    replay(in, [&](std::int64_t k0, const BitVolume& slab) { image.add(k0, slab); });
+    replay_runs(in, [&](std::int64_t k0, const RunSlab& slab) { image.add(k0, slab); });
     return radiography_result(in, image.take());
   }
 
-  // Its four maps of 32 bits a pixel, one layer of bits and the PNG.
+  // Its four maps of 32 bits a pixel and the PNG; a slab of runs
+  // (kRunSlabRuns of 8 bytes) and the seam's copy of its last layer.
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
-    return (4 * 4 + 2 + 4) * image_pixels(grid, r.axis) + bit_volume_bytes({grid.dims.x, grid.dims.y, 1});
+    return (4 * 4 + 2 + 4) * image_pixels(grid, r.axis) + 2 * kRunSlabRuns * 8;
   }
 
   std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest&) const override { return 6; }

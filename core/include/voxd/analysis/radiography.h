@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "voxd/bit_volume.h"
+#include "voxd/run_slab.h"
 
 namespace voxd {
 
@@ -50,6 +51,11 @@ class RadiographyAccumulator {
   // Layers [k0, k0 + slab.grid().dims.z), right after the previous slab's.
   // Throws std::logic_error out of order.
   void add(std::int64_t k0, const BitVolume& slab, int threads = 0);
+  // The same from the slab's runs (a stored RLE read as runs): the cost is
+  // the runs and the voxels where rays' runs begin and end, not the grid's
+  // bits. All slabs one way (the seam is kept so); mixing throws
+  // std::logic_error.
+  void add(std::int64_t k0, const RunSlab& slab, int threads = 0);
   // After the last layer. Throws std::logic_error if layers are missing.
   ThicknessImage take();
 
@@ -60,6 +66,9 @@ class RadiographyAccumulator {
   std::int64_t next_k_ = 0;
   std::vector<std::uint32_t> run_start_;  // z: the layer the ray's open run began at
   std::vector<std::uint64_t> last_layer_; // z: the previous layer's bits (rows of row words)
+  RunSlab last_runs_;                      // z: the same as runs
+  enum class Kind { none, bits, runs } kind_ = Kind::none;
+  void check_kind(Kind slab);
 };
 
 // Summary of one map over the rays that hit material (zeros are skipped).
