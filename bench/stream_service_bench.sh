@@ -6,15 +6,16 @@
 # thickness, which must answer 422. Prints the seconds of each step and the
 # server's peak RSS (VmHWM) after each.
 #   bench/stream_service_bench.sh [BUILD_DIR] [RESOLUTION]
-#   STEPS   the steps after the job, of: volume radiography analysis preview
-#           thickness (default: all)
+#   STEPS   the steps after the job, of: volume radiography analysis section
+#           preview thickness (default: all)
 #   KEEP    a folder to copy the analysis report, the radiographs and the
-#           previews into (analysis.json, z.png, x.json, y.png, top.png,
-#           side.png), to compare two builds' bytes
+#           sections and previews into (analysis.json, z.png, x.json, y.png,
+#           section-{z,x,y}.png, top.png, side.png), to compare two builds'
+#           bytes
 set -euo pipefail
 build="${1:-build}"
 res="${2:-8192}"
-steps=" ${STEPS:-volume radiography analysis preview thickness} "
+steps=" ${STEPS:-volume radiography analysis section preview thickness} "
 want() { [[ "$steps" == *" $1 "* ]]; }
 voxd="$build/server/voxd"
 work="$(mktemp -d)"
@@ -52,6 +53,13 @@ if want analysis; then
   t0=$(now); curl -sf "$url/v1/jobs/$id/analysis?thickness=false&skin=false" -o "$work/analysis.json"; step "mass properties, parts, voids" "$t0"
   python3 -c 'import json,sys; a=json.load(open(sys.argv[1])); print("  volume", a["mass_properties"]["voxels"]["volume"], "parts", a["parts"]["count"], "voids", a["voids"]["count"])' "$work/analysis.json"
   [[ -n "${KEEP:-}" ]] && cp "$work/analysis.json" "$KEEP/analysis.json"
+fi
+if want section; then
+  for axis in z x y; do
+    index=$(python3 -c 'import json,sys; s=json.loads(sys.argv[1]); print(s["grid"]["dims"]["xyz".index(sys.argv[2])] // 2)' "$status" $axis)
+    t0=$(now); curl -sf "$url/v1/jobs/$id/section?axis=$axis&index=$index" -o "$work/section-$axis.png"; step "section $axis (middle layer)" "$t0"
+    [[ -n "${KEEP:-}" ]] && cp "$work/section-$axis.png" "$KEEP/"
+  done
 fi
 if want preview; then
   t0=$(now); curl -sf "$url/v1/jobs/$id/preview?view=%2Bz" -o "$work/top.png"; step "preview +z (two passes)" "$t0"

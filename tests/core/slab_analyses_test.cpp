@@ -518,6 +518,38 @@ TEST(SlabAnalyses, SectionsAlongEachAxisAreTheInMemoryOnes) {
   EXPECT_THROW(SectionGatherer(g, 2, g.dims.z), Error);
 }
 
+// Each pixel of a section of random volumes against its voxel, from bits
+// and from runs, for any slabs.
+TEST(SlabAnalyses, SectionsOfRandomVolumesAreTheirVoxels) {
+  for (const double density : {0.2, 0.5, 0.85}) {
+    const Stored s = random_volume(density, 0x2545f4914f6cdd1du);
+    const glm::i64vec3 d = s.volume.grid().dims;
+    for (int axis = 0; axis < 3; ++axis) {
+      const int ca = axis == 0 ? 1 : 0, ra = axis == 2 ? 1 : 2;  // as radiography's pixels
+      for (std::int64_t index : {std::int64_t{0}, d[axis] / 2, d[axis] - 1}) {
+        std::vector<std::uint8_t> voxels;
+        for (std::int64_t r = 0; r < d[ra]; ++r)
+          for (std::int64_t c = 0; c < d[ca]; ++c) {
+            std::int64_t ijk[3];
+            ijk[axis] = index;
+            ijk[ca] = c;
+            ijk[ra] = r;
+            voxels.push_back(s.volume.get(ijk[0], ijk[1], ijk[2]) ? 255 : 0);
+          }
+        for (std::int64_t layers : {std::int64_t{1}, std::int64_t{4}, d.z}) {
+          SCOPED_TRACE("axis " + std::to_string(axis) + " index " + std::to_string(index) + " layers " +
+                       std::to_string(layers));
+          SectionGatherer from_bits(s.volume.grid(), axis, index), from_runs(s.volume.grid(), axis, index);
+          read_rle_bit_slabs(s.rle, layers, [&](std::int64_t k0, const BitVolume& slab) { from_bits.add(k0, slab); });
+          read_rle_run_slabs(s.rle, layers, [&](std::int64_t k0, const RunSlab& slab) { from_runs.add(k0, slab); });
+          EXPECT_EQ(from_bits.take().pixels, voxels);
+          EXPECT_EQ(from_runs.take().pixels, voxels);
+        }
+      }
+    }
+  }
+}
+
 // The visible voxel of a pixel, walked voxel by voxel from the camera: the
 // independent check of the renderer's run transitions and word scans.
 std::int64_t first_filled(const BitVolume& v, View view, std::int64_t column, std::int64_t row) {

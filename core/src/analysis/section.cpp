@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <string>
 
 #include "voxd/error.h"
@@ -55,6 +56,28 @@ void SectionGatherer::add(std::int64_t k0, const BitVolume& slab) {
     for (std::int64_t k = 0; k < d.z; ++k) {
       for (std::int64_t j = 0; j < d.y; ++j) out[(k0 + k) * d.y + j] = ((slab.row(j, k)[word] >> bit) & 1u) ? 255 : 0;
     }
+  }
+}
+
+void SectionGatherer::add(std::int64_t k0, const RunSlab& slab) {
+  const glm::i64vec3 d = slab.grid().dims;
+  std::uint8_t* out = image_.pixels.data();
+  const auto paint = [](std::span<const std::uint32_t> runs, std::uint8_t* row) {
+    for (std::size_t r = 0; r < runs.size(); r += 2) std::fill(row + runs[r], row + runs[r + 1], std::uint8_t{255});
+  };
+  if (axis_ == 2) {
+    if (index_ < k0 || index_ >= k0 + d.z) return;
+    for (std::int64_t j = 0; j < d.y; ++j) paint(slab.row(j, index_ - k0), out + j * d.x);
+  } else if (axis_ == 1) {
+    for (std::int64_t k = 0; k < d.z; ++k) paint(slab.row(index_, k), out + (k0 + k) * d.x);
+  } else {  // whether each x-row's runs hold voxel `index`: an odd count of bounds up to it
+    const auto at = static_cast<std::uint32_t>(index_);
+    for (std::int64_t k = 0; k < d.z; ++k)
+      for (std::int64_t j = 0; j < d.y; ++j) {
+        const std::span<const std::uint32_t> runs = slab.row(j, k);
+        const auto bounds = std::upper_bound(runs.begin(), runs.end(), at) - runs.begin();
+        out[(k0 + k) * d.y + j] = bounds % 2 == 1 ? 255 : 0;
+      }
   }
 }
 

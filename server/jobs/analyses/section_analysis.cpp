@@ -8,6 +8,7 @@
 #include "api/job_params.h"
 #include "voxd/analysis/section.h"
 #include "voxd/analysis/value_images.h"
+#include "voxd/encode/rle_slabs.h"
 
 namespace voxd::server {
 namespace {
@@ -90,14 +91,14 @@ class SectionAnalysis final : public JobAnalysisKind {
       });
       return to_bytes(section.png(image_text(in)));
     }
-    SectionGatherer section(job.grid, r.axis, layer);
-    replay(in, [&](std::int64_t k0, const BitVolume& slab) { section.add(k0, slab); });
+    SectionGatherer section(job.grid, r.axis, layer);  // from the stored runs: the rows the plane cuts
+    replay_runs(in, [&](std::int64_t k0, const RunSlab& slab) { section.add(k0, slab); });
     return to_bytes(section_png(section.take(), job.grid, r.axis, layer, image_text(in)));
   }
 
-  // The image and its PNG.
+  // The image and its PNG, and a slab of runs (kRunSlabRuns of 8 bytes).
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
-    return 2 * image_pixels(grid, r.axis);
+    return 2 * image_pixels(grid, r.axis) + kRunSlabRuns * 8;
   }
 
   std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest& r) const override {

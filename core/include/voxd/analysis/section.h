@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "voxd/bit_volume.h"
+#include "voxd/run_slab.h"
 
 namespace voxd {
 
@@ -32,6 +33,9 @@ class SectionGatherer {
   // Layers [k0, k0 + slab.grid().dims.z) of the grid; a slab the plane
   // does not cross adds nothing.
   void add(std::int64_t k0, const BitVolume& slab);
+  // The same from the slab's runs (a stored RLE read as runs): the runs of
+  // the rows the plane cuts, never the grid's bits.
+  void add(std::int64_t k0, const RunSlab& slab);
   GreyImage8 take() { return std::move(image_); }
 
  private:
