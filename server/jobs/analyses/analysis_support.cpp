@@ -34,21 +34,6 @@ std::optional<BitVolume> peeled_volume(const api::AnalysisRequest& r, const BitV
                 static_cast<std::uint32_t>(std::min<std::int64_t>(r.peel, UINT32_MAX)));
 }
 
-void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from, double to) {
-  if (!in.output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
-  const Grid& grid = in.job.grid;
-  JobControl* control = in.control;
-  const double slabs_total = static_cast<double>(grid.dims.z);
-  read_rle_bit_slabs(*in.output.rle->open(), replay_bit_slab_layers(grid),
-                     [&](std::int64_t k0, const BitVolume& slab) {
-                       if (control) control->check_cancelled();
-                       consume(k0, slab);
-                       const double done = static_cast<double>(k0 + slab.grid().dims.z) / slabs_total;
-                       if (control) control->set_progress(from + (to - from) * done);
-                     },
-                     kStoredSlabLimits);
-}
-
 void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double from, double to) {
   if (!in.output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
   const Grid& grid = in.job.grid;

@@ -26,13 +26,11 @@ std::vector<PngText> image_text(const AnalysisInput& in, bool with_peel = false)
 // The volume after r.peel layers of skin removal, or nullopt for none.
 std::optional<BitVolume> peeled_volume(const api::AnalysisRequest& r, const BitVolume& volume);
 
-// Replays a streamed job's stored volume slab by slab (kReplaySlabBytes),
-// with progress over [from, to] of the bar (a request of two passes takes
-// half each) and cancellation between slabs.
-void replay(const AnalysisInput& in, const BitSlabConsumer& consume, double from = 0.0, double to = 1.0);
-// The same as runs (voxd/run_slab.h), for analyses that work on runs: they
-// then cost the stored runs, not the grid's voxels. Slabs hold up to
-// kRunSlabRuns runs.
+// Replays a streamed job's stored volume slab by slab as its runs
+// (voxd/run_slab.h), with progress over [from, to] of the bar (a request of
+// two passes takes half each) and cancellation between slabs. The analyses
+// then cost the stored runs, not the grid's voxels (at 8192^3: 137 MiB of
+// runs, 50 GB of bits). Slabs hold up to kRunSlabRuns runs.
 void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double from = 0.0, double to = 1.0);
 // The same for a streamed job's stored values.
 void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume);
