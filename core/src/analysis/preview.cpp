@@ -192,6 +192,8 @@ struct PreviewRenderer::State {
   void find_y(std::int64_t k0, const BitVolume& slab);
   void find_z(std::int64_t k0, const BitVolume& slab);
   void find_x(std::int64_t k0, const RunSlab& slab);
+  template <typename WordsOf>
+  void find_y_words(std::int64_t k0, std::int64_t n, const WordsOf& words_of);
   void find_y(std::int64_t k0, const RunSlab& slab);
   void find_z(std::int64_t k0, const RunSlab& slab);
   void choose();
@@ -265,9 +267,11 @@ void PreviewRenderer::State::find_x(std::int64_t k0, const BitVolume& slab) {
 
 // Rays along y cross the x rows of one layer: walk them from the camera
 // side, taking the bits not yet found, until every column has its voxel or
-// the layer ends.
-void PreviewRenderer::State::find_y(std::int64_t k0, const BitVolume& slab) {
-  parallel_for(k0, k0 + slab.grid().dims.z, 1, threads, [&](std::int64_t a, std::int64_t b) {
+// the layer ends. words_of(j, kk, take) calls take(w, bits) for each word
+// of slab row (j, kk) that may hold voxels.
+template <typename WordsOf>
+void PreviewRenderer::State::find_y_words(std::int64_t k0, std::int64_t n, const WordsOf& words_of) {
+  parallel_for(k0, k0 + n, 1, threads, [&](std::int64_t a, std::int64_t b) {
     std::vector<std::uint64_t> found(static_cast<std::size_t>(words));
     for (std::int64_t k = a; k < b; ++k) {
       const std::int64_t r = along_up(k);
@@ -275,19 +279,26 @@ void PreviewRenderer::State::find_y(std::int64_t k0, const BitVolume& slab) {
       std::int64_t remaining = nx;
       for (std::int64_t s = 0; s < n_depth && remaining > 0; ++s) {
         const std::int64_t j = view.from_positive ? n_depth - 1 - s : s;
-        const std::uint64_t* row = slab.row(j, k - k0);
-        for (std::int64_t w = 0; w < words; ++w) {
-          std::uint64_t fresh = row[w] & ~found[static_cast<std::size_t>(w)];
-          if (!fresh) continue;
+        words_of(j, k - k0, [&](std::int64_t w, std::uint64_t bits) {
+          std::uint64_t fresh = bits & ~found[static_cast<std::size_t>(w)];
+          if (!fresh) return;
           found[static_cast<std::size_t>(w)] |= fresh;
           remaining -= std::popcount(fresh);
           for (; fresh; fresh &= fresh - 1) {
             const std::int64_t i = w * 64 + std::countr_zero(fresh);
             see(static_cast<std::size_t>(r * width + along_right(i)), i, j, k, s);
           }
-        }
+        });
       }
     }
+  });
+}
+
+void PreviewRenderer::State::find_y(std::int64_t k0, const BitVolume& slab) {
+  find_y_words(k0, slab.grid().dims.z, [&](std::int64_t j, std::int64_t kk, const auto& take) {
+    const std::uint64_t* row = slab.row(j, kk);
+    for (std::int64_t w = 0; w < words; ++w)
+      if (row[w]) take(w, row[w]);
   });
 }
 
@@ -352,29 +363,11 @@ void PreviewRenderer::State::find_x(std::int64_t k0, const RunSlab& slab) {
 }
 
 void PreviewRenderer::State::find_y(std::int64_t k0, const RunSlab& slab) {
-  parallel_for(k0, k0 + slab.grid().dims.z, 1, threads, [&](std::int64_t a, std::int64_t b) {
-    std::vector<std::uint64_t> found(static_cast<std::size_t>(words));
-    for (std::int64_t k = a; k < b; ++k) {
-      const std::int64_t r = along_up(k);
-      std::fill(found.begin(), found.end(), 0);
-      std::int64_t remaining = nx;
-      for (std::int64_t s = 0; s < n_depth && remaining > 0; ++s) {
-        const std::int64_t j = view.from_positive ? n_depth - 1 - s : s;
-        const Runs row = slab.row(j, k - k0);
-        for (std::size_t x = 0; x < row.size(); x += 2) {
-          const std::int64_t begin = row[x], end = row[x + 1];
-          for (std::int64_t w = begin / 64; w * 64 < end; ++w) {
-            std::uint64_t fresh = range_mask(w, begin, end) & ~found[static_cast<std::size_t>(w)];
-            if (!fresh) continue;
-            found[static_cast<std::size_t>(w)] |= fresh;
-            remaining -= std::popcount(fresh);
-            for (; fresh; fresh &= fresh - 1) {
-              const std::int64_t i = w * 64 + std::countr_zero(fresh);
-              see(static_cast<std::size_t>(r * width + along_right(i)), i, j, k, s);
-            }
-          }
-        }
-      }
+  find_y_words(k0, slab.grid().dims.z, [&](std::int64_t j, std::int64_t kk, const auto& take) {
+    const Runs row = slab.row(j, kk);
+    for (std::size_t x = 0; x < row.size(); x += 2) {
+      const std::int64_t begin = row[x], end = row[x + 1];
+      for (std::int64_t w = begin / 64; w * 64 < end; ++w) take(w, range_mask(w, begin, end));
     }
   });
 }
