@@ -661,6 +661,17 @@ TEST(SlabAnalyses, PreviewRefusesSlabsOutOfOrderOrAPassMissing) {
   renderer.find(0, s.volume);
   EXPECT_THROW(renderer.take(), std::logic_error);  // shade() has not run
   EXPECT_THROW(PreviewRenderer(g, View{3, true}), Error);
+  // Shrunk by a factor of 2, 46000^2 pixels are 529 million blocks of 9
+  // raw normals: more than 32 bits count, refused before anything is held.
+  Grid huge = g;
+  huge.dims = {46000, 46000, 1};
+  try {
+    PreviewRenderer(huge, View{2, true}, 1, 40000);
+    ADD_FAILURE() << "a preview of 529 million blocks was taken on";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::limit_exceeded);
+    EXPECT_NE(std::string(e.what()).find("ask for a smaller size"), std::string::npos) << e.what();
+  }
   // A pass takes its slabs one way: its seam is kept as bits or as runs.
   PreviewRenderer mixed(g, View{2, true});
   Grid half = g;

@@ -137,6 +137,12 @@ struct PreviewRenderer::State {
     width = img.width;
     pixels = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height);
     factor = pixels > 0 ? shrink_factor(img.width, img.height, max_side) : 1;
+    // Shrunk, the raw normals are 9 a block, counted in 32 bits like pixels.
+    const std::uint64_t blocks = static_cast<std::uint64_t>((img.width + factor - 1) / factor) *
+                                 static_cast<std::uint64_t>((img.height + factor - 1) / factor);
+    if (factor > 1 && 9 * blocks > std::numeric_limits<std::uint32_t>::max())
+      throw Error(ErrorCode::limit_exceeded, "preview: " + std::to_string(blocks) +
+                                                 " pixels to shrink to is too many (ask for a smaller size)");
     if (factor == 1) {  // shrunk, the pixels keep only their depths
       img.voxel.assign(pixels, -1);
       img.shade.assign(pixels, 0.0f);
