@@ -652,6 +652,46 @@ TEST(SlabAnalyses, PreviewsOfRandomVolumesFromRunsAndBitsAreTheInMemoryOnes) {
   }
 }
 
+// An image of over 2^17 visible pixels: the renderer's layer sort runs in
+// chunks on every thread. Every visible pixel's normal is then computed
+// (a unit vector: a pixel the sort lost would keep a zero one), the same
+// from slabs of one layer and from the whole volume, at full size and
+// shrunk.
+TEST(SlabAnalyses, PreviewsOfLargeImagesShadeEveryVisiblePixel) {
+  Grid g;
+  g.dims = {420, 400, 6};
+  g.voxel_size = 0.5;
+  BitVolume volume(g);
+  std::uint64_t state = 0x6a09e667f3bcc909u;
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; ++i) {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        if (state % 3 != 0) volume.set(i, j, k, true);
+      }
+  VectorSink sink;
+  write_rle(volume, sink);
+  for (const int max_side : {0, 200}) {
+    const PreviewImage whole = render_preview(volume, View{2, true}, 2, max_side);
+    std::int64_t visible = 0;
+    for (std::size_t p = 0; p < whole.voxel.size(); ++p) {
+      if (whole.voxel[p] < 0) continue;
+      ++visible;
+      ASSERT_NEAR(glm::length(whole.normal[p]), 1.0f, 1e-5f) << "pixel " << p << " max_side " << max_side;
+    }
+    // Full size over 2^17 pixels; shrunk by 3, over 2^17 / 9 blocks of 9 normals.
+    EXPECT_GT(visible * (max_side == 0 ? 1 : 9), std::int64_t{1} << 17);
+    PreviewRenderer layers(g, View{2, true}, 2, max_side);
+    read_rle_run_slabs(sink.data, 1, [&](std::int64_t k0, const RunSlab& slab) { layers.find(k0, slab); });
+    read_rle_run_slabs(sink.data, 1, [&](std::int64_t k0, const RunSlab& slab) { layers.shade(k0, slab); });
+    const PreviewImage got = layers.take();
+    EXPECT_EQ(got.voxel, whole.voxel);
+    EXPECT_EQ(got.shade, whole.shade);
+  }
+}
+
 TEST(SlabAnalyses, PreviewRefusesSlabsOutOfOrderOrAPassMissing) {
   const Stored& s = cases()[1];
   const Grid& g = s.volume.grid();

@@ -434,22 +434,47 @@ void PreviewRenderer::State::choose() {
   });
 }
 
+// A counting sort of the targets by their voxel's layer, on every thread:
+// contiguous chunks of targets counted and placed each on its own, the
+// chunks' offsets in a layer in chunk order, so the order within a layer is
+// the targets' whatever the threads.
 void PreviewRenderer::State::sort_by_layer() {
   if (factor > 1) choose();
-  layer_start.assign(static_cast<std::size_t>(nz + 1), 0);
   const std::int64_t per_layer = nx * ny;
-  const std::size_t targets = target_count();
-  const auto layer_of = [&](std::size_t t) {
-    return static_cast<std::size_t>(voxel_at(static_cast<std::size_t>(target_pixel(t))) / per_layer);
+  const auto targets = static_cast<std::int64_t>(target_count());
+  const auto layers = static_cast<std::size_t>(nz);
+  const auto layer_of = [&](std::int64_t t) {
+    return static_cast<std::size_t>(voxel_at(static_cast<std::size_t>(target_pixel(static_cast<std::size_t>(t)))) /
+                                    per_layer);
   };
-  for (std::size_t t = 0; t < targets; ++t)
-    if (needed(t)) ++layer_start[layer_of(t) + 1];
-  for (std::size_t k = 1; k < layer_start.size(); ++k) layer_start[k] += layer_start[k - 1];
-  by_layer.resize(static_cast<std::size_t>(layer_start.back()));
-  std::vector<std::int64_t> next(layer_start.begin(), layer_start.end() - 1);
-  for (std::size_t t = 0; t < targets; ++t)
-    if (needed(t)) by_layer[static_cast<std::size_t>(next[layer_of(t)]++)] = static_cast<std::uint32_t>(t);
-  raw.assign(targets, glm::vec3(0.0f));
+  const std::int64_t chunks = std::clamp<std::int64_t>(targets >> 16, 1, 64);
+  const std::int64_t per_chunk = (targets + chunks - 1) / chunks;
+  std::vector<std::int64_t> at(static_cast<std::size_t>(chunks) * layers, 0);  // chunk-major
+  const auto each_chunk = [&](const auto& visit) {
+    parallel_for(0, chunks, 1, threads, [&](std::int64_t c0, std::int64_t c1) {
+      for (std::int64_t c = c0; c < c1; ++c) {
+        std::int64_t* slot = at.data() + static_cast<std::size_t>(c) * layers;
+        for (std::int64_t t = c * per_chunk; t < std::min(targets, (c + 1) * per_chunk); ++t)
+          if (needed(static_cast<std::size_t>(t))) visit(slot[layer_of(t)], t);
+      }
+    });
+  };
+  each_chunk([](std::int64_t& count, std::int64_t) { ++count; });
+  layer_start.assign(layers + 1, 0);
+  std::int64_t placed = 0;
+  for (std::size_t k = 0; k < layers; ++k) {
+    layer_start[k] = placed;
+    for (std::int64_t c = 0; c < chunks; ++c) {
+      std::int64_t& slot = at[static_cast<std::size_t>(c) * layers + k];
+      const std::int64_t count = slot;
+      slot = placed;
+      placed += count;
+    }
+  }
+  layer_start[layers] = placed;
+  by_layer.resize(static_cast<std::size_t>(placed));
+  each_chunk([&](std::int64_t& next, std::int64_t t) { by_layer[static_cast<std::size_t>(next++)] = static_cast<std::uint32_t>(t); });
+  raw.assign(static_cast<std::size_t>(targets), glm::vec3(0.0f));
 }
 
 // Screen-space smoothing of the normals, then the lighting.
