@@ -4,6 +4,8 @@
 // in either fails here rather than at a client's first request.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <span>
 #include <string>
 
 #include "api/analyses/analysis_kind.h"
@@ -11,6 +13,10 @@
 #include "api/job_params.h"
 #include "server/jobs/analyses/job_analysis_kind.h"
 #include "server/jobs/job_analyses.h"
+#include "server/jobs/analyses/analysis_support.h"
+#include "voxd/byte_sink.h"
+#include "voxd/encode/rle_slabs.h"
+#include "voxd/encode/volume_format.h"
 
 namespace voxd::test {
 namespace {
@@ -65,6 +71,30 @@ TEST(AnalysisKinds, TheThicknessOnThePartCountsTheMeshAndKeysItsThresholds) {
   EXPECT_EQ(again.artifact_key(), on_part.artifact_key());
   EXPECT_NE(on_part.artifact_key(),
             api::parse_analysis_request(api::AnalysisKind::thickness, {{"format", "glb"}, {"min_wall", "0.9"}}, "").artifact_key());
+}
+
+// A streamed analysis's estimate counts a slab of stored runs at most
+// run_slab_bytes: read back from the RLE of the grid with the most runs a
+// row can hold (every other voxel), the slab is exactly that, and a grid
+// too large for one slab is held to kRunSlabRuns runs and rows.
+TEST(AnalysisKinds, ARunSlabIsAtMostWhatTheEstimatesCount) {
+  Grid g;
+  g.dims = {41, 12, 9};
+  BitVolume checker(g);
+  for (std::int64_t k = 0; k < g.dims.z; ++k)
+    for (std::int64_t j = 0; j < g.dims.y; ++j)
+      for (std::int64_t i = 0; i < g.dims.x; i += 2) checker.set(i, j, k, true);
+  VectorSink sink;
+  write_rle(checker, sink);
+  std::uint64_t largest = 0;
+  read_rle_run_slabs(std::span<const std::uint8_t>(sink.data), g.dims.z, [&](std::int64_t, const RunSlab& slab) {
+    largest = std::max<std::uint64_t>(largest, 8 * slab.run_count() + 4 * static_cast<std::uint64_t>(slab.row_count()));
+  });
+  EXPECT_EQ(largest, 8 * 21 * 12 * 9 + 4 * 12 * 9);
+  EXPECT_EQ(server::run_slab_bytes(g), largest);
+  Grid huge;
+  huge.dims = {8194, 7918, 6203};
+  EXPECT_EQ(server::run_slab_bytes(huge), 12 * kRunSlabRuns);
 }
 
 }  // namespace

@@ -34,6 +34,12 @@ std::optional<BitVolume> peeled_volume(const api::AnalysisRequest& r, const BitV
                 static_cast<std::uint32_t>(std::min<std::int64_t>(r.peel, UINT32_MAX)));
 }
 
+std::uint64_t run_slab_bytes(const Grid& grid) {
+  const auto rows = static_cast<std::uint64_t>(grid.dims.y) * static_cast<std::uint64_t>(grid.dims.z);
+  const std::uint64_t runs = rows * static_cast<std::uint64_t>((grid.dims.x + 1) / 2);
+  return 8 * std::min<std::uint64_t>(runs, kRunSlabRuns) + 4 * std::min<std::uint64_t>(rows, kRunSlabRuns);
+}
+
 void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double from, double to) {
   if (!in.output.rle) throw std::logic_error("a streamed job's analysis without its stored volume");
   const Grid& grid = in.job.grid;

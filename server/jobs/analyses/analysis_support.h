@@ -32,6 +32,10 @@ std::optional<BitVolume> peeled_volume(const api::AnalysisRequest& r, const BitV
 // then cost the stored runs, not the grid's voxels (at 8192^3: 137 MiB of
 // runs, 50 GB of bits). Slabs hold up to kRunSlabRuns runs.
 void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double from = 0.0, double to = 1.0);
+// A slab of those runs as the memory estimates count it: kRunSlabRuns runs
+// of 8 bytes and as many rows of 4, or fewer where the grid cannot hold so
+// many (a row has at most (nx + 1) / 2 runs).
+std::uint64_t run_slab_bytes(const Grid& grid);
 // The same for a streamed job's stored values.
 void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume);
 

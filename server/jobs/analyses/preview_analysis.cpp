@@ -8,7 +8,6 @@
 #include "server/jobs/analyses/slice_editing_cache.h"
 #include "voxd/analysis/preview.h"
 #include "voxd/analysis/value_images.h"
-#include "voxd/encode/rle_slabs.h"
 
 namespace voxd::server {
 namespace {
@@ -65,12 +64,11 @@ class PreviewAnalysis final : public JobAnalysisKind {
   // The depths, then at full size (no `size`) the visible voxels, normals
   // (raw and smoothed), shades, pixels sorted by layer, the RGB image and
   // its PNG; shrunk, those of the blocks only (9 raw normals a block); a
-  // slab of runs (kRunSlabRuns of 8 bytes) and the seam's copy of its last
-  // layers.
+  // slab of runs and the seam's copy of its last layers.
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
     const std::uint64_t pixels = image_pixels(grid, parse_view(r.view)->axis);
     const std::uint64_t per_pixel = r.size == 0 ? 8 + 4 + 12 + 12 + 4 + 4 + 3 + 3 : 4;
-    return per_pixel * pixels + 2 * kRunSlabRuns * 8 +
+    return per_pixel * pixels + 2 * run_slab_bytes(grid) +
            (r.size == 0 ? 0 : (8 + 12 + 4 + 8 + 9 * (12 + 4) + 3 + 3) * r.size * r.size);
   }
 

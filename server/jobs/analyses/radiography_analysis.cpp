@@ -2,7 +2,6 @@
 #include "server/jobs/analyses/analysis_support.h"
 
 #include "server/jobs/job_store.h"
-#include "voxd/encode/rle_slabs.h"
 
 namespace voxd::server {
 namespace {
@@ -26,10 +25,10 @@ class RadiographyAnalysis final : public JobAnalysisKind {
     return radiography_result(in, image.take());
   }
 
-  // Its four maps of 32 bits a pixel and the PNG; a slab of runs
-  // (kRunSlabRuns of 8 bytes) and the seam's copy of its last layer.
+  // Its four maps of 32 bits a pixel and the PNG; a slab of runs and the
+  // seam's copy of its last layer.
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
-    return (4 * 4 + 2 + 4) * image_pixels(grid, r.axis) + 2 * kRunSlabRuns * 8;
+    return (4 * 4 + 2 + 4) * image_pixels(grid, r.axis) + 2 * run_slab_bytes(grid);
   }
 
   std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest&) const override { return 6; }

@@ -71,10 +71,10 @@ class ReportAnalysis final : public JobAnalysisKind {
     return report_json(report, job);
   }
 
-  // A slab of runs (kRunSlabRuns of 8 bytes). The labeller's two layers of
-  // runs a phase are a layer's runs: a few per row of a real part.
-  std::uint64_t over_slabs_memory(const api::AnalysisRequest&, const Grid&) const override {
-    return kRunSlabRuns * 8;
+  // A slab of runs. The labeller's two layers of runs a phase are a
+  // layer's runs: a few per row of a real part.
+  std::uint64_t over_slabs_memory(const api::AnalysisRequest&, const Grid& grid) const override {
+    return run_slab_bytes(grid);
   }
 
   // The distance transform and the thickness map (floats), the labels of

@@ -8,7 +8,6 @@
 #include "api/job_params.h"
 #include "voxd/analysis/section.h"
 #include "voxd/analysis/value_images.h"
-#include "voxd/encode/rle_slabs.h"
 
 namespace voxd::server {
 namespace {
@@ -96,9 +95,9 @@ class SectionAnalysis final : public JobAnalysisKind {
     return to_bytes(section_png(section.take(), job.grid, r.axis, layer, image_text(in)));
   }
 
-  // The image and its PNG, and a slab of runs (kRunSlabRuns of 8 bytes).
+  // The image and its PNG, and a slab of runs.
   std::uint64_t over_slabs_memory(const api::AnalysisRequest& r, const Grid& grid) const override {
-    return 2 * image_pixels(grid, r.axis) + kRunSlabRuns * 8;
+    return 2 * image_pixels(grid, r.axis) + run_slab_bytes(grid);
   }
 
   std::uint64_t whole_grid_bytes_per_voxel(const api::AnalysisRequest& r) const override {
