@@ -217,6 +217,10 @@ struct PreviewRenderer::State {
       throw std::logic_error(std::string("PreviewRenderer::") + name + ": a pass takes all its slabs as bits or all as runs");
     pass = slab;
   }
+  // Either kind of slab: its order checked, then the view's find.
+  template <typename Slab>
+  void find_in(std::int64_t k0, const Slab& slab, Kind kind);
+  bool start_shade(std::int64_t k0, const Grid& slab, Kind kind);
 
   Grid grid;
   View view;
@@ -552,29 +556,20 @@ void check_slab(const Grid& grid, std::int64_t expected_k0, std::int64_t k0, con
 
 }  // namespace
 
-void PreviewRenderer::find(std::int64_t k0, const BitVolume& slab) {
-  State& s = *state_;
-  check_slab(s.grid, s.found_to, k0, slab.grid(), "find");
-  State::check_kind(s.find_kind, State::Kind::bits, "find");
-  if (s.pixels > 0) {
-    if (s.view.axis == 0) s.find_x(k0, slab);
-    else if (s.view.axis == 1) s.find_y(k0, slab);
-    else s.find_z(k0, slab);
+template <typename Slab>
+void PreviewRenderer::State::find_in(std::int64_t k0, const Slab& slab, Kind kind) {
+  check_slab(grid, found_to, k0, slab.grid(), "find");
+  check_kind(find_kind, kind, "find");
+  if (pixels > 0) {
+    if (view.axis == 0) find_x(k0, slab);
+    else if (view.axis == 1) find_y(k0, slab);
+    else find_z(k0, slab);
   }
-  s.found_to = k0 + slab.grid().dims.z;
+  found_to = k0 + slab.grid().dims.z;
 }
 
-void PreviewRenderer::find(std::int64_t k0, const RunSlab& slab) {
-  State& s = *state_;
-  check_slab(s.grid, s.found_to, k0, slab.grid(), "find");
-  State::check_kind(s.find_kind, State::Kind::runs, "find");
-  if (s.pixels > 0) {
-    if (s.view.axis == 0) s.find_x(k0, slab);
-    else if (s.view.axis == 1) s.find_y(k0, slab);
-    else s.find_z(k0, slab);
-  }
-  s.found_to = k0 + slab.grid().dims.z;
-}
+void PreviewRenderer::find(std::int64_t k0, const BitVolume& slab) { state_->find_in(k0, slab, State::Kind::bits); }
+void PreviewRenderer::find(std::int64_t k0, const RunSlab& slab) { state_->find_in(k0, slab, State::Kind::runs); }
 
 template <typename NormalOf>
 void PreviewRenderer::State::shade_layers(std::int64_t k0, std::int64_t n, const NormalOf& normal_of) {
@@ -594,14 +589,19 @@ void PreviewRenderer::State::shade_layers(std::int64_t k0, std::int64_t n, const
   });
 }
 
+// A slab for shade(), checked and counted: whether there are pixels to shade.
+bool PreviewRenderer::State::start_shade(std::int64_t k0, const Grid& slab, Kind kind) {
+  if (found_to != nz) throw std::logic_error("PreviewRenderer::shade before find() has seen every layer");
+  check_slab(grid, shaded_to, k0, slab, "shade");
+  check_kind(shade_kind, kind, "shade");
+  shaded_to = k0 + slab.dims.z;
+  return pixels > 0;
+}
+
 void PreviewRenderer::shade(std::int64_t k0, const BitVolume& slab) {
   State& s = *state_;
-  if (s.found_to != s.nz) throw std::logic_error("PreviewRenderer::shade before find() has seen every layer");
-  check_slab(s.grid, s.shaded_to, k0, slab.grid(), "shade");
-  State::check_kind(s.shade_kind, State::Kind::bits, "shade");
+  if (!s.start_shade(k0, slab.grid(), State::Kind::bits)) return;
   const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
-  s.shaded_to = k1;
-  if (s.pixels == 0) return;
   const std::uint64_t* layer_before[2] = {s.before[0].data(), s.before[1].data()};
   const auto filled = [&](std::int64_t a, std::int64_t b, std::int64_t c) {
     if (c >= k0) return slab.get(a, b, c - k0);
@@ -622,12 +622,8 @@ void PreviewRenderer::shade(std::int64_t k0, const BitVolume& slab) {
 
 void PreviewRenderer::shade(std::int64_t k0, const RunSlab& slab) {
   State& s = *state_;
-  if (s.found_to != s.nz) throw std::logic_error("PreviewRenderer::shade before find() has seen every layer");
-  check_slab(s.grid, s.shaded_to, k0, slab.grid(), "shade");
-  State::check_kind(s.shade_kind, State::Kind::runs, "shade");
+  if (!s.start_shade(k0, slab.grid(), State::Kind::runs)) return;
   const std::int64_t n = slab.grid().dims.z, k1 = k0 + n;
-  s.shaded_to = k1;
-  if (s.pixels == 0) return;
   const auto row = [&](std::int64_t b, std::int64_t c) {
     return c >= k0 ? slab.row(b, c - k0) : s.before_runs.row(b, c - (k0 - 2));
   };

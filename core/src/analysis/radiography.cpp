@@ -211,16 +211,16 @@ RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis)
   }
 }
 
-void RadiographyAccumulator::check_kind(Kind slab) {
+void RadiographyAccumulator::check_slab(std::int64_t k0, Kind slab) {
+  if (k0 != next_k_) throw std::logic_error("RadiographyAccumulator: slab at layer " + std::to_string(k0) +
+                                            " where layer " + std::to_string(next_k_) + " was expected");
   if (kind_ != Kind::none && kind_ != slab)
     throw std::logic_error("RadiographyAccumulator: takes all its slabs as bits or all as runs");
   kind_ = slab;
 }
 
 void RadiographyAccumulator::add(std::int64_t k0, const RunSlab& slab, int threads) {
-  if (k0 != next_k_) throw std::logic_error("RadiographyAccumulator: slab at layer " + std::to_string(k0) +
-                                            " where layer " + std::to_string(next_k_) + " was expected");
-  check_kind(Kind::runs);
+  check_slab(k0, Kind::runs);
   const glm::i64vec3 d = slab.grid().dims;
   next_k_ += d.z;
   if (d.z == 0 || image_.min.empty()) return;
@@ -281,9 +281,7 @@ void RadiographyAccumulator::add(std::int64_t k0, const RunSlab& slab, int threa
 }
 
 void RadiographyAccumulator::add(std::int64_t k0, const BitVolume& slab, int threads) {
-  if (k0 != next_k_) throw std::logic_error("RadiographyAccumulator: slab at layer " + std::to_string(k0) +
-                                            " where layer " + std::to_string(next_k_) + " was expected");
-  check_kind(Kind::bits);
+  check_slab(k0, Kind::bits);
   const glm::i64vec3 d = slab.grid().dims;
   next_k_ += d.z;
   if (d.z == 0 || image_.min.empty()) return;

@@ -68,7 +68,7 @@ class RadiographyAccumulator {
   std::vector<std::uint64_t> last_layer_; // z: the previous layer's bits (rows of row words)
   RunSlab last_runs_;                      // z: the same as runs
   enum class Kind { none, bits, runs } kind_ = Kind::none;
-  void check_kind(Kind slab);
+  void check_slab(std::int64_t k0, Kind slab);  // next in z order, of the accumulator's kind
 };
 
 // Summary of one map over the rays that hit material (zeros are skipped).
