@@ -1,13 +1,19 @@
 // Per-stage benchmarks of the engine on the 1.1M-triangle benchmark mesh:
-// parse (binary STL from memory), voxelize (parity) at 256^3..2048^3, encode.
+// parse (binary STL from memory), voxelize (parity) at 256^3..2048^3, encode,
+// and a stored RLE read back as runs.
 #include <cstdlib>
+#include <map>
+#include <span>
+#include <vector>
+
 #include <benchmark/benchmark.h>
 
 #include "bench_mesh.h"
 #include "voxd/grid.h"
 #include "voxd/mesh_io/mesh_decode.h"
-#include "voxd/encode/volume_format.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/slab_writer.h"
+#include "voxd/encode/volume_format.h"
 #include "voxd/voxelize/runs.h"
 #include "voxd/voxelize/voxelize.h"
 
@@ -86,6 +92,41 @@ void BM_VoxelizeRunsToRle(benchmark::State& state) {
 }
 BENCHMARK(BM_VoxelizeRunsToRle)
     ->ArgsProduct({{256, 512, 1024, 2048}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// A stored solid's RLE read back as runs (read_rle_run_slabs), as every
+// streamed analysis, radiograph, section and preview of a stored result
+// starts: the layers decoded on `threads` threads (second argument) and
+// joined in order, from memory, with a consumer that only counts. The RLE
+// is the solid's at the first argument, made once.
+void BM_ReadRunSlabs(benchmark::State& state) {
+  static std::map<std::int64_t, std::vector<std::uint8_t>> stored;
+  std::vector<std::uint8_t>& rle = stored[state.range(0)];
+  if (rle.empty()) {
+    const Grid g = grid_at(state.range(0));
+    VectorSink sink;
+    BitSlabWriter writer(g, VolumeFormat::rle, {}, sink);
+    voxelize_runs(
+        mesh(), g, VoxelizeOptions{}, [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); }, nullptr,
+        {}, writer.preparer());
+    writer.finish();
+    rle = std::move(sink.data);
+  }
+  const auto threads = static_cast<int>(state.range(1));
+  std::uint64_t runs = 0;
+  for (auto _ : state) {
+    runs = 0;
+    read_rle_run_slabs(std::span<const std::uint8_t>(rle), grid_at(state.range(0)).dims.z,
+                       [&](std::int64_t, const RunSlab& slab) { runs += slab.run_count(); }, {}, threads);
+    benchmark::DoNotOptimize(runs);
+  }
+  state.counters["runs"] = static_cast<double>(runs);
+  state.counters["rle_MiB"] = static_cast<double>(rle.size()) / (1 << 20);
+}
+BENCHMARK(BM_ReadRunSlabs)
+    ->ArgsProduct({{2048, 4096}, {1, 2, 16}})
+    ->ArgNames({"res", "threads"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

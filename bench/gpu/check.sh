@@ -46,6 +46,9 @@ scaling() {
       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
       --benchmark_out="$results/runs_to_rle_$t.json" --benchmark_out_format=json > /dev/null || status=1
   done
+  timeout 60 "$root/bin/stages_bench" --benchmark_filter='BM_ReadRunSlabs/res:4096/threads:(2|16)/' \
+    --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+    --benchmark_out="$results/read_runs.json" --benchmark_out_format=json > /dev/null || status=1
   python3 - "$results" <<'PY' | tee "$results/scaling.txt"
 import json, os, re, sys
 results = sys.argv[1]
@@ -65,6 +68,9 @@ runs = {t: medians(f"{results}/runs_to_rle_{t}.json", lambda n: n.split("/")[2])
 for arg, how in (("0", "RLE encoded by the writer"), ("1", "RLE encoded where made")):
     a, b = runs["2"].get(arg), runs["16"].get(arg)
     if a and b: print(f"{'solid 2048^3, ' + how:34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
+reads = medians(f"{results}/read_runs.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
+if reads.get("2") and reads.get("16"):
+    print(f"{'stored RLE 4096^3 read as runs':34} {reads['2']:13.0f} {reads['16']:14.0f} {reads['2'] / reads['16']:8.1f}x")
 PY
   return $status
 }

@@ -19,7 +19,13 @@ void RunSlab::append_rows(const RunSlab& next) {
   prepared_.k0 = -1;
   const auto base = static_cast<std::uint32_t>(bounds_.size());
   bounds_.insert(bounds_.end(), next.bounds_.begin(), next.bounds_.end());
-  for (std::size_t r = 1; r < next.starts_.size(); ++r) starts_.push_back(base + next.starts_[r]);
+  // Sized first, then written: a loop of push_backs would check the
+  // capacity for each row.
+  const std::size_t rows = next.starts_.size() - 1, at = starts_.size();
+  starts_.resize(at + rows);
+  std::uint32_t* out = starts_.data() + at;
+  const std::uint32_t* in = next.starts_.data() + 1;
+  for (std::size_t r = 0; r < rows; ++r) out[r] = base + in[r];
   filled_ += next.filled_;
 }
 

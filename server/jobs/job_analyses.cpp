@@ -15,6 +15,7 @@
 #include "server/jobs/analyses/analysis_support.h"
 #include "voxd/analysis/local_thickness.h"
 #include "voxd/analysis/wall_thickness.h"
+#include "voxd/encode/rle_slabs.h"
 #include "voxd/error.h"
 
 namespace voxd::server {
@@ -100,9 +101,11 @@ std::uint64_t analysis_memory_on_job(const AnalysisRequest& r, const api::JobPar
 
 std::uint64_t estimate_analysis_memory(const AnalysisRequest& r, const Grid& grid, bool over_slabs) {
   const JobAnalysisKind& kind = job_analysis_kind(r.kind);
-  // Over slabs: one replayed slab and the kind's images; else its bytes a
+  // Over slabs: one replayed slab (of values, or the run reader's batch of
+  // layers decoded on every core) and the kind's images; else its bytes a
   // voxel on the whole grid.
-  if (over_slabs) return kReplaySlabBytes + kind.over_slabs_memory(r, grid) + kImagesAndReports;
+  if (over_slabs)
+    return kReplaySlabBytes + run_reader_batch_bytes(0) + kind.over_slabs_memory(r, grid) + kImagesAndReports;
   return kind.whole_grid_bytes_per_voxel(r) * grid.voxel_count() + kImagesAndReports;
 }
 

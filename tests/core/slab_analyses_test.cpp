@@ -6,7 +6,10 @@
 // exactly its in-memory counterpart.
 #include <algorithm>
 #include <cstring>
+#include <optional>
+#include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -225,6 +228,115 @@ TEST(RleSlabs, RunSlabsAreTheStoredVoxelsForAnySlabsAndReads) {
   std::vector<std::uint8_t> padded = s.rle;
   padded.push_back(0);
   EXPECT_EQ(error_of(padded, true), error_of(padded, false));
+}
+
+// What a run reader handed on, call by call (each slab's first layer, its
+// layers and every row's runs), and the error it stopped with.
+struct RunCalls {
+  std::vector<std::vector<std::uint32_t>> calls;
+  std::optional<std::pair<ErrorCode, std::string>> error;
+  bool operator==(const RunCalls&) const = default;
+};
+
+template <class Input>
+RunCalls run_calls(Input&& input, std::int64_t layers, int threads) {
+  RunCalls out;
+  try {
+    read_rle_run_slabs(
+        input, layers,
+        [&](std::int64_t k0, const RunSlab& slab) {
+          std::vector<std::uint32_t> call{static_cast<std::uint32_t>(k0), static_cast<std::uint32_t>(slab.grid().dims.z)};
+          for (std::int64_t k = 0; k < slab.grid().dims.z; ++k)
+            for (std::int64_t j = 0; j < slab.grid().dims.y; ++j) {
+              const auto runs = slab.row(j, k);
+              call.push_back(static_cast<std::uint32_t>(runs.size()));
+              call.insert(call.end(), runs.begin(), runs.end());
+            }
+          out.calls.push_back(std::move(call));
+        },
+        {}, threads);
+  } catch (const Error& e) {
+    out.error = std::make_pair(e.code(), std::string(e.what()));
+  }
+  return out;
+}
+
+// Random runs of 1 to `longest` voxels, filled and empty in turn.
+BitVolume random_runs(const glm::i64vec3& dims, std::uint64_t longest, unsigned seed) {
+  Grid g;
+  g.dims = dims;
+  BitVolume v(g);
+  std::mt19937_64 rng(seed);
+  const std::uint64_t total = static_cast<std::uint64_t>(dims.x * dims.y * dims.z);
+  bool filled = rng() % 2 == 0;
+  for (std::uint64_t at = 0; at < total; filled = !filled) {
+    const std::uint64_t n = std::min(total - at, 1 + rng() % longest);
+    if (filled)
+      for (std::uint64_t u = at; u < at + n; ++u) {
+        const auto i = static_cast<std::int64_t>(u % static_cast<std::uint64_t>(dims.x));
+        const auto r = static_cast<std::int64_t>(u / static_cast<std::uint64_t>(dims.x));
+        v.set(i, r % dims.y, r / dims.y, true);
+      }
+    at += n;
+  }
+  return v;
+}
+
+// Read on several threads, layers are decoded apart in batches and joined
+// in order: the same slabs, the same calls and the same error as on one,
+// from memory and from a source read a few bytes at a time (whose buffer
+// moves on under the batch). Two grids beside the parts fill more than one
+// batch: one by its rows (65536 a layer), one by its payload (about 1.7 MB
+// a layer: two layers a batch, and one alone).
+TEST(RleSlabs, RunSlabsAreTheSameOnAnyThreads) {
+  std::vector<Stored> large;
+  for (auto [dims, longest] : {std::pair{glm::i64vec3{6, 65536, 37}, std::uint64_t{40}},
+                               std::pair{glm::i64vec3{4096, 1024, 5}, std::uint64_t{4}}}) {
+    Stored s{random_runs(dims, longest, static_cast<unsigned>(dims.x)), {}};
+    VectorSink sink;
+    write_rle(s.volume, sink);
+    s.rle = std::move(sink.data);
+    large.push_back(std::move(s));
+  }
+  std::vector<const Stored*> all;
+  for (const Stored& s : cases()) all.push_back(&s);
+  for (const Stored& s : large) all.push_back(&s);
+  std::size_t index = 0;
+  for (const Stored* stored_case : all) {
+    const Stored& s = *stored_case;
+    SCOPED_TRACE("case " + std::to_string(index++));
+    const std::int64_t nz = s.volume.grid().dims.z;
+    const RunCalls one = run_calls(std::span<const std::uint8_t>(s.rle), 7, 1);
+    ASSERT_FALSE(one.error) << one.error->second;
+    ASSERT_EQ(one.calls.size(), static_cast<std::size_t>((nz + 6) / 7));
+    for (int threads : {2, 3, 8}) {
+      SCOPED_TRACE("threads " + std::to_string(threads));
+      EXPECT_TRUE(run_calls(std::span<const std::uint8_t>(s.rle), 7, threads) == one);
+      Trickle source(s.rle, 4093);
+      EXPECT_TRUE(run_calls(source, 7, threads) == one);
+    }
+    // A stream broken here and there: cut short, or a byte changed (a run,
+    // a block's head, its length). Each thread count stops where one thread
+    // does, after the same slabs, with the same message.
+    std::mt19937 rng(static_cast<unsigned>(s.rle.size()));
+    for (int broken = 0; broken < (s.rle.size() < 100000 ? 24 : 6); ++broken) {
+      std::vector<std::uint8_t> bad = s.rle;
+      const std::size_t at = 40 + rng() % (bad.size() - 40);
+      if (broken % 3 == 0)
+        bad.resize(at);
+      else
+        bad[at] = static_cast<std::uint8_t>(broken % 3 == 1 ? bad[at] ^ 0x41 : 0x53);
+      SCOPED_TRACE("broken at byte " + std::to_string(at));
+      const RunCalls expected = run_calls(std::span<const std::uint8_t>(bad), 2, 1);
+      Trickle one_source(bad, 4093);
+      ASSERT_TRUE(run_calls(one_source, 2, 1) == expected);
+      for (int threads : {2, 8}) {
+        EXPECT_TRUE(run_calls(std::span<const std::uint8_t>(bad), 2, threads) == expected) << threads << " threads";
+        Trickle source(bad, 4093);
+        EXPECT_TRUE(run_calls(source, 2, threads) == expected) << threads << " threads, trickled";
+      }
+    }
+  }
 }
 
 // A slab of runs ends early once it holds kRunSlabRuns runs, so memory is

@@ -81,7 +81,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }, limits);
     });
   };
-  auto layers_of_runs = [&](auto&& input) {
+  auto layers_of_runs = [&](auto&& input, int threads) {
     return outcome([&](std::uint64_t& digest) {
       voxd::read_rle_run_slabs(input, 3, [&](std::int64_t k0, const voxd::RunSlab& slab) {
         for (std::int64_t k = 0; k < slab.grid().dims.z; ++k) {
@@ -96,12 +96,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           }
           digest = digest * 31 + static_cast<std::uint64_t>(k0 + k) * 7 + n;
         }
-      }, limits);
+      }, limits, threads);
     });
   };
   const auto layer_bits = layers_of_bits(bytes);
   Dribble dribbled_runs(bytes);
-  const auto layer_runs = layers_of_runs(dribbled_runs);
+  const auto layer_runs = layers_of_runs(dribbled_runs, 1);
+  // Decoded in batches on several threads: the same slabs up to the same
+  // error, from memory and through the dribbling window.
+  Dribble dribbled_batches(bytes);
+  if (layers_of_runs(bytes, 3) != layer_runs || layers_of_runs(dribbled_batches, 3) != layer_runs) __builtin_trap();
   const int limit = static_cast<int>(voxd::ErrorCode::limit_exceeded);
   if (layer_bits.second != limit && layer_runs.second != limit) {
     if (layer_bits.second != layer_runs.second) __builtin_trap();

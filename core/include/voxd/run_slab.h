@@ -41,6 +41,9 @@ class RunSlab {
     filled_ += end - begin;
   }
   void end_row() { starts_.push_back(static_cast<std::uint32_t>(bounds_.size())); }
+  // Room for `runs` runs before the slab's memory grows (and is copied
+  // whole). Room not written is address space, not memory.
+  void reserve_runs(std::size_t runs) { bounds_.reserve(2 * runs); }
   // Ends the slab after its first `layers` layers, whose rows are all
   // built: a slab handed on before its grid's last layer.
   void set_layers(std::int64_t layers) {

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <bit>
 #include <cstdint>
+#include <exception>
 #include <string>
+#include <vector>
 
 #include "encode/bit_runs.h"
 #include "encode/byte_cursor.h"
@@ -14,6 +16,7 @@
 #include "encode/volume_checks.h"
 #include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
+#include "voxd/parallel.h"
 
 namespace voxd {
 namespace {
@@ -289,20 +292,36 @@ encode::RleHeader read_header_of_type(SourceWindow& window, encode::RleValueType
 // The next slab block's payload, k of nz, whose runs cannot need more than
 // `max_payload` bytes (a bound that keeps a corrupt length from taking the
 // rest of the stream into memory). The span is valid until the next peek.
-SlabBlock next_slab_block(SourceWindow& window, std::int64_t k, std::int64_t nz, std::uint64_t max_payload) {
+// A slab block's head, read but not yet consumed: its payload's length and
+// the head's own.
+struct SlabHead {
+  std::uint64_t length;
+  std::size_t bytes;
+};
+
+SlabHead peek_slab_head(SourceWindow& window, std::int64_t k, std::int64_t nz, std::uint64_t max_payload) {
   ByteCursor head(window.peek(kMaxBlockHead), ErrorCode::truncated_input, "RLE stream", window.offset());
   const std::uint64_t length = read_slab_head(head, k, nz);
-  window.consume(head.offset() - window.offset());
   if (length > max_payload)
     head.fail(ErrorCode::malformed_input, "slab " + std::to_string(k) + " declares a payload of " + std::to_string(length) +
                                               " bytes, more than the runs of one layer can take");
+  return {length, head.offset() - window.offset()};
+}
+
+// Steps over the head peek_slab_head read and takes its payload.
+SlabBlock take_slab_block(SourceWindow& window, const SlabHead& head) {
+  window.consume(head.bytes);
   const std::size_t at = window.offset();
-  const auto payload = window.peek(static_cast<std::size_t>(length));
-  if (payload.size() < length)
+  const auto payload = window.peek(static_cast<std::size_t>(head.length));
+  if (payload.size() < head.length)
     throw Error(ErrorCode::truncated_input,
                 "RLE stream: data ends inside a slab payload at byte " + std::to_string(at));
   window.consume(payload.size());
   return {payload, at};
+}
+
+SlabBlock next_slab_block(SourceWindow& window, std::int64_t k, std::int64_t nz, std::uint64_t max_payload) {
+  return take_slab_block(window, peek_slab_head(window, k, nz, max_payload));
 }
 
 void read_end(SourceWindow& window, std::int64_t nz) {
@@ -363,11 +382,62 @@ void read_rle_bit_slabs(std::span<const std::uint8_t> data, std::int64_t slab_la
   read_rle_bit_slabs(source, slab_layers, consume, limits);
 }
 
+namespace {
+
+// Appends layer k's rows, from its slab block, to `into` (whose rows before
+// are whole): the stream's runs cut at the rows' ends. Rows are closed in
+// order; a run is held until the next one shows it is maximal (a stream
+// may split a run with a 0-run of length 0).
+void append_layer_runs(const SlabBlock& block, std::int64_t k, const Grid& grid, RunSlab& into) {
+  const std::int64_t nx = grid.dims.x, ny = grid.dims.y;
+  std::int64_t row = 0;
+  std::uint32_t held_begin = 0, held_end = 0;
+  std::int64_t held_row = -1;
+  auto flush = [&] {
+    if (held_row < 0) return;
+    for (; row < held_row; ++row) into.end_row();
+    into.add_run(held_begin, held_end);
+    held_row = -1;
+  };
+  decode_bit_payload(payload_cursor(block.payload, block.at, k), slab_voxel_count(grid),
+                     [&](std::uint64_t first, std::uint64_t length) {
+                       auto j = static_cast<std::int64_t>(first / static_cast<std::uint64_t>(nx));
+                       auto i = static_cast<std::int64_t>(first % static_cast<std::uint64_t>(nx));
+                       while (length > 0) {
+                         const auto n = static_cast<std::int64_t>(
+                             std::min<std::uint64_t>(length, static_cast<std::uint64_t>(nx - i)));
+                         if (held_row == j && held_end == static_cast<std::uint32_t>(i)) {
+                           held_end = static_cast<std::uint32_t>(i + n);
+                         } else {
+                           flush();
+                           held_row = j;
+                           held_begin = static_cast<std::uint32_t>(i);
+                           held_end = static_cast<std::uint32_t>(i + n);
+                         }
+                         length -= static_cast<std::uint64_t>(n);
+                         i = 0;
+                         ++j;
+                       }
+                     });
+  flush();
+  for (; row < ny; ++row) into.end_row();
+}
+
+}  // namespace
+
+std::uint64_t run_reader_batch_bytes(int threads) {
+  if ((threads > 0 ? threads : default_thread_count()) <= 1) return 0;
+  // Payload P and rows R at most: P copied, at most P / 2 + R runs of 8
+  // bytes (a row may cut a run; every layer has a row), R + layers <= 2 R
+  // row starts of 4 bytes.
+  return 5 * std::uint64_t{kRunReaderBatchPayload} + 24 * std::uint64_t{kRunReaderBatchRows};
+}
+
 void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunSlabConsumer& consume,
-                        const ReadLimits& limits) {
+                        const ReadLimits& limits, int threads) {
   SourceWindow window(source);
   const Grid grid = read_header_of_type(window, encode::RleValueType::bit, "read_rle_run_slabs").grid;
-  const std::int64_t nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
+  const std::int64_t ny = grid.dims.y, nz = grid.dims.z;
   const std::uint64_t slab_voxels = slab_voxel_count(grid);
   // One layer's runs: at most one a pair of voxels and one more a row (a
   // stored run may go on from one row into the next), two bounds of 4
@@ -382,58 +452,105 @@ void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunS
   // grid would otherwise reserve a start for each of its rows at once.
   const std::int64_t row_bound = std::max<std::int64_t>(1, static_cast<std::int64_t>(kRunSlabRuns) / std::max<std::int64_t>(ny, 1));
   const std::int64_t layers = std::clamp<std::int64_t>(std::min(slab_layers, row_bound), 1, std::max<std::int64_t>(nz, 1));
+  const int nthreads = threads > 0 ? threads : default_thread_count();
+  const std::uint64_t max_payload = max_bit_payload(slab_voxels);
+
   RunSlab slab;
   std::int64_t k0 = 0;
-  for (std::int64_t k = 0; k < nz; ++k) {
-    if (k == k0) slab.reset(slab_grid(grid, k0, std::min(layers, nz - k0)));
-    const SlabBlock block = next_slab_block(window, k, nz, max_bit_payload(slab_voxels));
-    // Rows are closed in order; a run is held until the next one shows it
-    // is maximal (a stream may split a run with a 0-run of length 0).
-    std::int64_t row = 0;
-    std::uint32_t held_begin = 0, held_end = 0;
-    std::int64_t held_row = -1;
-    auto flush = [&] {
-      if (held_row < 0) return;
-      for (; row < held_row; ++row) slab.end_row();
-      slab.add_run(held_begin, held_end);
-      held_row = -1;
-    };
-    decode_bit_payload(payload_cursor(block.payload, block.at, k), slab_voxels,
-                       [&](std::uint64_t first, std::uint64_t length) {
-                         auto j = static_cast<std::int64_t>(first / static_cast<std::uint64_t>(nx));
-                         auto i = static_cast<std::int64_t>(first % static_cast<std::uint64_t>(nx));
-                         while (length > 0) {
-                           const auto n = static_cast<std::int64_t>(
-                               std::min<std::uint64_t>(length, static_cast<std::uint64_t>(nx - i)));
-                           if (held_row == j && held_end == static_cast<std::uint32_t>(i)) {
-                             held_end = static_cast<std::uint32_t>(i + n);
-                           } else {
-                             flush();
-                             held_row = j;
-                             held_begin = static_cast<std::uint32_t>(i);
-                             held_end = static_cast<std::uint32_t>(i + n);
-                           }
-                           length -= static_cast<std::uint64_t>(n);
-                           i = 0;
-                           ++j;
-                         }
-                       });
-    flush();
-    for (; row < ny; ++row) slab.end_row();
+  // Layer k's rows are in the slab: hands the slab on when it is full.
+  auto layer_added = [&](std::int64_t k) {
     const std::int64_t in_slab = k + 1 - k0;
     if (in_slab == slab.grid().dims.z || slab.run_count() >= kRunSlabRuns) {
       if (in_slab < slab.grid().dims.z) slab.set_layers(in_slab);
       consume(k0, slab);
       k0 = k + 1;
     }
+  };
+  auto start_slab = [&](std::int64_t k) {
+    if (k != k0) return;
+    slab.reset(slab_grid(grid, k0, std::min(layers, nz - k0)));
+    // Room for the most runs a slab can hold (it is handed on once it holds
+    // kRunSlabRuns, so one layer more at most), so that it never grows by
+    // copying what it holds: 64 MiB at a time, on pages just faulted in.
+    // Only the pages written become memory.
+    slab.reserve_runs(static_cast<std::size_t>(
+        std::min(kRunSlabRuns + layer_runs, static_cast<std::uint64_t>(slab.grid().dims.z) * layer_runs)));
+  };
+
+  // A batch: the blocks of layers [k, k + blocks.size()), each decoded into
+  // a slab of its own on any thread, then appended in order. A source that
+  // is not in memory reuses its buffer when it reads on, so a block is
+  // copied before the next head is read.
+  std::vector<SlabBlock> blocks;
+  std::vector<std::vector<std::uint8_t>> copies;
+  // Apart in memory: threads decoding neighbouring layers would otherwise
+  // write the same cache lines (the vectors' ends) on every run.
+  struct alignas(128) Decoded {
+    RunSlab runs;
+  };
+  std::vector<Decoded> decoded;
+  std::vector<std::exception_ptr> errors;
+  for (std::int64_t k = 0; k < nz;) {
+    blocks.clear();
+    std::exception_ptr framing;  // a bad block head after the batch's good ones
+    std::uint64_t payload = 0, rows = 0;
+    try {
+      while (k + static_cast<std::int64_t>(blocks.size()) < nz) {
+        const auto b = static_cast<std::int64_t>(blocks.size());
+        if (b > 0) {
+          if (nthreads <= 1 || payload >= kRunReaderBatchPayload || rows + static_cast<std::uint64_t>(ny) > kRunReaderBatchRows)
+            break;
+          if (!window.in_memory()) {
+            if (copies.size() < blocks.size()) copies.resize(blocks.size());
+            copies[b - 1].assign(blocks[b - 1].payload.begin(), blocks[b - 1].payload.end());
+            blocks[b - 1].payload = copies[b - 1];
+          }
+        }
+        const SlabHead head = peek_slab_head(window, k + b, nz, max_payload);
+        if (b > 0 && payload + head.length > kRunReaderBatchPayload) break;
+        blocks.push_back(take_slab_block(window, head));
+        payload += head.length;
+        rows += static_cast<std::uint64_t>(ny);
+      }
+    } catch (...) {
+      if (blocks.empty()) throw;
+      framing = std::current_exception();
+    }
+    if (blocks.size() == 1) {
+      start_slab(k);
+      append_layer_runs(blocks[0], k, grid, slab);
+      layer_added(k++);
+    } else {
+      const auto n = static_cast<std::int64_t>(blocks.size());
+      if (decoded.size() < blocks.size()) decoded.resize(blocks.size());
+      errors.assign(blocks.size(), nullptr);
+      parallel_for(0, n, 1, nthreads, [&](std::int64_t b0, std::int64_t b1) {
+        for (std::int64_t b = b0; b < b1; ++b) {
+          const auto u = static_cast<std::size_t>(b);
+          try {
+            decoded[u].runs.reset(slab_grid(grid, k + b, 1));
+            append_layer_runs(blocks[u], k + b, grid, decoded[u].runs);
+          } catch (...) {
+            errors[u] = std::current_exception();
+          }
+        }
+      });
+      for (std::size_t b = 0; b < blocks.size(); ++b) {
+        if (errors[b]) std::rethrow_exception(errors[b]);  // after the layers before it, as on one thread
+        start_slab(k);
+        slab.append_rows(decoded[b].runs);
+        layer_added(k++);
+      }
+    }
+    if (framing) std::rethrow_exception(framing);
   }
   read_end(window, nz);
 }
 
 void read_rle_run_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const RunSlabConsumer& consume,
-                        const ReadLimits& limits) {
+                        const ReadLimits& limits, int threads) {
   SpanSource source(data);
-  read_rle_run_slabs(source, slab_layers, consume, limits);
+  read_rle_run_slabs(source, slab_layers, consume, limits, threads);
 }
 
 namespace {

@@ -52,7 +52,7 @@ void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double
                        const double done = static_cast<double>(k0 + slab.grid().dims.z) / layers_total;
                        if (control) control->set_progress(from + (to - from) * done);
                      },
-                     kStoredSlabLimits);
+                     kStoredSlabLimits, 0);
 }
 
 void replay_values(const AnalysisInput& in, const ValueSlabConsumer& consume) {

@@ -30,7 +30,8 @@ std::optional<BitVolume> peeled_volume(const api::AnalysisRequest& r, const BitV
 // (voxd/run_slab.h), with progress over [from, to] of the bar (a request of
 // two passes takes half each) and cancellation between slabs. The analyses
 // then cost the stored runs, not the grid's voxels (at 8192^3: 137 MiB of
-// runs, 50 GB of bits). Slabs hold up to kRunSlabRuns runs.
+// runs, 50 GB of bits). Slabs hold up to kRunSlabRuns runs. The layers are
+// decoded on every core (read_rle_run_slabs), the slabs handed on in order.
 void replay_runs(const AnalysisInput& in, const RunSlabConsumer& consume, double from = 0.0, double to = 1.0);
 // A slab of those runs as the memory estimates count it: kRunSlabRuns runs
 // of 8 bytes and as many rows of 4, or fewer where the grid cannot hold so

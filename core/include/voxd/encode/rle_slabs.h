@@ -40,11 +40,26 @@ void read_rle_bit_slabs(ByteSource& source, std::int64_t slab_layers, const BitS
 // once it holds kRunSlabRuns runs, and never more than kRunSlabRuns rows;
 // memory is one slab. Checked and thrown
 // like read_rle_bit_slabs; `limits` bounds the runs one layer can need.
+//
+// On more than one of `threads` (0 = every core) the layers are decoded
+// in batches, each layer apart on any thread, then joined into the slabs
+// in order on the calling thread: the same slabs, the same consumer calls
+// and the same error (the first bad block's) as on one thread. A batch of
+// more than one layer holds at most kRunReaderBatchPayload bytes of payload
+// and kRunReaderBatchRows rows (a larger layer is read alone, as on one
+// thread); see run_reader_batch_bytes for what that costs.
 inline constexpr std::size_t kRunSlabRuns = std::size_t{1} << 23;
+inline constexpr std::size_t kRunReaderBatchPayload = std::size_t{4} << 20;
+inline constexpr std::size_t kRunReaderBatchRows = std::size_t{1} << 20;
 void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunSlabConsumer& consume,
-                        const ReadLimits& limits = {});
+                        const ReadLimits& limits = {}, int threads = 1);
 void read_rle_run_slabs(std::span<const std::uint8_t> data, std::int64_t slab_layers, const RunSlabConsumer& consume,
-                        const ReadLimits& limits = {});
+                        const ReadLimits& limits = {}, int threads = 1);
+// The most memory the parallel reader's batch holds beside the slab, read
+// on `threads` threads (0 = every core): its payload, copied when the source
+// is not in memory, and its layers' runs (a run takes at least two bytes of
+// payload and 8 bytes decoded, a row start 4 bytes, a row may split a run).
+std::uint64_t run_reader_batch_bytes(int threads);
 
 // The same for a stream of values (u8, f32 or rgba8), each slab a
 // ValueVolume of the stream's type (ValueSlabWriter's input).
