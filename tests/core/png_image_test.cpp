@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <cmath>
 #include <functional>
@@ -117,6 +118,81 @@ TEST(PngGrey8, CrossSectionRoundTrips) {
   EXPECT_EQ(png["text"]["voxd:section"], "y = 4.5");
   // The staircase: column 12 (third step) is filled from row 2 to row 10.
   for (int k = 0; k < 13; ++k) EXPECT_EQ(png["pixels"][static_cast<std::size_t>(k * 16 + 12)], k >= 2 && k <= 10 ? 255 : 0);
+}
+
+// The chunk types of a PNG, in order (the signature skipped; lengths trusted).
+std::vector<std::string> chunk_types(const std::vector<std::uint8_t>& png) {
+  std::vector<std::string> types;
+  for (std::size_t at = 8; at + 8 <= png.size();) {
+    const std::size_t length = (std::size_t{png[at]} << 24) | (std::size_t{png[at + 1]} << 16) |
+                               (std::size_t{png[at + 2]} << 8) | png[at + 3];
+    types.emplace_back(reinterpret_cast<const char*>(png.data() + at + 4), 4);
+    at += 12 + length;
+  }
+  return types;
+}
+
+// Images of 1 MiB of rows or more are filtered and deflated in bands of
+// rows on every thread (encode/png_bands.h). The independent reader, whose
+// zlib checks the stream's Adler-32 and which checks every chunk's CRC,
+// decodes exactly the samples given, with the text; the bytes are the same
+// on 1, 2 and 5 threads. The pixels mix ramps, noise and flat runs, so
+// every row filter is chosen somewhere, and every band but the first
+// begins after a row of another band.
+TEST(PngBands, LargeImagesAreTheirSamplesAndTheSameBytesOnAnyThreads) {
+  struct Case {
+    const char* name;
+    int channels, bit_depth;
+    PngCompression compression;
+    int width, height;
+  };
+  const Case cases[] = {{"grey8", 1, 8, PngCompression::balanced, 1100, 1000},
+                        {"grey16", 1, 16, PngCompression::balanced, 800, 700},
+                        {"rgb8", 3, 8, PngCompression::balanced, 700, 503},
+                        {"rgb8 fast", 3, 8, PngCompression::fast, 700, 503},
+                        {"rgba8 fast", 4, 8, PngCompression::fast, 520, 509}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::size_t samples = static_cast<std::size_t>(c.width) * static_cast<std::size_t>(c.height) * c.channels;
+    std::vector<std::uint32_t> values(samples);
+    std::mt19937 rng(static_cast<unsigned>(samples));
+    const std::uint32_t top = c.bit_depth == 16 ? 65535 : 255;
+    for (std::size_t s = 0; s < samples; ++s) {
+      const std::size_t p = s / static_cast<std::size_t>(c.channels), x = p % static_cast<std::size_t>(c.width),
+                        y = p / static_cast<std::size_t>(c.width);
+      std::uint32_t v = 0;
+      if (y % 7 == 0) v = rng() % (top + 1);                               // noise
+      else if (y % 7 < 4) v = static_cast<std::uint32_t>(x * 37 + y * 11);  // ramps
+      else if (x % 50 < 25) v = static_cast<std::uint32_t>(y * 5);        // flat runs
+      values[s] = v % (top + 1);
+    }
+    const std::vector<PngText> text = {{"voxd:view", "bands"}};
+    auto write = [&](int threads) {
+      VectorSink sink;
+      if (c.bit_depth == 16) {
+        write_png_grey16(c.width, c.height, values, PngScale{}, text, sink, threads);
+      } else {
+        const std::vector<std::uint8_t> bytes(values.begin(), values.end());
+        if (c.channels == 1) write_png_grey8(c.width, c.height, bytes, text, sink, threads);
+        if (c.channels == 3) write_png_rgb8(RgbImage{c.width, c.height, bytes}, text, sink, c.compression, threads);
+        if (c.channels == 4) write_png_rgba8(c.width, c.height, bytes, text, sink, c.compression, threads);
+      }
+      return sink.data;
+    };
+    const std::vector<std::uint8_t> one = write(1);
+    EXPECT_EQ(write(2), one);
+    EXPECT_EQ(write(5), one);
+    const std::vector<std::string> types = chunk_types(one);
+    EXPECT_GE(std::count(types.begin(), types.end(), "IDAT"), 4) << "not written in bands";
+    EXPECT_EQ(types.back(), "IEND");
+    const json png = decode_png(one);
+    ASSERT_FALSE(png.empty());
+    EXPECT_EQ(png["width"], c.width);
+    EXPECT_EQ(png["height"], c.height);
+    EXPECT_EQ(png["bit_depth"], c.bit_depth);
+    EXPECT_EQ(png["text"]["voxd:view"], "bands");
+    EXPECT_TRUE(png["pixels"].get<std::vector<std::uint32_t>>() == values);
+  }
 }
 
 TEST(PngErrors, BadSizesAndTextAreRejectedBeforeWriting) {

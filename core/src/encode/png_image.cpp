@@ -1,4 +1,5 @@
-// PNG writing through libpng. libpng reports errors by longjmp; C++ objects
+// PNG writing through libpng, or for large images in bands on every core
+// (png_bands.h). libpng reports errors by longjmp; C++ objects
 // must not be skipped by it, so everything with a destructor (rows, strings,
 // the text table) is built before setjmp, and the sink's exceptions are
 // caught in the write callback, stored, and rethrown after libpng unwinds.
@@ -13,6 +14,7 @@
 #include <exception>
 #include <memory>
 
+#include "encode/png_bands.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/error.h"
 
@@ -112,11 +114,25 @@ void check_size(int width, int height, std::size_t values, const char* what) {
   return true;
 }
 
-// The one place that talks to libpng. `rows` are the encoded rows (big-endian
-// samples for 16-bit, as PNG stores them).
-void encode(int width, int height, int bit_depth, int colour_type, const std::vector<png_bytep>& rows,
-            const std::vector<PngText>& text, ByteSink& out, PngCompression compression = PngCompression::balanced) {
+// The one place that chooses the writer: libpng, or bands for an image of
+// four bands or more. `rows` are the encoded rows (big-endian samples for
+// 16-bit, as PNG stores them).
+void encode_png(int width, int height, int bit_depth, int colour_type, const std::vector<png_bytep>& rows,
+            const std::vector<PngText>& text, ByteSink& out, PngCompression compression, int threads) {
   check_text(text);
+  encode::PngRows image;
+  image.width = width;
+  image.height = height;
+  image.bit_depth = bit_depth;
+  image.colour_type = colour_type;
+  const int channels = colour_type == PNG_COLOR_TYPE_RGB ? 3 : colour_type == PNG_COLOR_TYPE_RGBA ? 4 : 1;
+  image.pixel_bytes = channels * bit_depth / 8;
+  image.row_bytes = static_cast<std::size_t>(width) * static_cast<std::size_t>(image.pixel_bytes);
+  if (encode::png_in_bands(image)) {
+    image.rows.assign(rows.begin(), rows.end());
+    encode::write_png_in_bands(image, text, out, compression, threads);
+    return;
+  }
   std::vector<std::string> keys, values;  // libpng wants non-const char*
   keys.reserve(text.size());
   values.reserve(text.size());
@@ -154,7 +170,7 @@ std::vector<PngText> scale_text(const PngScale& scale) {
 }
 
 void write_png_grey16(int width, int height, std::span<const std::uint32_t> values, const PngScale& scale,
-                      const std::vector<PngText>& text, ByteSink& out) {
+                      const std::vector<PngText>& text, ByteSink& out, int threads) {
   check_size(width, height, values.size(), "16-bit image");
   std::vector<std::uint8_t> bytes(values.size() * 2);
   for (std::size_t i = 0; i < values.size(); ++i) {
@@ -170,35 +186,38 @@ void write_png_grey16(int width, int height, std::span<const std::uint32_t> valu
   }
   std::vector<PngText> all = scale_text(scale);
   all.insert(all.end(), text.begin(), text.end());
-  encode(width, height, 16, PNG_COLOR_TYPE_GRAY, row_pointers(bytes, height, static_cast<std::size_t>(width) * 2), all, out);
+  encode_png(width, height, 16, PNG_COLOR_TYPE_GRAY, row_pointers(bytes, height, static_cast<std::size_t>(width) * 2), all, out,
+         PngCompression::balanced, threads);
 }
 
 void write_png_grey8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
-                     ByteSink& out) {
+                     ByteSink& out, int threads) {
   check_size(width, height, pixels.size(), "8-bit image");
   std::vector<std::uint8_t> bytes(pixels.begin(), pixels.end());
-  encode(width, height, 8, PNG_COLOR_TYPE_GRAY, row_pointers(bytes, height, static_cast<std::size_t>(width)), text, out);
+  encode_png(width, height, 8, PNG_COLOR_TYPE_GRAY, row_pointers(bytes, height, static_cast<std::size_t>(width)), text, out,
+         PngCompression::balanced, threads);
 }
 
-void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out, PngCompression compression) {
+void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out, PngCompression compression,
+                    int threads) {
   if (image.pixels.size() % 3 != 0) {
     throw Error(ErrorCode::invalid_argument, "RGB image has " + std::to_string(image.pixels.size()) + " bytes, not a multiple of 3");
   }
   check_size(image.width, image.height, image.pixels.size() / 3, "RGB image");
   std::vector<std::uint8_t> bytes = image.pixels;
-  encode(image.width, image.height, 8, PNG_COLOR_TYPE_RGB,
-         row_pointers(bytes, image.height, static_cast<std::size_t>(image.width) * 3), text, out, compression);
+  encode_png(image.width, image.height, 8, PNG_COLOR_TYPE_RGB,
+         row_pointers(bytes, image.height, static_cast<std::size_t>(image.width) * 3), text, out, compression, threads);
 }
 
 void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
-                     ByteSink& out, PngCompression compression) {
+                     ByteSink& out, PngCompression compression, int threads) {
   if (pixels.size() % 4 != 0) {
     throw Error(ErrorCode::invalid_argument, "RGBA image has " + std::to_string(pixels.size()) + " bytes, not a multiple of 4");
   }
   check_size(width, height, pixels.size() / 4, "RGBA image");
   std::vector<std::uint8_t> bytes(pixels.begin(), pixels.end());
-  encode(width, height, 8, PNG_COLOR_TYPE_RGBA, row_pointers(bytes, height, static_cast<std::size_t>(width) * 4), text, out,
-         compression);
+  encode_png(width, height, 8, PNG_COLOR_TYPE_RGBA, row_pointers(bytes, height, static_cast<std::size_t>(width) * 4), text, out,
+         compression, threads);
 }
 
 }  // namespace voxd

@@ -48,13 +48,15 @@ std::vector<std::uint8_t> layer_pixels(const DenseVolume<Rgba8>& volume, std::in
   return pixels;
 }
 
-void encode_layer(const DenseVolume<Rgba8>& volume, std::int64_t k, ByteSink& sink) {
+// `threads` for one large layer's bands: 1 where the layers themselves are
+// spread over the cores; the bytes are the same either way.
+void encode_layer(const DenseVolume<Rgba8>& volume, std::int64_t k, ByteSink& sink, int threads) {
   const Grid& g = volume.grid();
   const std::vector<PngText> text = {
       {"voxd:axis", "z"}, {"voxd:layer", std::to_string(k)}, {"voxd:voxel_size", number_text(g.voxel_size)}};
   // A stack is bulk output (hundreds of layers): fast compression.
   write_png_rgba8(static_cast<int>(g.dims.x), static_cast<int>(g.dims.y), layer_pixels(volume, k), text, sink,
-                  PngCompression::fast);
+                  PngCompression::fast, threads);
 }
 
 std::string manifest(const Grid& g) {
@@ -91,7 +93,7 @@ void write_png_stack_zip(const DenseVolume<Rgba8>& volume, ByteSink& sink) {
       g.dims.z, threads, slots.size(),
       [&](std::int64_t k, std::size_t slot) {
         slots[slot].data.clear();
-        encode_layer(volume, k, slots[slot]);
+        encode_layer(volume, k, slots[slot], 1);
       },
       [&](std::int64_t k, std::size_t slot) { zip.add(png_layer_name(k), slots[slot].data, false); });
   zip.finish();
@@ -102,7 +104,7 @@ void write_png_layer(const DenseVolume<Rgba8>& volume, std::int64_t k, ByteSink&
   if (k < 0 || k >= volume.grid().dims.z)
     throw Error(ErrorCode::invalid_argument, "PNG layer writer: layer " + std::to_string(k) + " is outside 0.." +
                                                  std::to_string(volume.grid().dims.z - 1));
-  encode_layer(volume, k, sink);
+  encode_layer(volume, k, sink, 0);
 }
 
 }  // namespace voxd

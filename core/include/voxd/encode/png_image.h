@@ -1,5 +1,6 @@
 #pragma once
-// PNG encoding of analysis images (thickness maps, cross-sections) with libpng.
+// PNG encoding of analysis images (thickness maps, cross-sections) with
+// libpng, and large ones in bands of rows on every core with zlib alone.
 // Metadata goes in tEXt chunks, which every PNG reader keeps and ignores
 // safely: what a pixel value means ("voxd:scale", "voxd:unit") travels with
 // the image instead of in a side channel.
@@ -37,16 +38,21 @@ struct RgbImage {
   std::vector<std::uint8_t> pixels;
 };
 
+// Every writer takes `threads` (0 = every core): an image of 1 MiB of rows
+// or more (four bands) is filtered and deflated in bands of rows on that
+// many threads, its bytes the same on any number (core/src/encode/png_bands.h);
+// smaller ones are written by libpng on the calling thread.
+
 // 16-bit greyscale: one pixel per value, row-major (values.size() must be
 // width * height). Throws Error(limit_exceeded) when a value exceeds 65535
 // (the format cannot hold it; a map of a volume over 65535 voxels long would),
 // Error(invalid_argument) for empty or mismatched sizes and bad text.
 void write_png_grey16(int width, int height, std::span<const std::uint32_t> values, const PngScale& scale,
-                      const std::vector<PngText>& text, ByteSink& out);
+                      const std::vector<PngText>& text, ByteSink& out, int threads = 0);
 
 // 8-bit greyscale, e.g. a cross-section (255 filled, 0 empty).
 void write_png_grey8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
-                     ByteSink& out);
+                     ByteSink& out, int threads = 0);
 
 // How hard libpng compresses: balanced is its default (zlib level 6, the
 // best of five filters per row); fast is zlib level 1 with one filter (Sub),
@@ -57,11 +63,11 @@ enum class PngCompression { balanced, fast };
 
 // 8-bit RGB, e.g. a false-colour thickness map (voxd/encode/colour_map.h).
 void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, ByteSink& out,
-                    PngCompression compression = PngCompression::balanced);
+                    PngCompression compression = PngCompression::balanced, int threads = 0);
 
 // 8-bit RGBA, 4 bytes per pixel (r, g, b, a), row-major, straight (not
 // premultiplied) alpha, e.g. one layer of a colour volume (voxd/encode/png_stack.h).
 void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
-                     ByteSink& out, PngCompression compression = PngCompression::balanced);
+                     ByteSink& out, PngCompression compression = PngCompression::balanced, int threads = 0);
 
 }  // namespace voxd
