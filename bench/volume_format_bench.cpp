@@ -3,6 +3,7 @@
 // a transition every other voxel); and the meshes of a result
 // (GET /v1/jobs/{id}/volume?format=stl|ply|glb): the sphere's voxel surface
 // made, then written as each mesh format.
+// And a radiograph-sized PNG written on 1 to 16 threads.
 //   ./build/bench/volume_format_bench --benchmark_filter=Sphere
 #include <algorithm>
 #include <cmath>
@@ -10,11 +11,13 @@
 #include <memory>
 #include <random>
 #include <span>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "voxd/byte_source.h"
 #include "voxd/encode/mesh_export.h"
+#include "voxd/encode/png_image.h"
 #include "voxd/encode/rle_slabs.h"
 #include "voxd/encode/volume_format.h"
 #include "voxd/encode/volume_surface.h"
@@ -185,6 +188,31 @@ void BM_MeshStlSphere(benchmark::State& s) { mesh_write_bench(s, voxd::write_mes
 void BM_MeshPlySphere(benchmark::State& s) { mesh_write_bench(s, voxd::write_mesh_ply); }
 void BM_MeshGlbSphere(benchmark::State& s) { mesh_write_bench(s, voxd::write_mesh_glb); }
 
+// A radiograph-sized 16-bit PNG (a sphere's chord lengths over a side x
+// side image, as a radiograph of a ball reads) written on `threads`
+// threads: from four bands up the rows are filtered and deflated in bands
+// (core/src/encode/png_bands.h). Args: side, threads.
+void BM_PngGrey16(benchmark::State& state) {
+  const auto side = static_cast<int>(state.range(0));
+  std::vector<std::uint32_t> values(static_cast<std::size_t>(side) * static_cast<std::size_t>(side));
+  const double r = 0.45 * side;
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      const double dx = x - side / 2.0, dy = y - side / 2.0, d2 = r * r - dx * dx - dy * dy;
+      values[static_cast<std::size_t>(y) * static_cast<std::size_t>(side) + static_cast<std::size_t>(x)] =
+          d2 > 0 ? static_cast<std::uint32_t>(2 * std::sqrt(d2)) : 0;
+    }
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    CountingSink sink;
+    voxd::write_png_grey16(side, side, values, {}, {}, sink, static_cast<int>(state.range(1)));
+    bytes = sink.size;
+  }
+  state.counters["png_MiB"] = static_cast<double>(bytes) / (1 << 20);
+  state.counters["pixels/s"] = benchmark::Counter(static_cast<double>(values.size()),
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+
 }  // namespace
 
 BENCHMARK(BM_RleEncodeSphere)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -203,3 +231,8 @@ BENCHMARK(BM_VoxelSurfaceSphere)->Arg(256)->Arg(512)->Unit(benchmark::kMilliseco
 BENCHMARK(BM_MeshStlSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MeshPlySphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MeshGlbSphere)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PngGrey16)
+    ->ArgsProduct({{4096}, {1, 2, 16}})
+    ->ArgNames({"side", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();

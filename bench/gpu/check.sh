@@ -21,9 +21,10 @@
 #   bench/gpu/check.sh scaling PACK_DIR [RESULTS_DIR]
 #       issue #39 on the machine's cores, GPU or not (about a minute): each
 #       stage of the analysis report on the torus at 512^3 on 2 and 16
-#       threads, and the solid straight to its RLE at 2048^3 on 2 and 16
-#       threads, its chunks encoded by the writer and where they are made;
-#       prints medians and speed-ups from 2 to 16 threads.
+#       threads, the solid straight to its RLE at 2048^3 on 2 and 16
+#       threads, its chunks encoded by the writer and where they are made,
+#       a stored 4096^3 RLE read back as runs, and a 4096 x 4096 16-bit PNG
+#       written in bands; prints medians and speed-ups from 2 to 16 threads.
 set -euo pipefail
 
 # Unpacks PACK_DIR's pack into `root` with its libraries on the path, and
@@ -49,6 +50,9 @@ scaling() {
   timeout 60 "$root/bin/stages_bench" --benchmark_filter='BM_ReadRunSlabs/res:4096/threads:(2|16)/' \
     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
     --benchmark_out="$results/read_runs.json" --benchmark_out_format=json > /dev/null || status=1
+  timeout 60 "$root/bin/volume_format_bench" --benchmark_filter='BM_PngGrey16/side:4096/threads:(2|16)/' \
+    --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+    --benchmark_out="$results/png.json" --benchmark_out_format=json > /dev/null || status=1
   python3 - "$results" <<'PY' | tee "$results/scaling.txt"
 import json, os, re, sys
 results = sys.argv[1]
@@ -71,6 +75,9 @@ for arg, how in (("0", "RLE encoded by the writer"), ("1", "RLE encoded where ma
 reads = medians(f"{results}/read_runs.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
 if reads.get("2") and reads.get("16"):
     print(f"{'stored RLE 4096^3 read as runs':34} {reads['2']:13.0f} {reads['16']:14.0f} {reads['2'] / reads['16']:8.1f}x")
+pngs = medians(f"{results}/png.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
+if pngs.get("2") and pngs.get("16"):
+    print(f"{'PNG16 4096 x 4096 in bands':34} {pngs['2']:13.0f} {pngs['16']:14.0f} {pngs['2'] / pngs['16']:8.1f}x")
 PY
   return $status
 }
@@ -82,8 +89,8 @@ case "${1:-}" in
     stage=$(mktemp -d); trap 'rm -rf "$stage"' EXIT
     mkdir -p "$stage/bin" "$stage/lib" "$out"
     for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench bench/analysis_stages_bench \
-      bench/stages_bench tests/coverage_cuda_test tests/coverage_device_test bench/coverage_device_bench \
-      tests/sdf_cuda_test tests/sdf_device_test bench/sdf_device_bench; do
+      bench/stages_bench bench/volume_format_bench tests/coverage_cuda_test tests/coverage_device_test \
+      bench/coverage_device_bench tests/sdf_cuda_test tests/sdf_device_test bench/sdf_device_bench; do
       cp "$build/$exe" "$stage/bin/"
       # The C and C++ runtimes stay behind: the GPU machine has its own, newer.
       # (grep finds nothing to keep for an executable of system libraries only.)
