@@ -103,6 +103,22 @@ TEST(PngGrey16, ValueOver65535IsALimitError) {
   EXPECT_NE(message.find("pixel (1, 1) has value 65536"), std::string::npos) << message;
   EXPECT_NE(message.find("65535"), std::string::npos) << message;
   EXPECT_TRUE(sink.data.empty());
+  // A large image's rows are converted on several threads: the pixel named
+  // is still the first over the limit in row order, whichever thread
+  // reaches which first.
+  const int w = 1000, h = 2000;
+  std::vector<std::uint32_t> large(static_cast<std::size_t>(w * h), 7);
+  large[1999 * 1000 + 5] = 70000;
+  large[1500 * 1000 + 900] = 65536;
+  large[1500 * 1000 + 901] = 99999;
+  large[260 * 1000 + 3] = 80000;
+  for (int threads : {1, 2, 7}) {
+    VectorSink large_sink;
+    EXPECT_EQ(code_of([&] { write_png_grey16(w, h, large, PngScale{}, {}, large_sink, threads); }, &message),
+              ErrorCode::limit_exceeded);
+    EXPECT_NE(message.find("pixel (3, 260) has value 80000"), std::string::npos) << threads << ": " << message;
+    EXPECT_TRUE(large_sink.data.empty());
+  }
 }
 
 TEST(PngGrey8, CrossSectionRoundTrips) {

@@ -7,6 +7,8 @@
 
 #include <png.h>
 
+#include <algorithm>
+#include <atomic>
 #include <charconv>
 #include <csetjmp>
 #include <cstdio>
@@ -17,6 +19,8 @@
 #include "encode/png_bands.h"
 #include "voxd/encode/number_text.h"
 #include "voxd/error.h"
+#include "voxd/parallel.h"
+#include "voxd/volume_memory.h"
 
 namespace voxd {
 namespace {
@@ -156,9 +160,12 @@ void encode_png(int width, int height, int bit_depth, int colour_type, const std
   }
 }
 
-std::vector<png_bytep> row_pointers(std::vector<std::uint8_t>& bytes, int height, std::size_t stride) {
+// libpng takes the rows as non-const but only reads them: png_write_row
+// copies each into its own buffer before filtering (no transforms are set),
+// so the caller's pixels are written from where they lie, not copied first.
+std::vector<png_bytep> row_pointers(const std::uint8_t* bytes, int height, std::size_t stride) {
   std::vector<png_bytep> rows(static_cast<std::size_t>(height));
-  for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = bytes.data() + r * stride;
+  for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = const_cast<png_bytep>(bytes + r * stride);
   return rows;
 }
 
@@ -172,29 +179,43 @@ std::vector<PngText> scale_text(const PngScale& scale) {
 void write_png_grey16(int width, int height, std::span<const std::uint32_t> values, const PngScale& scale,
                       const std::vector<PngText>& text, ByteSink& out, int threads) {
   check_size(width, height, values.size(), "16-bit image");
-  std::vector<std::uint8_t> bytes(values.size() * 2);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    const std::uint32_t v = values[i];
-    if (v > 65535) {
-      throw Error(ErrorCode::limit_exceeded,
-                  "pixel (" + std::to_string(i % static_cast<std::size_t>(width)) + ", " +
-                      std::to_string(i / static_cast<std::size_t>(width)) + ") has value " + std::to_string(v) +
-                      ", over 65535, the largest a 16-bit PNG can store");
-    }
-    bytes[2 * i] = static_cast<std::uint8_t>(v >> 8);
-    bytes[2 * i + 1] = static_cast<std::uint8_t>(v);
+  // Big-endian samples, rows on every thread: a radiograph of an 8192^3
+  // grid is 65 megapixels, whose 130 MB are faulted in as they are written
+  // (hence not cleared first, VolumeInit::none). The first pixel over
+  // 65535 in row order is the one named, on any number of threads.
+  VolumeVector<std::uint8_t> bytes{VolumeAllocator<std::uint8_t>(VolumeInit::none)};
+  bytes.resize(values.size() * 2);
+  std::atomic<std::size_t> first_over{SIZE_MAX};
+  const auto w = static_cast<std::size_t>(width);
+  parallel_for(0, height, std::max<std::int64_t>(1, (std::int64_t{1} << 18) / width), threads,
+               [&](std::int64_t r0, std::int64_t r1) {
+                 for (std::size_t i = static_cast<std::size_t>(r0) * w; i < static_cast<std::size_t>(r1) * w; ++i) {
+                   const std::uint32_t v = values[i];
+                   if (v > 65535) {
+                     std::size_t seen = first_over.load();
+                     while (i < seen && !first_over.compare_exchange_weak(seen, i)) {
+                     }
+                     return;
+                   }
+                   bytes[2 * i] = static_cast<std::uint8_t>(v >> 8);
+                   bytes[2 * i + 1] = static_cast<std::uint8_t>(v);
+                 }
+               });
+  if (const std::size_t i = first_over.load(); i != SIZE_MAX) {
+    throw Error(ErrorCode::limit_exceeded,
+                "pixel (" + std::to_string(i % w) + ", " + std::to_string(i / w) + ") has value " +
+                    std::to_string(values[i]) + ", over 65535, the largest a 16-bit PNG can store");
   }
   std::vector<PngText> all = scale_text(scale);
   all.insert(all.end(), text.begin(), text.end());
-  encode_png(width, height, 16, PNG_COLOR_TYPE_GRAY, row_pointers(bytes, height, static_cast<std::size_t>(width) * 2), all, out,
+  encode_png(width, height, 16, PNG_COLOR_TYPE_GRAY, row_pointers(bytes.data(), height, w * 2), all, out,
          PngCompression::balanced, threads);
 }
 
 void write_png_grey8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
                      ByteSink& out, int threads) {
   check_size(width, height, pixels.size(), "8-bit image");
-  std::vector<std::uint8_t> bytes(pixels.begin(), pixels.end());
-  encode_png(width, height, 8, PNG_COLOR_TYPE_GRAY, row_pointers(bytes, height, static_cast<std::size_t>(width)), text, out,
+  encode_png(width, height, 8, PNG_COLOR_TYPE_GRAY, row_pointers(pixels.data(), height, static_cast<std::size_t>(width)), text, out,
          PngCompression::balanced, threads);
 }
 
@@ -204,9 +225,8 @@ void write_png_rgb8(const RgbImage& image, const std::vector<PngText>& text, Byt
     throw Error(ErrorCode::invalid_argument, "RGB image has " + std::to_string(image.pixels.size()) + " bytes, not a multiple of 3");
   }
   check_size(image.width, image.height, image.pixels.size() / 3, "RGB image");
-  std::vector<std::uint8_t> bytes = image.pixels;
   encode_png(image.width, image.height, 8, PNG_COLOR_TYPE_RGB,
-         row_pointers(bytes, image.height, static_cast<std::size_t>(image.width) * 3), text, out, compression, threads);
+         row_pointers(image.pixels.data(), image.height, static_cast<std::size_t>(image.width) * 3), text, out, compression, threads);
 }
 
 void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,
@@ -215,8 +235,7 @@ void write_png_rgba8(int width, int height, std::span<const std::uint8_t> pixels
     throw Error(ErrorCode::invalid_argument, "RGBA image has " + std::to_string(pixels.size()) + " bytes, not a multiple of 4");
   }
   check_size(width, height, pixels.size() / 4, "RGBA image");
-  std::vector<std::uint8_t> bytes(pixels.begin(), pixels.end());
-  encode_png(width, height, 8, PNG_COLOR_TYPE_RGBA, row_pointers(bytes, height, static_cast<std::size_t>(width) * 4), text, out,
+  encode_png(width, height, 8, PNG_COLOR_TYPE_RGBA, row_pointers(pixels.data(), height, static_cast<std::size_t>(width) * 4), text, out,
          compression, threads);
 }
 
