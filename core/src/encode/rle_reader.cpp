@@ -493,12 +493,13 @@ void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunS
   for (std::int64_t k = 0; k < nz;) {
     blocks.clear();
     std::exception_ptr framing;  // a bad block head after the batch's good ones
-    std::uint64_t payload = 0, rows = 0;
+    std::uint64_t payload = 0;
     try {
       while (k + static_cast<std::int64_t>(blocks.size()) < nz) {
         const auto b = static_cast<std::int64_t>(blocks.size());
         if (b > 0) {
-          if (nthreads <= 1 || payload >= kRunReaderBatchPayload || rows + static_cast<std::uint64_t>(ny) > kRunReaderBatchRows)
+          if (nthreads <= 1 || payload >= kRunReaderBatchPayload ||
+              static_cast<std::uint64_t>((b + 1) * ny) > kRunReaderBatchRows)
             break;
           if (!window.in_memory()) {
             if (copies.size() < blocks.size()) copies.resize(blocks.size());
@@ -510,7 +511,6 @@ void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunS
         if (b > 0 && payload + head.length > kRunReaderBatchPayload) break;
         blocks.push_back(take_slab_block(window, head));
         payload += head.length;
-        rows += static_cast<std::uint64_t>(ny);
       }
     } catch (...) {
       if (blocks.empty()) throw;
