@@ -21,6 +21,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench_mesh.h"
+#include "callgrind_section.h"
 #include "support/test_parts.h"
 #include "voxd/analysis/analysis.h"
 #include "voxd/analysis/analysis_images.h"
@@ -66,6 +67,12 @@ const DenseVolume<float>& thickness(const std::string& name, std::int64_t resolu
 
 int threads_of(const benchmark::State& state) { return static_cast<int>(state.range(1)); }
 
+// The timed loop, also what bench/serial_fraction.sh counts, as STAGE/PART/res:R/threads:T.
+CallgrindSection counted(const benchmark::State& state, const char* stage, const char* name) {
+  return CallgrindSection(std::string(stage) + "/" + name + "/res:" + std::to_string(state.range(0)) +
+                          "/threads:" + std::to_string(threads_of(state)));
+}
+
 void counters(benchmark::State& state, const BitVolume& v) {
   state.counters["filled"] = static_cast<double>(v.count());
   state.counters["threads"] = static_cast<double>(threads_of(state));
@@ -73,18 +80,21 @@ void counters(benchmark::State& state, const BitVolume& v) {
 
 void BM_Mass(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
+  const CallgrindSection section = counted(state, "BM_Mass", name);
   for (auto _ : state) benchmark::DoNotOptimize(voxel_mass_properties(v, threads_of(state)));
   counters(state, v);
 }
 
 void BM_PartsAndVoids(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
+  const CallgrindSection section = counted(state, "BM_PartsAndVoids", name);
   for (auto _ : state) benchmark::DoNotOptimize(find_components(v, threads_of(state)));
   counters(state, v);
 }
 
 void BM_Skin(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
+  const CallgrindSection section = counted(state, "BM_Skin", name);
   for (auto _ : state)
     benchmark::DoNotOptimize(summarize_peeling(peel_depth(v, threads_of(state), PeelMetric::faces), threads_of(state)));
   counters(state, v);
@@ -126,6 +136,7 @@ class PhaseClock final : public HostInterrupter {
 void BM_WallThickness(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
   std::vector<double> sums(std::size(PhaseClock::kEnds), 0.0);
+  const CallgrindSection section = counted(state, "BM_WallThickness", name);
   for (auto _ : state) {
     PhaseClock clock;
     JobControl control(&clock);
@@ -145,6 +156,7 @@ void BM_WallThickness(benchmark::State& state, const char* name) {
 // the nearest medial voxel.
 void BM_NearestEmpty(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
+  const CallgrindSection section = counted(state, "BM_NearestEmpty", name);
   for (auto _ : state) benchmark::DoNotOptimize(detail::nearest_empty_voxels(v, threads_of(state)).values().data());
   counters(state, v);
 }
@@ -163,6 +175,7 @@ void BM_ThicknessRegions(benchmark::State& state, const char* name) {
   options.min_wall_voxels = stats.min + (stats.mean - stats.min) / 3;
   options.max_wall_voxels = stats.min + 2 * (stats.mean - stats.min) / 3;
   std::size_t regions = 0;
+  const CallgrindSection section = counted(state, "BM_ThicknessRegions", name);
   for (auto _ : state) {
     // Mass and parts are timed above; here they are a small share.
     const AnalysisReport report = analyze_volume(v, options);
@@ -177,6 +190,7 @@ void BM_ThicknessPreview(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
   const DenseVolume<float>& map = thickness(name, state.range(0));
   std::size_t bytes = 0;
+  const CallgrindSection section = counted(state, "BM_ThicknessPreview", name);
   for (auto _ : state) bytes = preview_png(v, View{2, true}, &map, {}, threads_of(state)).size();
   counters(state, v);
   state.counters["png_bytes"] = static_cast<double>(bytes);

@@ -1,14 +1,18 @@
 // Per-stage benchmarks of the engine on the 1.1M-triangle benchmark mesh:
 // parse (binary STL from memory), voxelize (parity) at 256^3..2048^3, encode,
-// and a stored RLE read back as runs.
+// a stored RLE read back as runs, and the streamed report over those runs.
 #include <cstdlib>
 #include <map>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "bench_mesh.h"
+#include "callgrind_section.h"
+#include "voxd/analysis/components.h"
+#include "voxd/analysis/mass_properties.h"
 #include "voxd/grid.h"
 #include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/encode/rle_slabs.h"
@@ -78,11 +82,14 @@ void BM_VoxelizeRunsToRle(benchmark::State& state) {
   const bool prepared = state.range(1) != 0;
   VoxelizeOptions options;  // VOXD_THREADS=N: N threads (default: every core)
   if (const char* t = std::getenv("VOXD_THREADS")) options.threads = std::atoi(t);
+  const Mesh& m = mesh();
+  const CallgrindSection section("BM_VoxelizeRunsToRle/" + std::to_string(state.range(0)) + "/" +
+                                 std::to_string(state.range(1)) + "/threads:" + std::to_string(options.threads));
   for (auto _ : state) {
     CountingSink sink;
     BitSlabWriter writer(g, VolumeFormat::rle, {}, sink);
     voxelize_runs(
-        mesh(), g, options, [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); }, nullptr, {},
+        m, g, options, [&](std::int64_t k0, const RunSlab& runs) { writer.write(k0, runs); }, nullptr, {},
         prepared ? writer.preparer() : RunSlabPreparer());
     writer.finish();
     benchmark::DoNotOptimize(sink.n);
@@ -95,16 +102,12 @@ BENCHMARK(BM_VoxelizeRunsToRle)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// A stored solid's RLE read back as runs (read_rle_run_slabs), as every
-// streamed analysis, radiograph, section and preview of a stored result
-// starts: the layers decoded on `threads` threads (second argument) and
-// joined in order, from memory, with a consumer that only counts. The RLE
-// is the solid's at the first argument, made once.
-void BM_ReadRunSlabs(benchmark::State& state) {
+// The solid's RLE at `resolution`, made once.
+const std::vector<std::uint8_t>& stored_rle(std::int64_t resolution) {
   static std::map<std::int64_t, std::vector<std::uint8_t>> stored;
-  std::vector<std::uint8_t>& rle = stored[state.range(0)];
+  std::vector<std::uint8_t>& rle = stored[resolution];
   if (rle.empty()) {
-    const Grid g = grid_at(state.range(0));
+    const Grid g = grid_at(resolution);
     VectorSink sink;
     BitSlabWriter writer(g, VolumeFormat::rle, {}, sink);
     voxelize_runs(
@@ -113,8 +116,23 @@ void BM_ReadRunSlabs(benchmark::State& state) {
     writer.finish();
     rle = std::move(sink.data);
   }
+  return rle;
+}
+
+std::string section_name(const char* bench, const benchmark::State& state) {
+  return std::string(bench) + "/res:" + std::to_string(state.range(0)) + "/threads:" + std::to_string(state.range(1));
+}
+
+// A stored solid's RLE read back as runs (read_rle_run_slabs), as every
+// streamed analysis, radiograph, section and preview of a stored result
+// starts: the layers decoded on `threads` threads (second argument) and
+// joined in order, from memory, with a consumer that only counts. The RLE
+// is the solid's at the first argument, made once.
+void BM_ReadRunSlabs(benchmark::State& state) {
+  const std::vector<std::uint8_t>& rle = stored_rle(state.range(0));
   const auto threads = static_cast<int>(state.range(1));
   std::uint64_t runs = 0;
+  const CallgrindSection section(section_name("BM_ReadRunSlabs", state));
   for (auto _ : state) {
     runs = 0;
     read_rle_run_slabs(std::span<const std::uint8_t>(rle), grid_at(state.range(0)).dims.z,
@@ -126,6 +144,36 @@ void BM_ReadRunSlabs(benchmark::State& state) {
 }
 BENCHMARK(BM_ReadRunSlabs)
     ->ArgsProduct({{2048, 4096}, {1, 2, 16}})
+    ->ArgNames({"res", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The streamed report of a stored solid (server/jobs/analyses/
+// report_analysis.cpp's over_slabs): its runs read as above, mass
+// properties and parts and voids taken slab by slab, on `threads` threads.
+void BM_StreamedReport(benchmark::State& state) {
+  const std::vector<std::uint8_t>& rle = stored_rle(state.range(0));
+  const Grid g = grid_at(state.range(0));
+  const auto threads = static_cast<int>(state.range(1));
+  std::size_t parts = 0;
+  const CallgrindSection section(section_name("BM_StreamedReport", state));
+  for (auto _ : state) {
+    VoxelMassAccumulator mass(g);
+    ComponentLabeller components(g, threads);
+    read_rle_run_slabs(
+        std::span<const std::uint8_t>(rle), g.dims.z,
+        [&](std::int64_t k0, const RunSlab& slab) {
+          mass.add(k0, slab, threads);
+          components.add(k0, slab);
+        },
+        {}, threads);
+    benchmark::DoNotOptimize(mass.result());
+    parts = components.finish().parts.size();
+  }
+  state.counters["parts"] = static_cast<double>(parts);
+}
+BENCHMARK(BM_StreamedReport)
+    ->ArgsProduct({{1024, 2048, 4096}, {2, 16}})
     ->ArgNames({"res", "threads"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

@@ -14,6 +14,42 @@ int default_thread_count() {
   return n == 0 ? 1 : static_cast<int>(n);
 }
 
+namespace detail {
+namespace {
+
+thread_local bool inside_parallel_work = false;
+
+template <class Body, class A, class B>
+[[gnu::noinline]] void parallel_work(const Body& body, A a, B b) {
+  inside_parallel_work = true;
+  struct Leave {
+    ~Leave() { inside_parallel_work = false; }
+  } leave;
+  body(a, b);
+}
+
+template <class Body, class A, class B>
+void run_piece(const Body& body, A a, B b) {
+  if (inside_parallel_work)
+    body(a, b);
+  else
+    parallel_work(body, a, b);
+}
+
+}  // namespace
+
+void run_parallel_piece(const std::function<void(std::int64_t, std::int64_t)>& body, std::int64_t a,
+                        std::int64_t b) {
+  run_piece(body, a, b);
+}
+
+void run_parallel_piece(const std::function<void(std::int64_t, std::size_t)>& body, std::int64_t a,
+                        std::size_t b) {
+  run_piece(body, a, b);
+}
+
+}  // namespace detail
+
 void parallel_for(std::int64_t begin, std::int64_t end, std::int64_t grain, int threads,
                   const std::function<void(std::int64_t, std::int64_t)>& body) {
   if (end <= begin) return;
@@ -35,7 +71,7 @@ void parallel_for(std::int64_t begin, std::int64_t end, std::int64_t grain, int 
       if (c >= chunks) return;
       const std::int64_t b = begin + c * grain;
       try {
-        body(b, std::min(end, b + grain));
+        detail::run_parallel_piece(body, b, std::min(end, b + grain));
       } catch (...) {
         std::lock_guard lock(error_mutex);
         if (!error) error = std::current_exception();

@@ -58,7 +58,11 @@ void run_ordered_pipeline(std::int64_t count, int threads, std::size_t slot_coun
       if (failed) return false;
     }
     try {
-      produce(i, slot);
+      // On one thread the pieces are serial work, and a profile should say so.
+      if (wanted_threads > 1)
+        detail::run_parallel_piece(produce, i, slot);
+      else
+        produce(i, slot);
     } catch (...) {
       fail(std::current_exception());
       return false;
