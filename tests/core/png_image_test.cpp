@@ -319,6 +319,48 @@ TEST(ThicknessColourMap, ExplicitRangeClampsAndScaleGoesToText) {
   EXPECT_EQ(code_of([&] { render_thickness_map(4, 2, values, o); }), ErrorCode::invalid_argument);
 }
 
+TEST(ThicknessColourMap, RowsOnAnyThreadCountAreEachValuesRampColour) {
+  // 301 rows of 37 pixels: several pieces of rows on several threads. The
+  // smallest value sits in the first rows and the largest in the last, so
+  // the range is found only by joining every piece's.
+  const int width = 37, height = 301;
+  std::vector<std::uint32_t> values(static_cast<std::size_t>(width) * height);
+  std::mt19937 rng(40);
+  std::uniform_int_distribution<std::uint32_t> wall(100, 9000);
+  for (auto& v : values) v = rng() % 10 < 3 ? 0 : wall(rng);
+  values[5 * width + 3] = 7;
+  values[300 * width + 36] = 9001;
+  std::uint32_t lo = UINT32_MAX, hi = 0;
+  for (const std::uint32_t v : values)
+    if (v != 0) lo = std::min(lo, v), hi = std::max(hi, v);
+  ASSERT_EQ(lo, 7u);
+  ASSERT_EQ(hi, 9001u);
+  const auto& ramp = thickness_ramp();
+  const ColourMap one = render_thickness_map(width, height, values, {}, 1);
+  for (const int threads : {1, 3, 0}) {
+    const ColourMap map = render_thickness_map(width, height, values, {}, threads);
+    EXPECT_EQ(map.range_min, lo) << threads;
+    EXPECT_EQ(map.range_max, hi) << threads;
+    ASSERT_EQ(map.image.height, height + kLegendHeight);
+    for (std::size_t p = 0; p < values.size(); ++p) {
+      // round((v - lo) * 255 / (hi - lo)), halves up, in doubles: exact here.
+      const Rgb want = values[p] == 0 ? kNoMaterialColour
+                                      : ramp[static_cast<std::size_t>(std::floor(
+                                            (values[p] - lo) * 255.0 / (hi - lo) + 0.5))];
+      const Rgb got{map.image.pixels[3 * p], map.image.pixels[3 * p + 1], map.image.pixels[3 * p + 2]};
+      ASSERT_EQ(got, want) << "pixel " << p << " on " << threads << " threads";
+    }
+    EXPECT_EQ(map.image.pixels, one.image.pixels) << threads;  // the legend too
+  }
+  // No material at all: the range is 0 to 0 on any thread count.
+  const std::vector<std::uint32_t> none(values.size(), 0);
+  for (const int threads : {1, 3}) {
+    const ColourMap empty = render_thickness_map(width, height, none, {}, threads);
+    EXPECT_EQ(empty.range_min, 0u);
+    EXPECT_EQ(empty.range_max, 0u);
+  }
+}
+
 double luminance(Rgb c) {
   auto lin = [](std::uint8_t v) {
     const double s = v / 255.0;

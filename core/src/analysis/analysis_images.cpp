@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <utility>
 
 #include "voxd/byte_sink.h"
 #include "voxd/encode/colour_map.h"
@@ -155,7 +156,7 @@ std::vector<std::uint8_t> section_png(const BitVolume& volume, int axis, std::in
       ijk[r_axis] = r;
       values[static_cast<std::size_t>(r) * image.width + c] = eighths(thickness->at(ijk[0], ijk[1], ijk[2]));
     }
-  ColourMap map = render_thickness_map(image.width, image.height, values, options);
+  ColourMap map = render_thickness_map(image.width, image.height, values, options, threads);
   map.text.insert(map.text.begin(), text.begin(), text.end());
   write_png_rgb8(map.image, map.text, out);
   return std::move(out.data);
@@ -221,23 +222,32 @@ std::vector<std::uint8_t> render_preview_png(const PreviewImage& rendered, const
     // Range over the whole map, not the visible voxels: the legend then
     // matches the thickness report and the other views of the same part.
     const ColourMapOptions options = thickness_colours(*thickness, g.voxel_size, threads);
+    // Every pixel is its own voxel's: the rows go to any thread.
+    const auto rows_pixels = [&](std::int64_t r0, std::int64_t r1) {
+      return std::pair{static_cast<std::size_t>(r0 * preview.width), static_cast<std::size_t>(r1 * preview.width)};
+    };
     std::vector<std::uint32_t> values(pixels, 0);
-    for (std::size_t p = 0; p < pixels; ++p) {
-      if (preview.voxel[p] >= 0) values[p] = eighths(thickness->values()[static_cast<std::size_t>(preview.voxel[p])]);
-    }
-    ColourMap map = render_thickness_map(preview.width, preview.height, values, options);
+    parallel_for(0, preview.height, 16, threads, [&](std::int64_t r0, std::int64_t r1) {
+      const auto [begin, end] = rows_pixels(r0, r1);
+      for (std::size_t p = begin; p < end; ++p)
+        if (preview.voxel[p] >= 0) values[p] = eighths(thickness->values()[static_cast<std::size_t>(preview.voxel[p])]);
+    });
+    ColourMap map = render_thickness_map(preview.width, preview.height, values, options, threads);
     image = std::move(map.image);
-    for (std::size_t p = 0; p < pixels; ++p) {  // the map rows only: the legend keeps its true colours
-      if (preview.voxel[p] < 0) continue;
-      std::uint8_t* px = &image.pixels[3 * p];
-      const Rgb c = values[p] == 0 ? kPreviewPartColour : Rgb{px[0], px[1], px[2]};
-      shade_into(px, c, preview.shade[p]);
-    }
+    parallel_for(0, preview.height, 16, threads, [&](std::int64_t r0, std::int64_t r1) {
+      const auto [begin, end] = rows_pixels(r0, r1);
+      for (std::size_t p = begin; p < end; ++p) {  // the map rows only: the legend keeps its true colours
+        if (preview.voxel[p] < 0) continue;
+        std::uint8_t* px = &image.pixels[3 * p];
+        const Rgb c = values[p] == 0 ? kPreviewPartColour : Rgb{px[0], px[1], px[2]};
+        shade_into(px, c, preview.shade[p]);
+      }
+    });
     chunks.insert(chunks.end(), map.text.begin(), map.text.end());
   }
   chunks.insert(chunks.end(), text.begin(), text.end());
   VectorSink out;
-  write_png_rgb8(image, chunks, out, compression);
+  write_png_rgb8(image, chunks, out, compression, threads);
   return std::move(out.data);
 }
 

@@ -9,10 +9,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <string>
 
 #include "voxd/error.h"
+#include "voxd/parallel.h"
 
 namespace voxd {
 namespace {
@@ -190,18 +192,38 @@ int draw_label(RgbImage& image, int x, int y, std::string_view text, Rgb ink) {
 }
 
 ColourMap render_thickness_map(int width, int height, std::span<const std::uint32_t> values,
-                               const ColourMapOptions& options) {
+                               const ColourMapOptions& options, int threads) {
   if (width < 0 || height < 0 || values.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
     throw Error(ErrorCode::invalid_argument, "thickness map: " + std::to_string(values.size()) + " values given for " +
                                                  std::to_string(width) + " x " + std::to_string(height) + " pixels");
   }
+  // Each pixel's colour is its own value's, and a range is a minimum and a
+  // maximum, which no order of taking changes: the rows go to any thread.
+  constexpr std::int64_t kRowsAPiece = 64;
+  const auto row_pixels = static_cast<std::size_t>(width);
   std::uint32_t lo = 0, hi = 0;
-  bool any = false;
-  for (const std::uint32_t v : values) {
-    if (v == 0) continue;
-    lo = any ? std::min(lo, v) : v;
-    hi = any ? std::max(hi, v) : v;
-    any = true;
+  if (!options.range_min || !options.range_max) {
+    struct Range {
+      std::uint32_t lo = std::numeric_limits<std::uint32_t>::max(), hi = 0;
+    };
+    std::vector<Range> pieces(static_cast<std::size_t>((height + kRowsAPiece - 1) / kRowsAPiece));
+    parallel_for(0, height, kRowsAPiece, threads, [&](std::int64_t r0, std::int64_t r1) {
+      Range& r = pieces[static_cast<std::size_t>(r0 / kRowsAPiece)];
+      for (std::size_t p = static_cast<std::size_t>(r0) * row_pixels; p < static_cast<std::size_t>(r1) * row_pixels; ++p) {
+        if (values[p] == 0) continue;
+        r.lo = std::min(r.lo, values[p]);
+        r.hi = std::max(r.hi, values[p]);
+      }
+    });
+    Range all;
+    for (const Range& r : pieces) {
+      all.lo = std::min(all.lo, r.lo);
+      all.hi = std::max(all.hi, r.hi);
+    }
+    if (all.hi > 0) {  // some value is not 0; else both stay 0
+      lo = all.lo;
+      hi = all.hi;
+    }
   }
   lo = options.range_min.value_or(lo);
   hi = options.range_max.value_or(hi);
@@ -217,12 +239,14 @@ ColourMap render_thickness_map(int width, int height, std::span<const std::uint3
   img.height = height + (legend ? kLegendHeight : 0);
   img.pixels.resize(static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height) * 3);
   const auto& ramp = thickness_ramp();
-  for (std::size_t p = 0; p < values.size(); ++p) {
-    const Rgb c = values[p] == 0 ? kNoMaterialColour : ramp[static_cast<std::size_t>(ramp_index(values[p], lo, hi))];
-    img.pixels[3 * p] = c.r;
-    img.pixels[3 * p + 1] = c.g;
-    img.pixels[3 * p + 2] = c.b;
-  }
+  parallel_for(0, height, kRowsAPiece, threads, [&](std::int64_t r0, std::int64_t r1) {
+    for (std::size_t p = static_cast<std::size_t>(r0) * row_pixels; p < static_cast<std::size_t>(r1) * row_pixels; ++p) {
+      const Rgb c = values[p] == 0 ? kNoMaterialColour : ramp[static_cast<std::size_t>(ramp_index(values[p], lo, hi))];
+      img.pixels[3 * p] = c.r;
+      img.pixels[3 * p + 1] = c.g;
+      img.pixels[3 * p + 2] = c.b;
+    }
+  });
   const double k = options.scale.per_value;
   out.text = scale_text(options.scale);
   out.text.push_back({"voxd:min", format_value(lo * k) + " " + options.scale.unit});

@@ -63,10 +63,11 @@ struct ColourMap {
 // clamped; 255 when lo == hi.
 int ramp_index(std::uint32_t value, std::uint32_t lo, std::uint32_t hi);
 
-// Throws Error(invalid_argument) for sizes that do not match or a range with
-// min > max.
+// Rows are coloured on up to `threads` threads (0: every core); the image
+// is the same on any count. Throws Error(invalid_argument) for sizes that do
+// not match or a range with min > max.
 ColourMap render_thickness_map(int width, int height, std::span<const std::uint32_t> values,
-                               const ColourMapOptions& options = {});
+                               const ColourMapOptions& options = {}, int threads = 0);
 
 // Diverging ramp for signed values (a signed distance field section),
 // computed like the thickness ramp in OKLab: blue for negative values, white
