@@ -1,6 +1,9 @@
 #include "voxd/run_slab.h"
 
+#include <algorithm>
+
 #include "encode/bit_runs.h"
+#include "voxd/parallel.h"
 
 namespace voxd {
 
@@ -16,17 +19,34 @@ void RunSlab::reset(const Grid& grid) {
 }
 
 void RunSlab::append_rows(const RunSlab& next) {
+  const RunSlab* one[] = {&next};
+  append_rows(one, 1);
+}
+
+void RunSlab::append_rows(std::span<const RunSlab* const> next, int threads) {
   prepared_.k0 = -1;
-  const auto base = static_cast<std::uint32_t>(bounds_.size());
-  bounds_.insert(bounds_.end(), next.bounds_.begin(), next.bounds_.end());
-  // Sized first, then written: a loop of push_backs would check the
-  // capacity for each row.
-  const std::size_t rows = next.starts_.size() - 1, at = starts_.size();
-  starts_.resize(at + rows);
-  std::uint32_t* out = starts_.data() + at;
-  const std::uint32_t* in = next.starts_.data() + 1;
-  for (std::size_t r = 0; r < rows; ++r) out[r] = base + in[r];
-  filled_ += next.filled_;
+  // Where each one's bounds and row starts go. Sized once, then written on
+  // any thread: a gathered batch of a large grid's layers is mostly copying
+  // onto pages that are new, which one thread would do alone.
+  std::vector<std::size_t> bounds_at(next.size() + 1, bounds_.size()), starts_at(next.size() + 1, starts_.size());
+  for (std::size_t s = 0; s < next.size(); ++s) {
+    bounds_at[s + 1] = bounds_at[s] + next[s]->bounds_.size();
+    starts_at[s + 1] = starts_at[s] + next[s]->starts_.size() - 1;
+    filled_ += next[s]->filled_;
+  }
+  bounds_.resize(bounds_at.back());
+  starts_.resize(starts_at.back());
+  parallel_for(0, static_cast<std::int64_t>(next.size()), 1, threads, [&](std::int64_t s0, std::int64_t s1) {
+    for (auto s = static_cast<std::size_t>(s0); s < static_cast<std::size_t>(s1); ++s) {
+      const RunSlab& from = *next[s];
+      std::copy(from.bounds_.begin(), from.bounds_.end(), bounds_.begin() + static_cast<std::ptrdiff_t>(bounds_at[s]));
+      const auto base = static_cast<std::uint32_t>(bounds_at[s]);
+      std::uint32_t* out = starts_.data() + starts_at[s];
+      const std::uint32_t* in = from.starts_.data() + 1;
+      const std::size_t rows = from.starts_.size() - 1;
+      for (std::size_t r = 0; r < rows; ++r) out[r] = base + in[r];
+    }
+  });
 }
 
 BitVolume RunSlab::to_bits() const {

@@ -340,41 +340,52 @@ TEST(RleSlabs, RunSlabsAreTheSameOnAnyThreads) {
 }
 
 // A slab of runs ends early once it holds kRunSlabRuns runs, so memory is
-// bounded by the runs however many layers are asked for: a grid striped
-// along x (a run every other voxel) of 131072 runs a layer, whose parts
-// (its planes of odd x) are found across the cut; and by its rows.
+// bounded by the runs however many layers are asked for: grids striped
+// along x (a run every other voxel) over the first 8, 7 or 5 words of each
+// row, 16384 runs a word column a layer, whose parts (the planes of odd x)
+// are found across the cut. On more threads the layers are decoded in
+// batches, whose ends need not fall where a slab fills (at layer 64, 74 or
+// 103): it ends at the same layer all the same.
 TEST(RleSlabs, ARunSlabEndsOnceItHoldsEnoughRuns) {
   Grid g;
-  g.dims = {512, 512, 70};
-  BitVolume striped(g);
-  for (std::int64_t k = 0; k < g.dims.z; ++k)
-    for (std::int64_t j = 0; j < g.dims.y; ++j) {
-      std::uint64_t* row = striped.row(j, k);
-      for (std::int64_t w = 0; w < striped.row_words(); ++w) row[w] = 0xAAAAAAAAAAAAAAAAu;  // odd x filled
+  g.dims = {512, 512, 110};
+  for (const std::int64_t words : {8, 7, 5}) {
+    BitVolume striped(g);
+    for (std::int64_t k = 0; k < g.dims.z; ++k)
+      for (std::int64_t j = 0; j < g.dims.y; ++j) {
+        std::uint64_t* row = striped.row(j, k);
+        for (std::int64_t w = 0; w < words; ++w) row[w] = 0xAAAAAAAAAAAAAAAAu;  // odd x filled
+      }
+    VectorSink rle;
+    write_rle(striped, rle);
+    const std::int64_t layer_runs = 512 * 32 * words;
+    const auto full = static_cast<std::int64_t>((kRunSlabRuns + layer_runs - 1) / layer_runs);  // layers of the first slab
+    for (const int threads : {1, 2, 3}) {
+      SCOPED_TRACE(std::to_string(words) + " words, " + std::to_string(threads) + " threads");
+      std::vector<std::pair<std::int64_t, std::int64_t>> slabs;
+      ComponentLabeller labeller(g, 2);
+      read_rle_run_slabs(
+          rle.data, g.dims.z,
+          [&](std::int64_t k0, const RunSlab& slab) {
+            slabs.emplace_back(k0, slab.grid().dims.z);
+            EXPECT_EQ(slab.count(), static_cast<std::uint64_t>(slab.grid().dims.z * layer_runs));
+            labeller.add(k0, slab);
+          },
+          {}, threads);
+      ASSERT_EQ(slabs.size(), 2u);
+      EXPECT_EQ(slabs[0], std::make_pair(std::int64_t{0}, full));
+      EXPECT_EQ(slabs[1], std::make_pair(full, g.dims.z - full));
+      // Each plane of odd x is a part; the planes between touch the border.
+      const ComponentReport r = labeller.finish();
+      ASSERT_EQ(r.parts.size(), static_cast<std::size_t>(32 * words));
+      for (std::size_t p = 0; p < r.parts.size(); ++p) {
+        EXPECT_EQ(r.parts[p].voxels, std::uint64_t{512 * 110});
+        EXPECT_EQ(r.parts[p].bbox_min, glm::i64vec3(2 * p + 1, 0, 0));
+        EXPECT_EQ(r.parts[p].bbox_max, glm::i64vec3(2 * p + 1, 511, 109));
+      }
+      EXPECT_TRUE(r.voids.empty());
     }
-  VectorSink rle;
-  write_rle(striped, rle);
-  const std::int64_t layer_runs = 512 * 256;
-  const auto full = static_cast<std::int64_t>((kRunSlabRuns + layer_runs - 1) / layer_runs);  // layers of the first slab
-  std::vector<std::pair<std::int64_t, std::int64_t>> slabs;
-  ComponentLabeller labeller(g, 2);
-  read_rle_run_slabs(rle.data, g.dims.z, [&](std::int64_t k0, const RunSlab& slab) {
-    slabs.emplace_back(k0, slab.grid().dims.z);
-    EXPECT_EQ(slab.count(), static_cast<std::uint64_t>(slab.grid().dims.z * 512 * 256));
-    labeller.add(k0, slab);
-  });
-  ASSERT_EQ(slabs.size(), 2u);
-  EXPECT_EQ(slabs[0], std::make_pair(std::int64_t{0}, full));
-  EXPECT_EQ(slabs[1], std::make_pair(full, g.dims.z - full));
-  // Each plane of odd x is a part; the planes between touch the border.
-  const ComponentReport r = labeller.finish();
-  ASSERT_EQ(r.parts.size(), 256u);
-  for (std::size_t p = 0; p < r.parts.size(); ++p) {
-    EXPECT_EQ(r.parts[p].voxels, std::uint64_t{512 * 70});
-    EXPECT_EQ(r.parts[p].bbox_min, glm::i64vec3(2 * p + 1, 0, 0));
-    EXPECT_EQ(r.parts[p].bbox_max, glm::i64vec3(2 * p + 1, 511, 69));
   }
-  EXPECT_TRUE(r.voids.empty());
   // Rows bound a slab too (each has a start): a grid of 4096 x 4096 rows
   // one voxel long comes in slabs of kRunSlabRuns rows, runs or none.
   Grid rows_grid;

@@ -7,7 +7,10 @@
 // of the benchmark torus holds about 40 thousand runs where its bits take 2 MB.
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <new>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "voxd/bit_volume.h"
@@ -53,6 +56,10 @@ class RunSlab {
   // Appends the rows of `next`, a slab of the layers after this one's rows
   // (a whole grid's runs gathered slab by slab).
   void append_rows(const RunSlab& next);
+  // Appends the rows of each of `next` in turn, as many append_rows calls
+  // would, copying them on up to `threads` threads (0: every core): only
+  // where each one goes is summed in order.
+  void append_rows(std::span<const RunSlab* const> next, int threads);
 
   std::uint64_t count() const { return filled_; }
   std::size_t run_count() const { return bounds_.size() / 2; }
@@ -74,9 +81,32 @@ class RunSlab {
   const Prepared& prepared() const { return prepared_; }
 
  private:
+  // std::allocator's memory, but resize() leaves the new elements to be
+  // written (append_rows writes each on the thread that copies it) rather
+  // than clearing them all on the calling thread first.
+  template <class T>
+  struct Uncleared : std::allocator<T> {
+    template <class U>
+    struct rebind {
+      using other = Uncleared<U>;
+    };
+    Uncleared() = default;
+    template <class U>
+    Uncleared(const Uncleared<U>&) noexcept {}
+    template <class U>
+    void construct(U* p) noexcept {
+      ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  };
+  using Bounds = std::vector<std::uint32_t, Uncleared<std::uint32_t>>;
+
   Grid grid_;
-  std::vector<std::uint32_t> starts_;  // row r's bounds are [starts_[r], starts_[r + 1])
-  std::vector<std::uint32_t> bounds_;
+  Bounds starts_;  // row r's bounds are [starts_[r], starts_[r + 1])
+  Bounds bounds_;
   std::uint64_t filled_ = 0;
   Prepared prepared_;
 };

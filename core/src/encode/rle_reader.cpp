@@ -490,6 +490,7 @@ void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunS
   };
   std::vector<Decoded> decoded;
   std::vector<std::exception_ptr> errors;
+  std::vector<const RunSlab*> segment;
   for (std::int64_t k = 0; k < nz;) {
     blocks.clear();
     std::exception_ptr framing;  // a bad block head after the batch's good ones
@@ -535,11 +536,26 @@ void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunS
           }
         }
       });
-      for (std::size_t b = 0; b < blocks.size(); ++b) {
-        if (errors[b]) std::rethrow_exception(errors[b]);  // after the layers before it, as on one thread
+      // The layers go into the slab in segments: as many as it takes before
+      // it is handed on, or before a layer that failed, whose error then
+      // comes after the layers before it, as on one thread. A segment is
+      // appended at once, copied on every thread; only its last layer can
+      // fill the slab, so it alone is checked.
+      for (std::size_t b = 0; b < blocks.size();) {
+        if (errors[b]) std::rethrow_exception(errors[b]);
         start_slab(k);
-        slab.append_rows(decoded[b].runs);
+        segment.clear();
+        std::size_t runs = slab.run_count();
+        while (b + segment.size() < blocks.size() && !errors[b + segment.size()]) {
+          const RunSlab& layer = decoded[b + segment.size()].runs;
+          segment.push_back(&layer);
+          runs += layer.run_count();
+          if (k + static_cast<std::int64_t>(segment.size()) - k0 == slab.grid().dims.z || runs >= kRunSlabRuns) break;
+        }
+        slab.append_rows(segment, nthreads);
+        k += static_cast<std::int64_t>(segment.size()) - 1;
         layer_added(k++);
+        b += segment.size();
       }
     }
     if (framing) std::rethrow_exception(framing);
