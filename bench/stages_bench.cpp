@@ -1,6 +1,7 @@
 // Per-stage benchmarks of the engine on the 1.1M-triangle benchmark mesh:
 // parse (binary STL from memory), voxelize (parity) at 256^3..2048^3, encode,
-// a stored RLE read back as runs, and the streamed report over those runs.
+// a stored RLE read back as runs, and the streamed report, radiograph and
+// preview over those runs.
 #include <cstdlib>
 #include <map>
 #include <span>
@@ -13,6 +14,9 @@
 #include "callgrind_section.h"
 #include "voxd/analysis/components.h"
 #include "voxd/analysis/mass_properties.h"
+#include "voxd/analysis/analysis_images.h"
+#include "voxd/analysis/preview.h"
+#include "voxd/analysis/radiography.h"
 #include "voxd/grid.h"
 #include "voxd/mesh_io/mesh_decode.h"
 #include "voxd/encode/rle_slabs.h"
@@ -174,6 +178,60 @@ void BM_StreamedReport(benchmark::State& state) {
 }
 BENCHMARK(BM_StreamedReport)
     ->ArgsProduct({{1024, 2048, 4096}, {2, 16}})
+    ->ArgNames({"res", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The streamed radiograph along z (radiography_analysis.cpp's over_slabs):
+// the stored runs read, each ray's thickness gathered, the largest as a
+// 16-bit PNG.
+void BM_StreamedRadiograph(benchmark::State& state) {
+  const std::vector<std::uint8_t>& rle = stored_rle(state.range(0));
+  const Grid g = grid_at(state.range(0));
+  const auto threads = static_cast<int>(state.range(1));
+  std::size_t bytes = 0;
+  const CallgrindSection section(section_name("BM_StreamedRadiograph", state));
+  for (auto _ : state) {
+    RadiographyAccumulator image(g, 2);
+    read_rle_run_slabs(
+        std::span<const std::uint8_t>(rle), g.dims.z,
+        [&](std::int64_t k0, const RunSlab& slab) { image.add(k0, slab, threads); }, {}, threads);
+    bytes = radiography_png(image.take(), 2, RadiographyMeasure::max, false, {}, {}).size();
+  }
+  state.counters["png_bytes"] = static_cast<double>(bytes);
+}
+BENCHMARK(BM_StreamedRadiograph)
+    ->ArgsProduct({{1024, 2048}, {2, 16}})
+    ->ArgNames({"res", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The streamed preview from +z at the service's default size (2048 pixels
+// a side at most; preview_analysis.cpp's over_slabs): the visible voxels
+// from one read of the stored runs, their normals and shades from a second,
+// the PNG.
+void BM_StreamedPreview(benchmark::State& state) {
+  const std::vector<std::uint8_t>& rle = stored_rle(state.range(0));
+  const Grid g = grid_at(state.range(0));
+  const auto threads = static_cast<int>(state.range(1));
+  const View view{2, true};
+  constexpr int kMaxSide = 2048;
+  std::size_t bytes = 0;
+  const CallgrindSection section(section_name("BM_StreamedPreview", state));
+  for (auto _ : state) {
+    PreviewRenderer preview(g, view, threads, kMaxSide);
+    read_rle_run_slabs(
+        std::span<const std::uint8_t>(rle), g.dims.z,
+        [&](std::int64_t k0, const RunSlab& slab) { preview.find(k0, slab); }, {}, threads);
+    read_rle_run_slabs(
+        std::span<const std::uint8_t>(rle), g.dims.z,
+        [&](std::int64_t k0, const RunSlab& slab) { preview.shade(k0, slab); }, {}, threads);
+    bytes = preview_png(preview.take(), g, view, {}, kMaxSide).size();
+  }
+  state.counters["png_bytes"] = static_cast<double>(bytes);
+}
+BENCHMARK(BM_StreamedPreview)
+    ->ArgsProduct({{1024, 2048}, {2, 16}})
     ->ArgNames({"res", "threads"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

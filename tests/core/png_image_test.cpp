@@ -69,7 +69,7 @@ TEST(PngGrey16, RadiographyOfSteppedBlockRoundTrips) {
   const json png = decode_png(sink.data);
   EXPECT_EQ(png["width"], 16);
   EXPECT_EQ(png["height"], 12);
-  EXPECT_EQ(png["pixels"].get<std::vector<std::uint32_t>>(), img.total);
+  EXPECT_EQ(png["pixels"].get<std::vector<std::uint32_t>>(), std::vector<std::uint32_t>(img.total.begin(), img.total.end()));
   EXPECT_EQ(png["text"]["voxd:scale"], "1 pixel value = 1 voxel");
 }
 

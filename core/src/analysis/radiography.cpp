@@ -179,13 +179,11 @@ namespace {
 // All three maps zero, sized for the projection of `grid` along `axis`.
 ThicknessImage blank_image(const Grid& grid, int axis) {
   const ImageSize size = projected_size(grid, axis);
-  ThicknessImage image;
-  image.width = size.width;
-  image.height = size.height;
+  const VolumeAllocator<std::uint32_t> zeroed(VolumeInit::zeroed);
+  ThicknessImage image{size.width, size.height, VolumeVector<std::uint32_t>(zeroed),
+                       VolumeVector<std::uint32_t>(zeroed), VolumeVector<std::uint32_t>(zeroed)};
   const std::size_t pixels = static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height);
-  image.min.assign(pixels, 0);
-  image.max.assign(pixels, 0);
-  image.total.assign(pixels, 0);
+  for (VolumeVector<std::uint32_t>* map : {&image.min, &image.max, &image.total}) map->resize(pixels);
   return image;
 }
 
@@ -204,9 +202,12 @@ ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
 }
 
 RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis)
-    : grid_(grid), axis_(axis), image_(blank_image(grid, axis)) {
+    : grid_(grid),
+      axis_(axis),
+      image_(blank_image(grid, axis)),
+      run_start_(VolumeAllocator<std::uint32_t>(VolumeInit::zeroed)) {
   if (axis == 2) {
-    run_start_.assign(image_.min.size(), 0);
+    run_start_.resize(image_.min.size());
     last_layer_.assign(static_cast<std::size_t>((grid.dims.x + 63) / 64 * grid.dims.y), 0);
   }
 }
