@@ -7,14 +7,12 @@
 // of the benchmark torus holds about 40 thousand runs where its bits take 2 MB.
 #include <cstdint>
 #include <functional>
-#include <memory>
-#include <new>
 #include <span>
-#include <utility>
 #include <vector>
 
 #include "voxd/bit_volume.h"
 #include "voxd/grid.h"
+#include "voxd/uncleared_vector.h"
 
 namespace voxd {
 
@@ -81,28 +79,10 @@ class RunSlab {
   const Prepared& prepared() const { return prepared_; }
 
  private:
-  // std::allocator's memory, but resize() leaves the new elements to be
-  // written (append_rows writes each on the thread that copies it) rather
-  // than clearing them all on the calling thread first.
-  template <class T>
-  struct Uncleared : std::allocator<T> {
-    template <class U>
-    struct rebind {
-      using other = Uncleared<U>;
-    };
-    Uncleared() = default;
-    template <class U>
-    Uncleared(const Uncleared<U>&) noexcept {}
-    template <class U>
-    void construct(U* p) noexcept {
-      ::new (static_cast<void*>(p)) U;
-    }
-    template <class U, class... Args>
-    void construct(U* p, Args&&... args) {
-      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-    }
-  };
-  using Bounds = std::vector<std::uint32_t, Uncleared<std::uint32_t>>;
+  // resize() leaves the new elements to be written (append_rows writes
+  // each on the thread that copies it) rather than clearing them all on the
+  // calling thread first.
+  using Bounds = UnclearedVector<std::uint32_t>;
 
   Grid grid_;
   Bounds starts_;  // row r's bounds are [starts_[r], starts_[r + 1])

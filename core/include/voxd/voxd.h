@@ -19,6 +19,7 @@
 #include "voxd/progress.h"
 #include "voxd/run_slab.h"
 #include "voxd/transform.h"
+#include "voxd/uncleared_vector.h"
 #include "voxd/volume_memory.h"
 
 #include "voxd/mesh_io/mesh_decode.h"

@@ -1,0 +1,39 @@
+#pragma once
+// A std::vector whose resize() leaves the new elements as the memory held
+// them, for values about to be written by several threads: std::vector
+// would first clear them all on the calling thread (and fault in every new
+// page there). The memory is std::allocator's (the heap, or the kernel's
+// ordinary pages for large blocks), not a volume's huge pages
+// (voxd/volume_memory.h): an image or a slab of runs is written once, in
+// rows, where the huge pages' first touch costs more than it saves (on a
+// virtual machine, the host clears each 2 MiB page it has not backed yet).
+#include <memory>
+#include <new>
+#include <utility>
+#include <vector>
+
+namespace voxd {
+
+template <class T>
+struct UnclearedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UnclearedAllocator<U>;
+  };
+  UnclearedAllocator() = default;
+  template <class U>
+  UnclearedAllocator(const UnclearedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;  // default-initialized: left as it is
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+template <class T>
+using UnclearedVector = std::vector<T, UnclearedAllocator<T>>;
+
+}  // namespace voxd
