@@ -269,8 +269,8 @@ TEST(Radiography, EmptyVolumeAndBadAxis) {
   const ThicknessImage img = radiography(v, 1);
   EXPECT_EQ(img.width, 5);
   EXPECT_EQ(img.height, 7);
-  EXPECT_EQ(img.total, VolumeVector<std::uint32_t>(35, 0));
-  EXPECT_EQ(img.min, VolumeVector<std::uint32_t>(35, 0));
+  EXPECT_EQ(img.total, UnclearedVector<std::uint32_t>(35, 0));
+  EXPECT_EQ(img.min, UnclearedVector<std::uint32_t>(35, 0));
   for (int axis : {-1, 3}) {
     try {
       radiography(v, axis);

@@ -15,7 +15,7 @@
 #include "analysis/zero_skip.h"
 
 namespace voxd {
-const VolumeVector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m) {
+const UnclearedVector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m) {
   return m == RadiographyMeasure::min ? image.min : m == RadiographyMeasure::max ? image.max : image.total;
 }
 

@@ -176,14 +176,23 @@ ImageSize projected_size(const Grid& grid, int axis) {
 
 namespace {
 
+// `map` as `n` zeros, written on every thread.
+void clear_on_every_thread(UnclearedVector<std::uint32_t>& map, std::size_t n) {
+  map.resize(n);
+  constexpr std::int64_t kPiece = std::int64_t{1} << 20;  // 4 MiB
+  parallel_for(0, static_cast<std::int64_t>(n), kPiece, 0, [&](std::int64_t a, std::int64_t b) {
+    std::fill(map.begin() + a, map.begin() + b, 0u);
+  });
+}
+
 // All three maps zero, sized for the projection of `grid` along `axis`.
 ThicknessImage blank_image(const Grid& grid, int axis) {
   const ImageSize size = projected_size(grid, axis);
-  const VolumeAllocator<std::uint32_t> zeroed(VolumeInit::zeroed);
-  ThicknessImage image{size.width, size.height, VolumeVector<std::uint32_t>(zeroed),
-                       VolumeVector<std::uint32_t>(zeroed), VolumeVector<std::uint32_t>(zeroed)};
+  ThicknessImage image;
+  image.width = size.width;
+  image.height = size.height;
   const std::size_t pixels = static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height);
-  for (VolumeVector<std::uint32_t>* map : {&image.min, &image.max, &image.total}) map->resize(pixels);
+  for (UnclearedVector<std::uint32_t>* map : {&image.min, &image.max, &image.total}) clear_on_every_thread(*map, pixels);
   return image;
 }
 
@@ -202,12 +211,9 @@ ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
 }
 
 RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis)
-    : grid_(grid),
-      axis_(axis),
-      image_(blank_image(grid, axis)),
-      run_start_(VolumeAllocator<std::uint32_t>(VolumeInit::zeroed)) {
+    : grid_(grid), axis_(axis), image_(blank_image(grid, axis)) {
   if (axis == 2) {
-    run_start_.resize(image_.min.size());
+    clear_on_every_thread(run_start_, image_.min.size());
     last_layer_.assign(static_cast<std::size_t>((grid.dims.x + 63) / 64 * grid.dims.y), 0);
   }
 }

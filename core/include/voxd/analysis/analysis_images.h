@@ -21,7 +21,7 @@ enum class RadiographyMeasure { min, max, total };
 inline constexpr EnumNames<RadiographyMeasure, 3> kRadiographyMeasureNames{{
     {RadiographyMeasure::min, "min"}, {RadiographyMeasure::max, "max"}, {RadiographyMeasure::total, "total"}}};
 inline const char* to_string(RadiographyMeasure m) noexcept { return name_of(kRadiographyMeasureNames, m); }
-const VolumeVector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m);
+const UnclearedVector<std::uint32_t>& values_of(const ThicknessImage& image, RadiographyMeasure m);
 
 // 16-bit grey (pixel = thickness in voxels, exact) or, with `colour`, false
 // colour with a legend. `scale` states what one pixel value is worth.

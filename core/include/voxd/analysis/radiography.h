@@ -11,7 +11,7 @@
 
 #include "voxd/bit_volume.h"
 #include "voxd/run_slab.h"
-#include "voxd/volume_memory.h"
+#include "voxd/uncleared_vector.h"
 
 namespace voxd {
 
@@ -20,15 +20,14 @@ namespace voxd {
 //   axis 0 (x): column = j, row = k;  axis 1 (y): column = i, row = k;
 //   axis 2 (z): column = i, row = j.
 // 0 in all three where the ray crosses no material.
-// The maps are volume memory (voxd/volume_memory.h): a large one starts as
-// fresh zero pages, faulted in by the threads that first write them, not
-// cleared on one thread first (a gigabyte for a radiograph of 8192^3).
+// The maps are cleared on every thread when they are made, not on the one
+// that makes them (a gigabyte of maps for a radiograph of 8192^3).
 struct ThicknessImage {
   int width = 0;
   int height = 0;
-  VolumeVector<std::uint32_t> min;    // shortest filled run on the ray
-  VolumeVector<std::uint32_t> max;    // longest filled run on the ray
-  VolumeVector<std::uint32_t> total;  // filled voxels on the ray
+  UnclearedVector<std::uint32_t> min;    // shortest filled run on the ray
+  UnclearedVector<std::uint32_t> max;    // longest filled run on the ray
+  UnclearedVector<std::uint32_t> total;  // filled voxels on the ray
 };
 
 // Image size for a projection of `grid` along `axis`: {width, height}.
@@ -68,7 +67,7 @@ class RadiographyAccumulator {
   int axis_;
   ThicknessImage image_;
   std::int64_t next_k_ = 0;
-  VolumeVector<std::uint32_t> run_start_;  // z: the layer the ray's open run began at
+  UnclearedVector<std::uint32_t> run_start_;  // z: the layer the ray's open run began at
   std::vector<std::uint64_t> last_layer_; // z: the previous layer's bits (rows of row words)
   RunSlab last_runs_;                      // z: the same as runs
   enum class Kind { none, bits, runs } kind_ = Kind::none;
