@@ -5,8 +5,8 @@
 // page there). The memory is std::allocator's (the heap, or the kernel's
 // ordinary pages for large blocks), not a volume's huge pages
 // (voxd/volume_memory.h): an image or a slab of runs is written once, in
-// rows, where the huge pages' first touch costs more than it saves (on a
-// virtual machine, the host clears each 2 MiB page it has not backed yet).
+// rows, and a radiograph's maps on huge pages were slower to fault in than
+// on ordinary ones on the development VM (docs/benchmarks.md, 2026-11-29).
 #include <memory>
 #include <new>
 #include <utility>
