@@ -23,8 +23,10 @@
 #       stage of the analysis report on the torus at 512^3 on 2 and 16
 #       threads, the solid straight to its RLE at 2048^3 on 2 and 16
 #       threads, its chunks encoded by the writer and where they are made,
-#       a stored 4096^3 RLE read back as runs, and a 4096 x 4096 16-bit PNG
-#       written in bands; prints medians and speed-ups from 2 to 16 threads.
+#       a stored 4096^3 RLE read back as runs, the streamed report,
+#       radiograph and preview over a stored 2048^3 RLE's runs, and a 4096 x
+#       4096 16-bit PNG written in bands; prints medians and speed-ups from 2
+#       to 16 threads.
 set -euo pipefail
 
 # Unpacks PACK_DIR's pack into `root` with its libraries on the path, and
@@ -50,6 +52,9 @@ scaling() {
   timeout 60 "$root/bin/stages_bench" --benchmark_filter='BM_ReadRunSlabs/res:4096/threads:(2|16)/' \
     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
     --benchmark_out="$results/read_runs.json" --benchmark_out_format=json > /dev/null || status=1
+  timeout 120 "$root/bin/stages_bench" --benchmark_filter='BM_Streamed(Report|Radiograph|Preview)/res:2048/threads:(2|16)/' \
+    --benchmark_repetitions=3 --benchmark_report_aggregates_only=true \
+    --benchmark_out="$results/streamed.json" --benchmark_out_format=json > /dev/null || status=1
   timeout 60 "$root/bin/volume_format_bench" --benchmark_filter='BM_PngGrey16/side:4096/threads:(2|16)/' \
     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
     --benchmark_out="$results/png.json" --benchmark_out_format=json > /dev/null || status=1
@@ -75,6 +80,11 @@ for arg, how in (("0", "RLE encoded by the writer"), ("1", "RLE encoded where ma
 reads = medians(f"{results}/read_runs.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
 if reads.get("2") and reads.get("16"):
     print(f"{'stored RLE 4096^3 read as runs':34} {reads['2']:13.0f} {reads['16']:14.0f} {reads['2'] / reads['16']:8.1f}x")
+streamed = medians(f"{results}/streamed.json",
+                   lambda n: tuple(re.match(r"BM_Streamed(\w+)/res:\d+/threads:(\d+)/", n).groups()))
+for what in ("Report", "Radiograph", "Preview"):
+    a, b = streamed.get((what, "2")), streamed.get((what, "16"))
+    if a and b: print(f"{'streamed ' + what.lower() + ', 2048^3 runs':34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
 pngs = medians(f"{results}/png.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
 if pngs.get("2") and pngs.get("16"):
     print(f"{'PNG16 4096 x 4096 in bands':34} {pngs['2']:13.0f} {pngs['16']:14.0f} {pngs['2'] / pngs['16']:8.1f}x")
