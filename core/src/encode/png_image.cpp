@@ -20,7 +20,7 @@
 #include "voxd/encode/number_text.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
-#include "voxd/volume_memory.h"
+#include "voxd/uncleared_vector.h"
 
 namespace voxd {
 namespace {
@@ -181,9 +181,10 @@ void write_png_grey16(int width, int height, std::span<const std::uint32_t> valu
   check_size(width, height, values.size(), "16-bit image");
   // Big-endian samples, rows on every thread: a radiograph of an 8192^3
   // grid is 65 megapixels, whose 130 MB are faulted in as they are written
-  // (hence not cleared first, VolumeInit::none). The first pixel over
-  // 65535 in row order is the one named, on any number of threads.
-  VolumeVector<std::uint8_t> bytes{VolumeAllocator<std::uint8_t>(VolumeInit::none)};
+  // (hence not cleared first: an UnclearedVector, as the radiograph's maps).
+  // The first pixel over 65535 in row order is the one named, on any number
+  // of threads.
+  UnclearedVector<std::uint8_t> bytes;
   bytes.resize(values.size() * 2);
   std::atomic<std::size_t> first_over{SIZE_MAX};
   const auto w = static_cast<std::size_t>(width);
