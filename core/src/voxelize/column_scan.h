@@ -19,6 +19,7 @@
 #include <cstdint>
 
 #include "voxelize/fixed_point_mesh.h"
+#include "voxelize/int128_to_double.h"
 
 namespace voxd::detail {
 
@@ -28,7 +29,7 @@ using i128 = __int128;
 // answer below lo - 1 is reported as lo - 1 and one above hi as hi + 1. A
 // double estimate is corrected with exact integer checks (usually 0 steps).
 inline std::int64_t ceil_div_clamped(i128 c, i128 m, std::int64_t lo, std::int64_t hi) {
-  const double t = static_cast<double>(c) / static_cast<double>(m);
+  const double t = int128_to_double(c) / int128_to_double(m);
   std::int64_t j;
   if (!(t > static_cast<double>(lo - 1))) {
     j = lo - 1;
@@ -71,7 +72,7 @@ inline void scan_triangle(const FixedPoint& A, const FixedPoint& B, const FixedP
                e1v = static_cast<double>(bv - av);
   const double e2x = static_cast<double>(C[axes.ray] - A[axes.ray]), e2u = static_cast<double>(cu - au),
                e2v = static_cast<double>(cv - av);
-  const double nx = static_cast<double>(det);
+  const double nx = int128_to_double(det);
   const double gu = -(e1v * e2x - e1x * e2v) / nx;  // dx/du
   const double gv = -(e1x * e2u - e1u * e2x) / nx;  // dx/dv
   constexpr double kInvOne = 1.0 / static_cast<double>(kFixedOne);

@@ -10,43 +10,14 @@
 // comes from the triangle's plane in double, with only correctly rounded
 // operations and no fused multiply-add on either side (the kernels build with
 // -fmad=false); the one conversion a library might round its own way,
-// __int128 to double, is spelled out below.
-#include <math.h>
-
+// __int128 to double, is spelled out (int128_to_double.h).
 #include <cstdint>
 
 #include "voxelize/fixed_point.h"
 #include "voxelize/host_device.h"
+#include "voxelize/int128_to_double.h"
 
 namespace voxd::detail {
-
-// Leading zero bits of a non-zero 64-bit word.
-VOXD_HD inline int leading_zeros(std::uint64_t x) {
-#if defined(__CUDA_ARCH__)
-  return __clzll(static_cast<long long>(x));
-#else
-  return __builtin_clzll(x);
-#endif
-}
-
-// v rounded to the nearest double, ties to even: what GCC's conversion does
-// on the CPU, written out so that the GPU does not depend on how its
-// compiler converts a 128-bit integer.
-VOXD_HD inline double int128_to_double(__int128 v) {
-  constexpr __int128 exact = __int128{1} << 53;
-  if (v >= -exact && v <= exact) return static_cast<double>(static_cast<std::int64_t>(v));
-  const bool negative = v < 0;
-  const unsigned __int128 m = negative ? -static_cast<unsigned __int128>(v) : static_cast<unsigned __int128>(v);
-  const auto hi = static_cast<std::uint64_t>(m >> 64);
-  const int length = hi != 0 ? 128 - leading_zeros(hi) : 64 - leading_zeros(static_cast<std::uint64_t>(m));
-  const int shift = length - 53;  // >= 1: |v| > 2^53
-  auto mantissa = static_cast<std::uint64_t>(m >> shift);
-  const unsigned __int128 rest = m & ((static_cast<unsigned __int128>(1) << shift) - 1);
-  const unsigned __int128 half = static_cast<unsigned __int128>(1) << (shift - 1);
-  if (rest > half || (rest == half && (mantissa & 1) != 0)) ++mantissa;  // 2^53 is still exact
-  const double magnitude = ldexp(static_cast<double>(mantissa), shift);
-  return negative ? -magnitude : magnitude;
-}
 
 // Sign of an edge function after displacing the point by (eps, eps^2) in
 // (u, v): never zero for a non-degenerate edge (simulation of simplicity).
