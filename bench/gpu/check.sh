@@ -24,9 +24,10 @@
 #       threads, the solid straight to its RLE at 2048^3 on 2 and 16
 #       threads, its chunks encoded by the writer and where they are made,
 #       a stored 4096^3 RLE read back as runs, the streamed report,
-#       radiograph and preview over a stored 2048^3 RLE's runs, and a 4096 x
-#       4096 16-bit PNG written in bands; prints medians and speed-ups from 2
-#       to 16 threads.
+#       radiograph and preview over a stored 2048^3 RLE's runs, a 4096 x
+#       4096 16-bit PNG written in bands, and the memory's own bandwidth
+#       (read, write, copy); prints the CPU's layout (lscpu: cores, threads
+#       a core, memory nodes), medians and speed-ups from 2 to 16 threads.
 set -euo pipefail
 
 # Unpacks PACK_DIR's pack into `root` with its libraries on the path, and
@@ -41,6 +42,15 @@ unpack() {
 
 scaling() {
   local root=$1 results=$2 status=0
+  # What "16 cores" means here: 16 cores, or 8 with two threads each, on
+  # one memory node or two, decides which speed-ups are possible at all.
+  lscpu > "$results/lscpu.txt" 2>&1 || nproc > "$results/lscpu.txt"
+  grep -E '^(Model name|CPU\(s\)|Thread\(s\) per core|Core\(s\) per socket|Socket\(s\)|NUMA node\(s\)|L3 cache|CPU max MHz):' \
+    "$results/lscpu.txt" || true
+  # The memory's own speed-up from 2 to 16 threads: the ceiling of a stage
+  # that streams its voxels.
+  timeout 60 "$root/bin/memory_bandwidth_bench" --benchmark_filter='threads:(2|16)/' \
+    --benchmark_out="$results/memory.json" --benchmark_out_format=json > /dev/null || status=1
   timeout 240 "$root/bin/analysis_stages_bench" --benchmark_filter='torus/res:512/threads:(2|16)/' \
     --benchmark_report_aggregates_only=true --benchmark_out="$results/analysis_stages.json" \
     --benchmark_out_format=json > /dev/null || status=1
@@ -85,6 +95,14 @@ streamed = medians(f"{results}/streamed.json",
 for what in ("Report", "Radiograph", "Preview"):
     a, b = streamed.get((what, "2")), streamed.get((what, "16"))
     if a and b: print(f"{'streamed ' + what.lower() + ', 2048^3 runs':34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
+if os.path.exists(f"{results}/memory.json"):
+    rates = {}
+    for b in json.load(open(f"{results}/memory.json"))["benchmarks"]:
+        what, t = re.match(r"BM_Memory(\w+)/threads:(\d+)/", b["name"]).groups()
+        rates[(what, t)] = b["bytes_per_second"] / 1e9
+    for what in ("Read", "Write", "Copy"):
+        a, b = rates.get((what, "2")), rates.get((what, "16"))
+        if a and b: print(f"{'memory ' + what.lower() + ', GB/s (not ms)':34} {a:13.1f} {b:14.1f} {b / a:8.1f}x")
 pngs = medians(f"{results}/png.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
 if pngs.get("2") and pngs.get("16"):
     print(f"{'PNG16 4096 x 4096 in bands':34} {pngs['2']:13.0f} {pngs['16']:14.0f} {pngs['2'] / pngs['16']:8.1f}x")
@@ -99,8 +117,9 @@ case "${1:-}" in
     stage=$(mktemp -d); trap 'rm -rf "$stage"' EXIT
     mkdir -p "$stage/bin" "$stage/lib" "$out"
     for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench bench/analysis_stages_bench \
-      bench/stages_bench bench/volume_format_bench tests/coverage_cuda_test tests/coverage_device_test \
-      bench/coverage_device_bench tests/sdf_cuda_test tests/sdf_device_test bench/sdf_device_bench; do
+      bench/stages_bench bench/volume_format_bench bench/memory_bandwidth_bench \
+      tests/coverage_cuda_test tests/coverage_device_test bench/coverage_device_bench \
+      tests/sdf_cuda_test tests/sdf_device_test bench/sdf_device_bench; do
       cp "$build/$exe" "$stage/bin/"
       # The C and C++ runtimes stay behind: the GPU machine has its own, newer.
       # (grep finds nothing to keep for an executable of system libraries only.)

@@ -1,0 +1,101 @@
+// The machine's own memory bandwidth on 1 to 16 threads, through the same
+// parallel_for the stages use (issue #39): the ceiling a stage that streams
+// its voxels through memory can reach. A stage whose speed-up from 2 to 16
+// threads stops near this one's is bound by memory, not by serial work
+// (which bench/serial_fraction.sh counts); one far below it is not.
+// bench/gpu/check.sh scaling runs it on the lent 16-core machines.
+//   memory_bandwidth_bench --benchmark_filter='threads:(2|16)/'
+//
+// Three loops over 1 GiB arrays of 64-bit words, STREAM's kernels without
+// the arithmetic: read (a sum), write (a fill) and copy, in pieces of 1 MiB
+// claimed by the threads as a stage's rows are. The arrays are first
+// written by the same pieces on all threads, so their pages lie where a
+// stage's own would (first touch, on a machine with several memory nodes).
+#include <benchmark/benchmark.h>
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "voxd/parallel.h"
+#include "voxd/uncleared_vector.h"
+
+namespace {
+
+constexpr std::int64_t kWords = std::int64_t{1} << 27;  // 1 GiB of 64-bit words
+constexpr std::int64_t kPiece = std::int64_t{1} << 17;  // 1 MiB
+
+using Words = voxd::UnclearedVector<std::uint64_t>;
+
+Words& array(int which) {
+  static Words arrays[2] = {Words(kWords), Words(kWords)};
+  static const bool touched = [] {
+    for (Words& a : arrays)
+      voxd::parallel_for(0, kWords, kPiece, 0, [&](std::int64_t b, std::int64_t e) {
+        for (std::int64_t i = b; i < e; ++i) a[static_cast<std::size_t>(i)] = static_cast<std::uint64_t>(i);
+      });
+    return true;
+  }();
+  (void)touched;
+  return arrays[which];
+}
+
+void report(benchmark::State& state, std::int64_t bytes_a_pass) {
+  state.SetBytesProcessed(state.iterations() * bytes_a_pass);
+  state.counters["threads"] = static_cast<double>(state.range(0));
+}
+
+void BM_MemoryRead(benchmark::State& state) {
+  const Words& a = array(0);
+  const int threads = static_cast<int>(state.range(0));
+  std::vector<std::uint64_t> sums(static_cast<std::size_t>(kWords / kPiece));
+  for (auto _ : state) {
+    voxd::parallel_for(0, kWords, kPiece, threads, [&](std::int64_t b, std::int64_t e) {
+      std::uint64_t sum = 0;
+      for (std::int64_t i = b; i < e; ++i) sum += a[static_cast<std::size_t>(i)];
+      sums[static_cast<std::size_t>(b / kPiece)] = sum;
+    });
+    benchmark::DoNotOptimize(sums.data());
+  }
+  report(state, kWords * 8);
+}
+
+void BM_MemoryWrite(benchmark::State& state) {
+  Words& a = array(0);
+  const int threads = static_cast<int>(state.range(0));
+  std::uint64_t value = 0;
+  for (auto _ : state) {
+    ++value;
+    voxd::parallel_for(0, kWords, kPiece, threads, [&](std::int64_t b, std::int64_t e) {
+      for (std::int64_t i = b; i < e; ++i) a[static_cast<std::size_t>(i)] = value;
+    });
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  report(state, kWords * 8);
+}
+
+void BM_MemoryCopy(benchmark::State& state) {
+  const Words& from = array(0);
+  Words& to = array(1);
+  const int threads = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    voxd::parallel_for(0, kWords, kPiece, threads, [&](std::int64_t b, std::int64_t e) {
+      std::memcpy(to.data() + b, from.data() + b, static_cast<std::size_t>(e - b) * 8);
+    });
+    benchmark::DoNotOptimize(to.data());
+    benchmark::ClobberMemory();
+  }
+  report(state, kWords * 16);  // read and written
+}
+
+void threads(benchmark::internal::Benchmark* b) {
+  for (int t : {1, 2, 4, 8, 16}) b->ArgName("threads")->Arg(t);
+  b->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(0.3);
+}
+
+BENCHMARK(BM_MemoryRead)->Apply(threads);
+BENCHMARK(BM_MemoryWrite)->Apply(threads);
+BENCHMARK(BM_MemoryCopy)->Apply(threads);
+
+}  // namespace
