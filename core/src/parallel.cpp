@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -36,7 +37,13 @@ void run_piece(const Body& body, A a, B b) {
     parallel_work(body, a, b);
 }
 
+std::atomic<ScheduleObserver*> observer{nullptr};
+
 }  // namespace
+
+void set_schedule_observer(ScheduleObserver* o) noexcept { observer.store(o); }
+ScheduleObserver* schedule_observer() noexcept { return observer.load(std::memory_order_relaxed); }
+bool inside_parallel_piece() noexcept { return inside_parallel_work; }
 
 void run_parallel_piece(const std::function<void(std::int64_t, std::int64_t)>& body, std::int64_t a,
                         std::int64_t b) {
@@ -57,8 +64,20 @@ void parallel_for(std::int64_t begin, std::int64_t end, std::int64_t grain, int 
   const std::int64_t chunks = (end - begin + grain - 1) / grain;
   int n = threads > 0 ? threads : default_thread_count();
   n = static_cast<int>(std::min<std::int64_t>(n, chunks));
-  if (n <= 1) {
+  detail::ScheduleObserver* const observer = detail::schedule_observer();
+  if (n <= 1 || (observer && detail::inside_parallel_piece())) {
     for (std::int64_t b = begin; b < end; b += grain) body(b, std::min(end, b + grain));
+    return;
+  }
+  if (observer) {  // a benchmark's simulation: each piece timed, one after another
+    std::vector<double> seconds;
+    seconds.reserve(static_cast<std::size_t>(chunks));
+    for (std::int64_t b = begin; b < end; b += grain) {
+      const auto start = std::chrono::steady_clock::now();
+      detail::run_parallel_piece(body, b, std::min(end, b + grain));
+      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+    observer->loop(n, seconds);
     return;
   }
   std::atomic<std::int64_t> next{0};

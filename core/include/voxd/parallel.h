@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <span>
 
 namespace voxd {
 
@@ -29,6 +30,29 @@ void run_parallel_piece(const std::function<void(std::int64_t, std::int64_t)>& b
                         std::int64_t b);
 void run_parallel_piece(const std::function<void(std::int64_t, std::size_t)>& body, std::int64_t a,
                         std::size_t b);
+
+// What a benchmark sees of the work threads would share, to work out how
+// long a stage would take on more cores than the machine has
+// (bench/schedule_simulation.h). While an observer is set (for the whole
+// process: benchmarks only), each outermost parallel_for and ordered
+// pipeline runs its pieces one after another on the calling thread, in the
+// order threads would claim them, a loop nested in a piece runs inline, and
+// the observer is told the seconds each piece took and how many threads
+// would have shared them.
+class ScheduleObserver {
+ public:
+  virtual ~ScheduleObserver() = default;
+  virtual void loop(int threads, std::span<const double> pieces) = 0;
+  // An ordered pipeline: piece i is produced on any thread, then consumed
+  // in order on one.
+  virtual void pipeline(int threads, std::span<const double> produce, std::span<const double> consume) = 0;
+};
+void set_schedule_observer(ScheduleObserver* observer) noexcept;  // nullptr: threads again
+ScheduleObserver* schedule_observer() noexcept;                   // the one set, or nullptr
+// Whether this thread is running a piece of a loop or pipeline (under an
+// observer, a loop nested in it runs inline).
+bool inside_parallel_piece() noexcept;
+
 }  // namespace detail
 
 }  // namespace voxd

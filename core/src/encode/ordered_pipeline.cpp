@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
@@ -31,6 +32,34 @@ void run_ordered_pipeline(std::int64_t count, int threads, std::size_t slot_coun
       static_cast<int>(std::min<std::int64_t>(threads > 0 ? threads : default_thread_count(), count));
   // Signed, for the `i - slots` comparisons below.
   const auto slots = static_cast<std::int64_t>(std::max<std::size_t>(slot_count, 1));
+  if (detail::ScheduleObserver* const observer = detail::schedule_observer()) {
+    // A benchmark's simulation: each piece produced and consumed in turn, timed.
+    const bool outermost = !detail::inside_parallel_piece() && wanted_threads > 1;
+    std::vector<double> produce_seconds, consume_seconds;
+    const auto seconds_of = [](auto&& step) {
+      const auto start = std::chrono::steady_clock::now();
+      step();
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    for (std::int64_t i = 0; i < count; ++i) {
+      const auto slot = static_cast<std::size_t>(i % slots);
+      produce_seconds.push_back(seconds_of([&] {
+        if (outermost)
+          detail::run_parallel_piece(produce, i, slot);
+        else
+          produce(i, slot);
+      }));
+      // A loop within consume is part of its serial time (as if on one thread).
+      consume_seconds.push_back(seconds_of([&] {
+        if (outermost)
+          detail::run_parallel_piece(consume, i, slot);
+        else
+          consume(i, slot);
+      }));
+    }
+    if (outermost) observer->pipeline(wanted_threads, produce_seconds, consume_seconds);
+    return;
+  }
 
   std::mutex mutex;
   std::condition_variable changed;

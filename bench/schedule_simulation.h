@@ -1,0 +1,104 @@
+#pragma once
+// How long a benchmark's section would take on more threads than the
+// machine has cores, from the pieces its loops are cut into (issue #39).
+// Amdahl's bound from serial instructions (bench/serial_fraction.sh) takes
+// every loop as divisible without end; a loop of 20 equal pieces on 16
+// threads takes two pieces' time, not 20/16 of one, and one long piece
+// holds back the rest. This simulation sees that.
+//
+// With VOXD_SCHEDULE_SIMULATION set, each outermost parallel_for and
+// ordered pipeline of the section runs its pieces one after another on the
+// calling thread, timing each (voxd::detail::ScheduleObserver), and the
+// section's time on the loops' thread counts is worked out:
+//   - a loop: its pieces in the order they would be claimed, each taken by
+//     whichever thread is free first (parallel_for's dynamic claiming);
+//   - a pipeline: pieces produced as in a loop, consumed in order on a lane
+//     of its own (slightly optimistic: the real consumer is one of the
+//     threads);
+//   - everything outside loops: serial, as measured.
+// Left out, so the figure is a bound: starting and joining threads, and
+// threads slowing each other down (memory bandwidth, caches, turbo
+// clocks). Counters: simulated_ms (the section on the loops' threads),
+// serial_ms (outside any loop), pieces_in_loops.
+//   VOXD_SCHEDULE_SIMULATION=1 build/bench/analysis_stages_bench --benchmark_filter=...
+// bench/schedule_bound.sh pairs a section's 2- and 16-thread figures.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <functional>
+#include <queue>
+#include <span>
+#include <vector>
+
+#include "voxd/parallel.h"
+
+namespace voxd::bench {
+
+// When `threads` threads, each taking the next piece when it is free, are
+// done with `pieces` (seconds each, in claim order); `ends` gets each
+// piece's end.
+inline double list_schedule(int threads, std::span<const double> pieces, std::vector<double>* ends = nullptr) {
+  std::priority_queue<double, std::vector<double>, std::greater<>> free_at;
+  for (int t = 0; t < std::max(threads, 1); ++t) free_at.push(0.0);
+  double last = 0;
+  for (const double seconds : pieces) {
+    const double end = free_at.top() + seconds;
+    free_at.pop();
+    free_at.push(end);
+    last = std::max(last, end);
+    if (ends) ends->push_back(end);
+  }
+  return last;
+}
+
+class ScheduleSimulation final : public detail::ScheduleObserver {
+ public:
+  explicit ScheduleSimulation(benchmark::State& state)
+      : state_(state), on_(std::getenv("VOXD_SCHEDULE_SIMULATION") != nullptr) {
+    if (!on_) return;
+    detail::set_schedule_observer(this);
+    start_ = std::chrono::steady_clock::now();
+  }
+  ~ScheduleSimulation() override {
+    if (!on_) return;
+    detail::set_schedule_observer(nullptr);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double iterations = state_.iterations() > 0 ? static_cast<double>(state_.iterations()) : 1.0;
+    const double serial = std::max(0.0, wall - in_loops_);
+    state_.counters["serial_ms"] = 1e3 * serial / iterations;
+    state_.counters["simulated_ms"] = 1e3 * (serial + simulated_) / iterations;
+    state_.counters["pieces_in_loops"] = static_cast<double>(pieces_) / iterations;
+  }
+  ScheduleSimulation(const ScheduleSimulation&) = delete;
+  ScheduleSimulation& operator=(const ScheduleSimulation&) = delete;
+
+  void loop(int threads, std::span<const double> pieces) override {
+    for (const double s : pieces) in_loops_ += s;
+    simulated_ += list_schedule(threads, pieces);
+    pieces_ += pieces.size();
+  }
+
+  void pipeline(int threads, std::span<const double> produce, std::span<const double> consume) override {
+    std::vector<double> produced;
+    list_schedule(threads, produce, &produced);
+    double consumed = 0;
+    for (std::size_t i = 0; i < produce.size(); ++i) {
+      consumed = std::max(consumed, produced[i]) + consume[i];
+      in_loops_ += produce[i] + consume[i];
+    }
+    simulated_ += consumed;
+    pieces_ += produce.size();
+  }
+
+ private:
+  benchmark::State& state_;
+  const bool on_;
+  std::chrono::steady_clock::time_point start_;
+  double in_loops_ = 0;   // seconds the loops' pieces took, one after another
+  double simulated_ = 0;  // seconds they would take on their threads
+  std::size_t pieces_ = 0;
+};
+
+}  // namespace voxd::bench

@@ -1,0 +1,141 @@
+// parallel_for and the ordered pipeline: every index once, and what a
+// benchmark's schedule observer (bench/schedule_simulation.h) is told.
+#include "voxd/parallel.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "encode/ordered_pipeline.h"
+
+namespace voxd {
+namespace {
+
+TEST(ParallelFor, CoversEveryIndexOnceInPiecesOfTheGrain) {
+  for (int threads : {1, 3, 8}) {
+    std::vector<std::atomic<int>> hits(1000);
+    std::atomic<int> oversized{0};
+    parallel_for(5, 1000, 7, threads, [&](std::int64_t a, std::int64_t b) {
+      if (b - a > 7 || (a - 5) % 7 != 0) ++oversized;
+      for (std::int64_t i = a; i < b; ++i) ++hits[static_cast<std::size_t>(i)];
+    });
+    EXPECT_EQ(oversized.load(), 0) << threads;
+    for (std::size_t i = 0; i < hits.size(); ++i) ASSERT_EQ(hits[i].load(), i < 5 ? 0 : 1) << i << " " << threads;
+  }
+}
+
+TEST(ParallelFor, RethrowsABodysErrorOnTheCallingThread) {
+  EXPECT_THROW(parallel_for(0, 100, 1, 4,
+                            [](std::int64_t a, std::int64_t) {
+                              if (a == 37) throw std::runtime_error("piece 37");
+                            }),
+               std::runtime_error);
+}
+
+// Records what it is told, and on which thread each piece ran.
+class RecordingObserver final : public detail::ScheduleObserver {
+ public:
+  struct Loop {
+    int threads;
+    std::size_t pieces;
+    std::size_t consumed;  // a pipeline's consume steps; 0 for a loop
+  };
+  std::vector<Loop> loops;
+  void loop(int threads, std::span<const double> pieces) override {
+    for (double s : pieces) EXPECT_GE(s, 0.0);
+    loops.push_back({threads, pieces.size(), 0});
+  }
+  void pipeline(int threads, std::span<const double> produce, std::span<const double> consume) override {
+    loops.push_back({threads, produce.size(), consume.size()});
+  }
+};
+
+struct Observing {
+  explicit Observing(detail::ScheduleObserver* o) { detail::set_schedule_observer(o); }
+  ~Observing() { detail::set_schedule_observer(nullptr); }
+};
+
+TEST(ScheduleObserver, IsToldEachOutermostLoopsPiecesRunInClaimOrderOnTheCallingThread) {
+  RecordingObserver observer;
+  const auto caller = std::this_thread::get_id();
+  std::vector<std::pair<std::int64_t, std::int64_t>> order;
+  bool elsewhere = false;
+  {
+    const Observing observing(&observer);
+    parallel_for(0, 100, 7, 4, [&](std::int64_t a, std::int64_t b) {
+      elsewhere |= std::this_thread::get_id() != caller;
+      order.emplace_back(a, b);
+      // Nested: runs inline, as part of this piece, and is not a loop of its own.
+      parallel_for(0, 50, 1, 4, [&](std::int64_t, std::int64_t) { elsewhere |= std::this_thread::get_id() != caller; });
+    });
+    // One thread: serial work, not a loop to simulate.
+    parallel_for(0, 100, 7, 1, [](std::int64_t, std::int64_t) {});
+    // More threads than pieces: the loop's threads are its pieces.
+    parallel_for(0, 3, 1, 16, [](std::int64_t, std::int64_t) {});
+  }
+  EXPECT_FALSE(elsewhere);
+  ASSERT_EQ(order.size(), 15u);
+  for (std::size_t p = 0; p < order.size(); ++p)
+    EXPECT_EQ(order[p], std::make_pair(static_cast<std::int64_t>(7 * p), std::min<std::int64_t>(100, 7 * p + 7)));
+  ASSERT_EQ(observer.loops.size(), 2u);
+  EXPECT_EQ(observer.loops[0].threads, 4);
+  EXPECT_EQ(observer.loops[0].pieces, 15u);
+  EXPECT_EQ(observer.loops[1].threads, 3);
+  EXPECT_EQ(observer.loops[1].pieces, 3u);
+
+  // Without it, threads again and nothing told.
+  std::mutex mutex;
+  std::vector<std::thread::id> ids;
+  parallel_for(0, 64, 1, 4, [&](std::int64_t, std::int64_t) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    std::lock_guard lock(mutex);
+    ids.push_back(std::this_thread::get_id());
+  });
+  std::sort(ids.begin(), ids.end());
+  EXPECT_GT(std::unique(ids.begin(), ids.end()) - ids.begin(), 1);
+  EXPECT_EQ(observer.loops.size(), 2u);
+}
+
+TEST(ScheduleObserver, IsToldAPipelinesProducedAndConsumedPiecesInOrder) {
+  RecordingObserver observer;
+  const auto caller = std::this_thread::get_id();
+  using Step = std::tuple<char, std::int64_t, std::size_t>;  // produce or consume, piece, slot
+  std::vector<Step> steps;
+  bool elsewhere = false;
+  {
+    const Observing observing(&observer);
+    encode::run_ordered_pipeline(
+        5, 3, 2,
+        [&](std::int64_t i, std::size_t slot) {
+          elsewhere |= std::this_thread::get_id() != caller;
+          steps.emplace_back('p', i, slot);
+        },
+        [&](std::int64_t i, std::size_t slot) {
+          // A loop within consume is part of its serial time, not a loop of its own.
+          parallel_for(0, 10, 1, 4, [](std::int64_t, std::int64_t) {});
+          steps.emplace_back('c', i, slot);
+        });
+  }
+  EXPECT_FALSE(elsewhere);
+  std::vector<Step> expected;
+  for (std::int64_t i = 0; i < 5; ++i) {
+    expected.emplace_back('p', i, i % 2);
+    expected.emplace_back('c', i, i % 2);
+  }
+  EXPECT_EQ(steps, expected);
+  ASSERT_EQ(observer.loops.size(), 1u);
+  EXPECT_EQ(observer.loops[0].threads, 3);
+  EXPECT_EQ(observer.loops[0].pieces, 5u);
+  EXPECT_EQ(observer.loops[0].consumed, 5u);
+}
+
+}  // namespace
+}  // namespace voxd
