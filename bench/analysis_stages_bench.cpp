@@ -82,7 +82,7 @@ void counters(benchmark::State& state, const BitVolume& v) {
 void BM_Mass(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
   const CallgrindSection section = counted(state, "BM_Mass", name);
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads_of(state));
   for (auto _ : state) benchmark::DoNotOptimize(voxel_mass_properties(v, threads_of(state)));
   counters(state, v);
 }
@@ -90,7 +90,7 @@ void BM_Mass(benchmark::State& state, const char* name) {
 void BM_PartsAndVoids(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
   const CallgrindSection section = counted(state, "BM_PartsAndVoids", name);
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads_of(state));
   for (auto _ : state) benchmark::DoNotOptimize(find_components(v, threads_of(state)));
   counters(state, v);
 }
@@ -98,7 +98,7 @@ void BM_PartsAndVoids(benchmark::State& state, const char* name) {
 void BM_Skin(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
   const CallgrindSection section = counted(state, "BM_Skin", name);
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads_of(state));
   for (auto _ : state)
     benchmark::DoNotOptimize(summarize_peeling(peel_depth(v, threads_of(state), PeelMetric::faces), threads_of(state)));
   counters(state, v);
@@ -141,7 +141,7 @@ void BM_WallThickness(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
   std::vector<double> sums(std::size(PhaseClock::kEnds), 0.0);
   const CallgrindSection section = counted(state, "BM_WallThickness", name);
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads_of(state));
   for (auto _ : state) {
     PhaseClock clock;
     JobControl control(&clock);
@@ -162,7 +162,7 @@ void BM_WallThickness(benchmark::State& state, const char* name) {
 void BM_NearestEmpty(benchmark::State& state, const char* name) {
   const BitVolume& v = solid(name, state.range(0));
   const CallgrindSection section = counted(state, "BM_NearestEmpty", name);
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads_of(state));
   for (auto _ : state) benchmark::DoNotOptimize(detail::nearest_empty_voxels(v, threads_of(state)).values().data());
   counters(state, v);
 }
@@ -182,7 +182,7 @@ void BM_ThicknessRegions(benchmark::State& state, const char* name) {
   options.max_wall_voxels = stats.min + 2 * (stats.mean - stats.min) / 3;
   std::size_t regions = 0;
   const CallgrindSection section = counted(state, "BM_ThicknessRegions", name);
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads_of(state));
   for (auto _ : state) {
     // Mass and parts are timed above; here they are a small share.
     const AnalysisReport report = analyze_volume(v, options);
@@ -198,7 +198,7 @@ void BM_ThicknessPreview(benchmark::State& state, const char* name) {
   const DenseVolume<float>& map = thickness(name, state.range(0));
   std::size_t bytes = 0;
   const CallgrindSection section = counted(state, "BM_ThicknessPreview", name);
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads_of(state));
   for (auto _ : state) bytes = preview_png(v, View{2, true}, &map, {}, threads_of(state)).size();
   counters(state, v);
   state.counters["png_bytes"] = static_cast<double>(bytes);

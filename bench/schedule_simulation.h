@@ -8,8 +8,10 @@
 //
 // With VOXD_SCHEDULE_SIMULATION set, each outermost parallel_for and
 // ordered pipeline of the section runs its pieces one after another on the
-// calling thread, timing each (voxd::detail::ScheduleObserver), and the
-// section's time on the loops' thread counts is worked out:
+// calling thread, timing each (voxd::detail::ScheduleObserver), loops that
+// ask for every core, or cut themselves by the cores, see the simulated
+// machine's (the benchmark's thread count), and the section's time on the
+// loops' thread counts is worked out:
 //   - a loop: its pieces in the order they would be claimed, each taken by
 //     whichever thread is free first (parallel_for's dynamic claiming);
 //   - a pipeline: pieces produced as in a loop, consumed in order on a lane
@@ -19,17 +21,22 @@
 // Left out, so the figure is a bound: starting and joining threads, and
 // threads slowing each other down (memory bandwidth, caches, turbo
 // clocks). Counters: simulated_ms (the section on the loops' threads),
-// serial_ms (outside any loop), pieces_in_loops.
+// serial_ms (outside any loop), pieces_in_loops. VOXD_SCHEDULE_SIMULATION=loops
+// also prints each loop to stderr (threads, pieces, their sum, the
+// simulated time, the longest piece), to find the one that holds a stage back.
 //   VOXD_SCHEDULE_SIMULATION=1 build/bench/analysis_stages_bench --benchmark_filter=...
 // bench/schedule_bound.sh pairs a section's 2- and 16-thread figures.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <queue>
 #include <span>
+#include <thread>
 #include <vector>
 
 #include "voxd/parallel.h"
@@ -55,8 +62,13 @@ inline double list_schedule(int threads, std::span<const double> pieces, std::ve
 
 class ScheduleSimulation final : public detail::ScheduleObserver {
  public:
-  explicit ScheduleSimulation(benchmark::State& state)
-      : state_(state), on_(std::getenv("VOXD_SCHEDULE_SIMULATION") != nullptr) {
+  // `cores`: the machine simulated, what loops asked for every core get
+  // (and what cuts loops by the machine's size); 0: this machine's.
+  ScheduleSimulation(benchmark::State& state, int cores)
+      : state_(state),
+        cores_(cores > 0 ? cores : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))),
+        on_(std::getenv("VOXD_SCHEDULE_SIMULATION") != nullptr),
+        print_(on_ && std::strcmp(std::getenv("VOXD_SCHEDULE_SIMULATION"), "loops") == 0) {
     if (!on_) return;
     detail::set_schedule_observer(this);
     start_ = std::chrono::steady_clock::now();
@@ -74,10 +86,21 @@ class ScheduleSimulation final : public detail::ScheduleObserver {
   ScheduleSimulation(const ScheduleSimulation&) = delete;
   ScheduleSimulation& operator=(const ScheduleSimulation&) = delete;
 
+  int cores() const override { return cores_; }
+
   void loop(int threads, std::span<const double> pieces) override {
-    for (const double s : pieces) in_loops_ += s;
-    simulated_ += list_schedule(threads, pieces);
+    double sum = 0, longest = 0;
+    for (const double s : pieces) {
+      sum += s;
+      longest = std::max(longest, s);
+    }
+    const double simulated = list_schedule(threads, pieces);
+    in_loops_ += sum;
+    simulated_ += simulated;
     pieces_ += pieces.size();
+    if (print_)
+      std::fprintf(stderr, "loop: %2d threads %6zu pieces %9.3f ms in all -> %8.3f ms, longest piece %8.3f ms\n",
+                   threads, pieces.size(), 1e3 * sum, 1e3 * simulated, 1e3 * longest);
   }
 
   void pipeline(int threads, std::span<const double> produce, std::span<const double> consume) override {
@@ -90,11 +113,15 @@ class ScheduleSimulation final : public detail::ScheduleObserver {
     }
     simulated_ += consumed;
     pieces_ += produce.size();
+    if (print_)
+      std::fprintf(stderr, "pipeline: %2d threads %6zu pieces -> %8.3f ms\n", threads, produce.size(), 1e3 * consumed);
   }
 
  private:
   benchmark::State& state_;
+  const int cores_;
   const bool on_;
+  const bool print_;
   std::chrono::steady_clock::time_point start_;
   double in_loops_ = 0;   // seconds the loops' pieces took, one after another
   double simulated_ = 0;  // seconds they would take on their threads

@@ -90,7 +90,7 @@ void BM_VoxelizeRunsToRle(benchmark::State& state) {
   const Mesh& m = mesh();
   const CallgrindSection section("BM_VoxelizeRunsToRle/" + std::to_string(state.range(0)) + "/" +
                                  std::to_string(state.range(1)) + "/threads:" + std::to_string(options.threads));
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, options.threads);
   for (auto _ : state) {
     CountingSink sink;
     BitSlabWriter writer(g, VolumeFormat::rle, {}, sink);
@@ -139,7 +139,7 @@ void BM_ReadRunSlabs(benchmark::State& state) {
   const auto threads = static_cast<int>(state.range(1));
   std::uint64_t runs = 0;
   const CallgrindSection section(section_name("BM_ReadRunSlabs", state));
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads);
   for (auto _ : state) {
     runs = 0;
     read_rle_run_slabs(std::span<const std::uint8_t>(rle), grid_at(state.range(0)).dims.z,
@@ -164,7 +164,7 @@ void BM_StreamedReport(benchmark::State& state) {
   const auto threads = static_cast<int>(state.range(1));
   std::size_t parts = 0;
   const CallgrindSection section(section_name("BM_StreamedReport", state));
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads);
   for (auto _ : state) {
     VoxelMassAccumulator mass(g);
     ComponentLabeller components(g, threads);
@@ -195,7 +195,7 @@ void BM_StreamedRadiograph(benchmark::State& state) {
   const auto threads = static_cast<int>(state.range(1));
   std::size_t bytes = 0;
   const CallgrindSection section(section_name("BM_StreamedRadiograph", state));
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads);
   for (auto _ : state) {
     RadiographyAccumulator image(g, 2);
     read_rle_run_slabs(
@@ -223,7 +223,7 @@ void BM_StreamedPreview(benchmark::State& state) {
   constexpr int kMaxSide = 2048;
   std::size_t bytes = 0;
   const CallgrindSection section(section_name("BM_StreamedPreview", state));
-  const ScheduleSimulation simulated(state);
+  const ScheduleSimulation simulated(state, threads);
   for (auto _ : state) {
     PreviewRenderer preview(g, view, threads, kMaxSide);
     read_rle_run_slabs(

@@ -11,6 +11,7 @@
 namespace voxd {
 
 int default_thread_count() {
+  if (const detail::ScheduleObserver* o = detail::schedule_observer()) return o->cores();
   const unsigned n = std::thread::hardware_concurrency();
   return n == 0 ? 1 : static_cast<int>(n);
 }

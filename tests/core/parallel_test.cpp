@@ -49,6 +49,7 @@ class RecordingObserver final : public detail::ScheduleObserver {
     std::size_t consumed;  // a pipeline's consume steps; 0 for a loop
   };
   std::vector<Loop> loops;
+  int cores() const override { return 5; }
   void loop(int threads, std::span<const double> pieces) override {
     for (double s : pieces) EXPECT_GE(s, 0.0);
     loops.push_back({threads, pieces.size(), 0});
@@ -80,12 +81,18 @@ TEST(ScheduleObserver, IsToldEachOutermostLoopsPiecesRunInClaimOrderOnTheCalling
     parallel_for(0, 100, 7, 1, [](std::int64_t, std::int64_t) {});
     // More threads than pieces: the loop's threads are its pieces.
     parallel_for(0, 3, 1, 16, [](std::int64_t, std::int64_t) {});
+    // Every core: the simulated machine's.
+    EXPECT_EQ(default_thread_count(), 5);
+    parallel_for(0, 100, 1, 0, [](std::int64_t, std::int64_t) {});
   }
+  EXPECT_EQ(default_thread_count(), static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
   EXPECT_FALSE(elsewhere);
   ASSERT_EQ(order.size(), 15u);
   for (std::size_t p = 0; p < order.size(); ++p)
     EXPECT_EQ(order[p], std::make_pair(static_cast<std::int64_t>(7 * p), std::min<std::int64_t>(100, 7 * p + 7)));
-  ASSERT_EQ(observer.loops.size(), 2u);
+  ASSERT_EQ(observer.loops.size(), 3u);
+  EXPECT_EQ(observer.loops[2].threads, 5);
+  EXPECT_EQ(observer.loops[2].pieces, 100u);
   EXPECT_EQ(observer.loops[0].threads, 4);
   EXPECT_EQ(observer.loops[0].pieces, 15u);
   EXPECT_EQ(observer.loops[1].threads, 3);
@@ -101,7 +108,7 @@ TEST(ScheduleObserver, IsToldEachOutermostLoopsPiecesRunInClaimOrderOnTheCalling
   });
   std::sort(ids.begin(), ids.end());
   EXPECT_GT(std::unique(ids.begin(), ids.end()) - ids.begin(), 1);
-  EXPECT_EQ(observer.loops.size(), 2u);
+  EXPECT_EQ(observer.loops.size(), 3u);
 }
 
 TEST(ScheduleObserver, IsToldAPipelinesProducedAndConsumedPiecesInOrder) {

@@ -38,10 +38,14 @@ void run_parallel_piece(const std::function<void(std::int64_t, std::size_t)>& bo
 // pipeline runs its pieces one after another on the calling thread, in the
 // order threads would claim them, a loop nested in a piece runs inline, and
 // the observer is told the seconds each piece took and how many threads
-// would have shared them.
+// would have shared them. default_thread_count() answers the observer's
+// cores, so loops cut by the machine's size are cut as on the machine
+// simulated.
 class ScheduleObserver {
  public:
   virtual ~ScheduleObserver() = default;
+  // The cores of the machine simulated: what a thread count of 0 means.
+  virtual int cores() const = 0;
   virtual void loop(int threads, std::span<const double> pieces) = 0;
   // An ordered pipeline: piece i is produced on any thread, then consumed
   // in order on one.
