@@ -28,6 +28,7 @@
 #include "analysis/zero_skip.h"
 #include "union_find.h"
 #include "voxd/parallel.h"
+#include "voxd/uncleared_vector.h"
 
 namespace voxd {
 namespace {
@@ -114,8 +115,8 @@ struct RegionSums {
 
 // One query's runs in scan order: row r's are [row_start[r], row_start[r + 1]).
 struct QueryRuns {
-  std::vector<Run> runs;
-  std::vector<RunSums> sums;
+  UnclearedVector<Run> runs;  // written whole, on every thread (scan_runs)
+  UnclearedVector<RunSums> sums;
   std::vector<std::uint64_t> row_start;
 };
 
@@ -234,25 +235,36 @@ std::vector<QueryRuns> scan_runs(const DenseVolume<float>& thickness, const std:
       }
     }
   });
+  // Each layer's runs go after the layers before: where is summed here,
+  // the copies (and the layers' own vectors given back) go on every thread.
+  // On the calling thread they were most of this stage's serial time.
   std::vector<QueryRuns> out(nq);
+  std::vector<std::vector<std::uint64_t>> layer_start(nq);
   for (std::size_t q = 0; q < nq; ++q) {
     QueryRuns& r = out[q];
     r.row_start.assign(static_cast<std::size_t>(rows) + 1, 0);
     for (std::int64_t row = 0; row < rows; ++row)
       r.row_start[static_cast<std::size_t>(row) + 1] = r.row_start[static_cast<std::size_t>(row)] + row_count[q][static_cast<std::size_t>(row)];
+    std::vector<std::uint32_t>().swap(row_count[q]);
     const std::uint64_t total = r.row_start.back();
     if (total > std::numeric_limits<std::uint32_t>::max())
       throw std::length_error("find_thickness_regions: more than 2^32 runs");
-    r.runs.reserve(static_cast<std::size_t>(total));
-    r.sums.reserve(static_cast<std::size_t>(total));
-    for (std::size_t k = 0; k < static_cast<std::size_t>(d.z); ++k) {
-      r.runs.insert(r.runs.end(), layer_runs[q][k].begin(), layer_runs[q][k].end());
-      r.sums.insert(r.sums.end(), layer_sums[q][k].begin(), layer_sums[q][k].end());
-      std::vector<Run>().swap(layer_runs[q][k]);
-      std::vector<RunSums>().swap(layer_sums[q][k]);
-    }
-    std::vector<std::uint32_t>().swap(row_count[q]);
+    layer_start[q].resize(static_cast<std::size_t>(d.z) + 1, 0);
+    for (std::size_t k = 0; k < static_cast<std::size_t>(d.z); ++k)
+      layer_start[q][k + 1] = layer_start[q][k] + layer_runs[q][k].size();
+    r.runs.resize(static_cast<std::size_t>(total));
+    r.sums.resize(static_cast<std::size_t>(total));
   }
+  parallel_for(0, d.z, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
+    for (std::size_t q = 0; q < nq; ++q)
+      for (auto k = static_cast<std::size_t>(k0); k < static_cast<std::size_t>(k1); ++k) {
+        const auto at = static_cast<std::ptrdiff_t>(layer_start[q][k]);
+        std::copy(layer_runs[q][k].begin(), layer_runs[q][k].end(), out[q].runs.begin() + at);
+        std::copy(layer_sums[q][k].begin(), layer_sums[q][k].end(), out[q].sums.begin() + at);
+        std::vector<Run>().swap(layer_runs[q][k]);
+        std::vector<RunSums>().swap(layer_sums[q][k]);
+      }
+  });
   return out;
 }
 
@@ -263,8 +275,8 @@ std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::
                                         std::vector<std::uint32_t>* probe_regions, int threads) {
   const bool thin = kind == ThicknessRegionKind::thin;
   const std::int64_t rows = d.y * d.z;
-  const std::vector<Run>& runs = found_runs.runs;
-  const std::vector<RunSums>& sums = found_runs.sums;
+  const auto& runs = found_runs.runs;
+  const auto& sums = found_runs.sums;
   const std::vector<std::uint64_t>& row_start = found_runs.row_start;
   const std::uint64_t total = row_start.back();
   // Join each run with the runs it touches in rows already seen: runs of a
