@@ -40,7 +40,7 @@ void write_chunk(ByteSink& out, const char* type, std::initializer_list<std::spa
 }
 
 std::int64_t rows_per_band(const PngRows& image) {
-  return std::max<std::int64_t>(1, static_cast<std::int64_t>(kPngBandBytes / (image.row_bytes + 1)));
+  return std::max<std::int64_t>(1, static_cast<std::int64_t>(png_band_bytes(image) / (image.row_bytes + 1)));
 }
 
 int paeth(int a, int b, int c) {
@@ -162,6 +162,11 @@ void deflate_band(const PngRows& image, std::int64_t b, std::int64_t bands, PngC
 }
 
 }  // namespace
+
+std::size_t png_band_bytes(const PngRows& image) {
+  const std::size_t filtered = static_cast<std::size_t>(image.height) * (image.row_bytes + 1);
+  return std::clamp(filtered / 16, kPngMinBandBytes, kPngMaxBandBytes);
+}
 
 bool png_in_bands(const PngRows& image) {
   const std::int64_t per_band = rows_per_band(image);

@@ -28,12 +28,16 @@ struct PngRows {
   std::vector<const std::uint8_t*> rows;
 };
 
-// Filtered bytes (a filter byte a row, then its samples) a band holds, the
-// last band fewer.
-inline constexpr std::size_t kPngBandBytes = std::size_t{256} << 10;
+// Filtered bytes (a filter byte a row, then its samples) a band holds: a
+// sixteenth of the image, so 16 threads share an image of 1 MiB or more,
+// but at least 64 KiB (each band re-filters and primes the 32 KiB before
+// it) and at most 256 KiB. Whole rows: the last band fewer.
+inline constexpr std::size_t kPngMinBandBytes = std::size_t{64} << 10;
+inline constexpr std::size_t kPngMaxBandBytes = std::size_t{256} << 10;
+std::size_t png_band_bytes(const PngRows& image);
 
-// Whether an image of these rows is written in bands: from four bands up.
-// Smaller ones go through libpng as before, whose bytes they keep.
+// Whether an image of these rows is written in bands: from four bands up
+// (256 KiB). Smaller ones go through libpng, whose bytes they keep.
 bool png_in_bands(const PngRows& image);
 
 // The whole PNG: signature, IHDR, a tEXt chunk for each text (checked by

@@ -119,7 +119,7 @@ void check_size(int width, int height, std::size_t values, const char* what) {
 }
 
 // The one place that chooses the writer: libpng, or bands for an image of
-// four bands or more. `rows` are the encoded rows (big-endian samples for
+// four bands or more (256 KiB). `rows` are the encoded rows (big-endian samples for
 // 16-bit, as PNG stores them).
 void encode_png(int width, int height, int bit_depth, int colour_type, const std::vector<png_bytep>& rows,
             const std::vector<PngText>& text, ByteSink& out, PngCompression compression, int threads) {

@@ -38,10 +38,11 @@ struct RgbImage {
   std::vector<std::uint8_t> pixels;
 };
 
-// Every writer takes `threads` (0 = every core): an image of 1 MiB of rows
-// or more (four bands) is filtered and deflated in bands of rows on that
-// many threads, its bytes the same on any number (core/src/encode/png_bands.h);
-// smaller ones are written by libpng on the calling thread.
+// Every writer takes `threads` (0 = every core): an image of 256 KiB of
+// rows or more (four bands) is filtered and deflated in bands of rows on
+// that many threads (16 bands from 1 MiB), its bytes the same on any number
+// (core/src/encode/png_bands.h); smaller ones are written by libpng on the
+// calling thread.
 
 // 16-bit greyscale: one pixel per value, row-major (values.size() must be
 // width * height). Throws Error(limit_exceeded) when a value exceeds 65535
