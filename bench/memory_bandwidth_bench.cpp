@@ -2,7 +2,9 @@
 // parallel_for the stages use (issue #39): the ceiling a stage that streams
 // its voxels through memory can reach. A stage whose speed-up from 2 to 16
 // threads stops near this one's is bound by memory, not by serial work
-// (which bench/serial_fraction.sh counts); one far below it is not.
+// (which bench/serial_fraction.sh counts); one far below it is not. And
+// how fast a fresh gigabyte of volume memory is faulted in on 1 to 16
+// threads.
 // bench/gpu/check.sh scaling runs it on the lent 16-core machines.
 //   memory_bandwidth_bench --benchmark_filter='threads:(2|16)/'
 //
@@ -19,6 +21,7 @@
 
 #include "voxd/parallel.h"
 #include "voxd/uncleared_vector.h"
+#include "voxd/volume_memory.h"
 
 namespace {
 
@@ -89,6 +92,32 @@ void BM_MemoryCopy(benchmark::State& state) {
   report(state, kWords * 16);  // read and written
 }
 
+// A fresh volume's pages faulted in by the threads that first write them,
+// as every stage's new volumes are (voxd/volume_memory.h: huge pages where
+// the kernel allows): how far the kernel's page faults scale is a ceiling
+// too.
+// The first gigabyte is faulted in once, untimed: on a VM whose host backs
+// its memory lazily the very first touch costs the host's faults too
+// (docs/benchmarks.md, 2026-11-29), which no later request pays.
+void fault_in_volume(int threads) {
+  constexpr std::size_t kBytes = std::size_t{1} << 30;
+  auto* p = static_cast<std::uint8_t*>(voxd::allocate_volume_memory(kBytes, true));
+  voxd::parallel_for(0, static_cast<std::int64_t>(kBytes), std::int64_t{1} << 21, threads,
+                     [&](std::int64_t b, std::int64_t e) {
+                       for (std::int64_t i = b; i < e; i += 4096) p[i] = 1;
+                     });
+  benchmark::DoNotOptimize(p);
+  voxd::free_volume_memory(p, kBytes);
+}
+
+void BM_MemoryFaultIn(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  static const bool warm = (fault_in_volume(0), true);
+  (void)warm;
+  for (auto _ : state) fault_in_volume(threads);
+  report(state, std::int64_t{1} << 30);
+}
+
 void threads(benchmark::internal::Benchmark* b) {
   for (int t : {1, 2, 4, 8, 16}) b->ArgName("threads")->Arg(t);
   b->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(0.3);
@@ -97,5 +126,6 @@ void threads(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_MemoryRead)->Apply(threads);
 BENCHMARK(BM_MemoryWrite)->Apply(threads);
 BENCHMARK(BM_MemoryCopy)->Apply(threads);
+BENCHMARK(BM_MemoryFaultIn)->Apply(threads);
 
 }  // namespace

@@ -25,9 +25,10 @@
 #       threads, its chunks encoded by the writer and where they are made,
 #       a stored 4096^3 RLE read back as runs, the streamed report,
 #       radiograph and preview over a stored 2048^3 RLE's runs, a 4096 x
-#       4096 16-bit PNG written in bands, and the memory's own bandwidth
-#       (read, write, copy); prints the CPU's layout (lscpu: cores, threads
-#       a core, memory nodes), medians and speed-ups from 2 to 16 threads.
+#       4096 16-bit PNG written in bands, and the memory's own speed
+#       (read, write, copy, fresh pages faulted in); prints the CPU's
+#       layout (lscpu: cores, threads a core, memory nodes), medians and
+#       speed-ups from 2 to 16 threads.
 set -euo pipefail
 
 # Unpacks PACK_DIR's pack into `root` with its libraries on the path, and
@@ -100,7 +101,7 @@ if os.path.exists(f"{results}/memory.json"):
     for b in json.load(open(f"{results}/memory.json"))["benchmarks"]:
         what, t = re.match(r"BM_Memory(\w+)/threads:(\d+)/", b["name"]).groups()
         rates[(what, t)] = b["bytes_per_second"] / 1e9
-    for what in ("Read", "Write", "Copy"):
+    for what in ("Read", "Write", "Copy", "FaultIn"):
         a, b = rates.get((what, "2")), rates.get((what, "16"))
         if a and b: print(f"{'memory ' + what.lower() + ', GB/s (not ms)':34} {a:13.1f} {b:14.1f} {b / a:8.1f}x")
 pngs = medians(f"{results}/png.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
