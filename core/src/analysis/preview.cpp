@@ -11,6 +11,7 @@
 
 #include "voxd/error.h"
 #include "voxd/parallel.h"
+#include "voxd/uncleared_vector.h"
 #include "voxd/analysis/radiography.h"
 #include "run_rows.h"
 
@@ -233,12 +234,14 @@ struct PreviewRenderer::State {
   PreviewImage img;
   // Distance of the visible voxel from the camera side, in voxels; -1 = background.
   std::vector<std::int32_t> depth;
-  std::vector<glm::vec3> raw;  // the unsmoothed normals, a target's each
+  // The unsmoothed normals, a target's each. Made (tens of megabytes for a
+  // large grid's preview) and zeroed on every thread, not the calling one.
+  UnclearedVector<glm::vec3> raw;
   // Shrunk (max_side): each pixel of `out` stands for a block of factor x
   // factor rendered ones and shows the block's chosen pixel (its nearest
   // visible voxel, as shrink_preview), whose normal alone is smoothed and lit.
   int factor = 1;
-  std::vector<std::int64_t> chosen;  // a block's chosen pixel, -1 for none
+  UnclearedVector<std::int64_t> chosen;  // a block's chosen pixel, -1 for none (choose writes each)
   PreviewImage out;
   std::int64_t found_to = 0, shaded_to = 0;  // layers each pass has seen
   std::vector<std::uint64_t> last_layer;     // find along z: the layer before the slab
@@ -247,7 +250,7 @@ struct PreviewRenderer::State {
   Kind find_kind = Kind::none, shade_kind = Kind::none;
   // shade: the pixels by their visible voxel's layer (a counting sort).
   std::vector<std::int64_t> layer_start;
-  std::vector<std::uint32_t> by_layer;
+  UnclearedVector<std::uint32_t> by_layer;  // written whole by the sort
 };
 
 // Rays along the x rows: the visible voxel is the row's highest (+x) or
@@ -421,7 +424,7 @@ void PreviewRenderer::State::choose() {
   out.voxel.assign(blocks, -1);
   out.shade.assign(blocks, 0.0f);
   out.normal.assign(blocks, glm::vec3(0.0f));
-  chosen.assign(blocks, -1);
+  chosen.resize(blocks);
   parallel_for(0, out.height, 4, threads, [&](std::int64_t b0, std::int64_t b1) {
     for (std::int64_t row = b0; row < b1; ++row)
       for (std::int64_t col = 0; col < out.width; ++col) {
@@ -478,7 +481,10 @@ void PreviewRenderer::State::sort_by_layer() {
   layer_start[layers] = placed;
   by_layer.resize(static_cast<std::size_t>(placed));
   each_chunk([&](std::int64_t& next, std::int64_t t) { by_layer[static_cast<std::size_t>(next++)] = static_cast<std::uint32_t>(t); });
-  raw.assign(static_cast<std::size_t>(targets), glm::vec3(0.0f));
+  raw.resize(static_cast<std::size_t>(targets));
+  parallel_for(0, targets, std::int64_t{1} << 18, threads, [&](std::int64_t a, std::int64_t b) {
+    std::fill(raw.begin() + a, raw.begin() + b, glm::vec3(0.0f));
+  });
 }
 
 // Screen-space smoothing of the normals, then the lighting.
