@@ -107,6 +107,8 @@ BENCHMARK(BM_VoxelizeRunsToRle)
     ->ArgsProduct({{256, 512, 1024, 2048}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+// And at the size issue #39 asks to scale from 2 to 16 threads (140 MB of RLE).
+BENCHMARK(BM_VoxelizeRunsToRle)->Args({8192, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The solid's RLE at `resolution`, made once.
 const std::vector<std::uint8_t>& stored_rle(std::int64_t resolution) {

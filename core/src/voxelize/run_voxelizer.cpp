@@ -190,6 +190,12 @@ void voxelize_runs(const Mesh& mesh, const Grid& grid, const VoxelizeOptions& op
           control->set_progress(static_cast<double>(first_layer(i) + layer_count(i) - chunks.first) /
                                 static_cast<double>(chunks.end - chunks.first));
       });
+  // The slots' memory given back on every thread: on 16 threads they are 64
+  // chunks' crossings and runs, and unmapping them on the calling thread
+  // took 20 ms of the 8192^3 solid's 95 ms there (the schedule simulation).
+  parallel_for(0, static_cast<std::int64_t>(slots.size()), 1, threads, [&](std::int64_t a, std::int64_t b) {
+    for (std::int64_t i = a; i < b; ++i) slots[static_cast<std::size_t>(i)] = ChunkRuns{};
+  });
 }
 
 }  // namespace voxd
