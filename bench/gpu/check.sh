@@ -21,7 +21,7 @@
 #   bench/gpu/check.sh scaling PACK_DIR [RESULTS_DIR]
 #       issue #39 on the machine's cores, GPU or not (about a minute): each
 #       stage of the analysis report on the torus at 512^3 on 2 and 16
-#       threads, the solid straight to its RLE at 2048^3 on 2 and 16
+#       threads, the solid straight to its RLE at 2048^3 and 8192^3 on 2 and 16
 #       threads, its chunks encoded by the writer and where they are made,
 #       a stored 4096^3 RLE read back as runs, the streamed report,
 #       radiograph and preview over a stored 2048^3 RLE's runs, a 4096 x
@@ -56,7 +56,7 @@ scaling() {
     --benchmark_report_aggregates_only=true --benchmark_out="$results/analysis_stages.json" \
     --benchmark_out_format=json > /dev/null || status=1
   for t in 2 16; do
-    VOXD_THREADS=$t timeout 60 "$root/bin/stages_bench" --benchmark_filter='BM_VoxelizeRunsToRle/2048/' \
+    VOXD_THREADS=$t timeout 90 "$root/bin/stages_bench" --benchmark_filter='BM_VoxelizeRunsToRle/(2048|8192)/' \
       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
       --benchmark_out="$results/runs_to_rle_$t.json" --benchmark_out_format=json > /dev/null || status=1
   done
@@ -84,10 +84,11 @@ print(f"{'stage (torus 512^3)':34} {'2 threads ms':>13} {'16 threads ms':>14} {'
 for stage in sorted({s for s, _ in stages}):
     a, b = stages.get((stage, "2")), stages.get((stage, "16"))
     if a and b: print(f"{stage:34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
-runs = {t: medians(f"{results}/runs_to_rle_{t}.json", lambda n: n.split("/")[2]) for t in ("2", "16")}
-for arg, how in (("0", "RLE encoded by the writer"), ("1", "RLE encoded where made")):
+runs = {t: medians(f"{results}/runs_to_rle_{t}.json", lambda n: "/".join(n.split("/")[1:3])) for t in ("2", "16")}
+for arg, how in (("2048/0", "2048^3, RLE encoded by the writer"), ("2048/1", "2048^3, RLE encoded where made"),
+                 ("8192/1", "8192^3, RLE encoded where made")):
     a, b = runs["2"].get(arg), runs["16"].get(arg)
-    if a and b: print(f"{'solid 2048^3, ' + how:34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
+    if a and b: print(f"{'solid ' + how:34} {a:13.0f} {b:14.0f} {a / b:8.1f}x")
 reads = medians(f"{results}/read_runs.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
 if reads.get("2") and reads.get("16"):
     print(f"{'stored RLE 4096^3 read as runs':34} {reads['2']:13.0f} {reads['16']:14.0f} {reads['2'] / reads['16']:8.1f}x")
