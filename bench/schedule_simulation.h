@@ -113,8 +113,18 @@ class ScheduleSimulation final : public detail::ScheduleObserver {
     }
     simulated_ += consumed;
     pieces_ += produce.size();
-    if (print_)
-      std::fprintf(stderr, "pipeline: %2d threads %6zu pieces -> %8.3f ms\n", threads, produce.size(), 1e3 * consumed);
+    if (print_) {
+      double made = 0, used = 0, longest = 0;
+      for (std::size_t i = 0; i < produce.size(); ++i) {
+        made += produce[i];
+        used += consume[i];
+        longest = std::max(longest, produce[i]);
+      }
+      std::fprintf(stderr,
+                   "pipeline: %2d threads %6zu pieces %9.3f ms made + %8.3f ms consumed in all -> %8.3f ms, "
+                   "longest piece %8.3f ms\n",
+                   threads, produce.size(), 1e3 * made, 1e3 * used, 1e3 * consumed, 1e3 * longest);
+    }
   }
 
  private:
