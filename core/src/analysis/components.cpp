@@ -436,6 +436,7 @@ void ComponentLabeller::add(std::int64_t k0, const BitVolume& slab) {
   const int threads = threads_ > 0 ? threads_ : default_thread_count();
   const std::int64_t batch = std::max<std::int64_t>(16, 16 * threads);
   std::vector<RunSlab> layers(static_cast<std::size_t>(std::min(batch, nz)));
+  std::vector<const RunSlab*> batch_layers;
   RunSlab runs;
   for (std::int64_t b0 = 0; b0 < nz; b0 += batch) {
     const std::int64_t n = std::min(batch, nz - b0);
@@ -451,8 +452,11 @@ void ComponentLabeller::add(std::int64_t k0, const BitVolume& slab) {
         }
       }
     });
+    // Joined on every thread, as the RLE reader joins its layers.
     runs.reset(slab_grid(slab.grid(), b0, n));
-    for (std::int64_t l = 0; l < n; ++l) runs.append_rows(layers[static_cast<std::size_t>(l)]);
+    batch_layers.clear();
+    for (std::int64_t l = 0; l < n; ++l) batch_layers.push_back(&layers[static_cast<std::size_t>(l)]);
+    runs.append_rows(batch_layers, threads);
     add(k0 + b0, runs);
   }
 }
