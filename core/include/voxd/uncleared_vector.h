@@ -7,10 +7,15 @@
 // (voxd/volume_memory.h): an image or a slab of runs is written once, in
 // rows, and a radiograph's maps on huge pages were slower to fault in than
 // on ordinary ones on the development VM (docs/benchmarks.md, 2026-11-29).
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <new>
 #include <utility>
 #include <vector>
+
+#include "voxd/parallel.h"
 
 namespace voxd {
 
@@ -35,5 +40,18 @@ struct UnclearedAllocator : std::allocator<T> {
 
 template <class T>
 using UnclearedVector = std::vector<T, UnclearedAllocator<T>>;
+
+// `v` as `n` copies of `value`, written in pieces of 4 MiB on up to
+// `threads` threads (0: every core), so each page is faulted in by the
+// thread that writes it: for buffers that start as zeros (a radiograph's
+// maps, a preview's normals) and are then written on every thread.
+template <class T>
+void assign_on_every_thread(UnclearedVector<T>& v, std::size_t n, const T& value, int threads = 0) {
+  v.resize(n);
+  const auto piece = static_cast<std::int64_t>(std::max<std::size_t>(1, (std::size_t{4} << 20) / sizeof(T)));
+  parallel_for(0, static_cast<std::int64_t>(n), piece, threads, [&](std::int64_t a, std::int64_t b) {
+    std::fill(v.begin() + a, v.begin() + b, value);
+  });
+}
 
 }  // namespace voxd

@@ -481,10 +481,7 @@ void PreviewRenderer::State::sort_by_layer() {
   layer_start[layers] = placed;
   by_layer.resize(static_cast<std::size_t>(placed));
   each_chunk([&](std::int64_t& next, std::int64_t t) { by_layer[static_cast<std::size_t>(next++)] = static_cast<std::uint32_t>(t); });
-  raw.resize(static_cast<std::size_t>(targets));
-  parallel_for(0, targets, std::int64_t{1} << 18, threads, [&](std::int64_t a, std::int64_t b) {
-    std::fill(raw.begin() + a, raw.begin() + b, glm::vec3(0.0f));
-  });
+  assign_on_every_thread(raw, static_cast<std::size_t>(targets), glm::vec3(0.0f), threads);
 }
 
 // Screen-space smoothing of the normals, then the lighting.

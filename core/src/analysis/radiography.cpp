@@ -176,15 +176,6 @@ ImageSize projected_size(const Grid& grid, int axis) {
 
 namespace {
 
-// `map` as `n` zeros, written on every thread.
-void clear_on_every_thread(UnclearedVector<std::uint32_t>& map, std::size_t n) {
-  map.resize(n);
-  constexpr std::int64_t kPiece = std::int64_t{1} << 20;  // 4 MiB
-  parallel_for(0, static_cast<std::int64_t>(n), kPiece, 0, [&](std::int64_t a, std::int64_t b) {
-    std::fill(map.begin() + a, map.begin() + b, 0u);
-  });
-}
-
 // All three maps zero, sized for the projection of `grid` along `axis`.
 ThicknessImage blank_image(const Grid& grid, int axis) {
   const ImageSize size = projected_size(grid, axis);
@@ -192,7 +183,7 @@ ThicknessImage blank_image(const Grid& grid, int axis) {
   image.width = size.width;
   image.height = size.height;
   const std::size_t pixels = static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height);
-  for (UnclearedVector<std::uint32_t>* map : {&image.min, &image.max, &image.total}) clear_on_every_thread(*map, pixels);
+  for (UnclearedVector<std::uint32_t>* map : {&image.min, &image.max, &image.total}) assign_on_every_thread(*map, pixels, 0u);
   return image;
 }
 
@@ -213,7 +204,7 @@ ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
 RadiographyAccumulator::RadiographyAccumulator(const Grid& grid, int axis)
     : grid_(grid), axis_(axis), image_(blank_image(grid, axis)) {
   if (axis == 2) {
-    clear_on_every_thread(run_start_, image_.min.size());
+    assign_on_every_thread(run_start_, image_.min.size(), 0u);
     last_layer_.assign(static_cast<std::size_t>((grid.dims.x + 63) / 64 * grid.dims.y), 0);
   }
 }
