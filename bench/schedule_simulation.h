@@ -14,16 +14,17 @@
 // loops' thread counts is worked out:
 //   - a loop: its pieces in the order they would be claimed, each taken by
 //     whichever thread is free first (parallel_for's dynamic claiming);
-//   - a pipeline: pieces produced as in a loop, consumed in order on a lane
-//     of its own (slightly optimistic: the real consumer is one of the
-//     threads);
+//   - a pipeline: pieces produced as in a loop, none before the piece that
+//     last held its slot is consumed, consumed in order on a lane of its
+//     own (slightly optimistic: the real consumer is one of the threads);
 //   - everything outside loops: serial, as measured.
 // Left out, so the figure is a bound: starting and joining threads, and
 // threads slowing each other down (memory bandwidth, caches, turbo
 // clocks). Counters: simulated_ms (the section on the loops' threads),
 // serial_ms (outside any loop), pieces_in_loops. VOXD_SCHEDULE_SIMULATION=loops
 // also prints each loop to stderr (threads, pieces, their sum, the
-// simulated time, the longest piece), to find the one that holds a stage back.
+// simulated time, the longest piece, the serial time since the loop before),
+// to find the loop, or the gap between loops, that holds a stage back.
 //   VOXD_SCHEDULE_SIMULATION=1 build/bench/analysis_stages_bench --benchmark_filter=...
 // bench/schedule_bound.sh pairs a section's 2- and 16-thread figures.
 #include <benchmark/benchmark.h>
@@ -34,31 +35,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
-#include <queue>
 #include <span>
 #include <thread>
 #include <vector>
 
+#include "schedule_model.h"
 #include "voxd/parallel.h"
 
 namespace voxd::bench {
-
-// When `threads` threads, each taking the next piece when it is free, are
-// done with `pieces` (seconds each, in claim order); `ends` gets each
-// piece's end.
-inline double list_schedule(int threads, std::span<const double> pieces, std::vector<double>* ends = nullptr) {
-  std::priority_queue<double, std::vector<double>, std::greater<>> free_at;
-  for (int t = 0; t < std::max(threads, 1); ++t) free_at.push(0.0);
-  double last = 0;
-  for (const double seconds : pieces) {
-    const double end = free_at.top() + seconds;
-    free_at.pop();
-    free_at.push(end);
-    last = std::max(last, end);
-    if (ends) ends->push_back(end);
-  }
-  return last;
-}
 
 class ScheduleSimulation final : public detail::ScheduleObserver {
  public:
@@ -71,7 +55,7 @@ class ScheduleSimulation final : public detail::ScheduleObserver {
         print_(on_ && std::strcmp(std::getenv("VOXD_SCHEDULE_SIMULATION"), "loops") == 0) {
     if (!on_) return;
     detail::set_schedule_observer(this);
-    start_ = std::chrono::steady_clock::now();
+    start_ = last_report_ = std::chrono::steady_clock::now();
   }
   ~ScheduleSimulation() override {
     if (!on_) return;
@@ -99,18 +83,16 @@ class ScheduleSimulation final : public detail::ScheduleObserver {
     simulated_ += simulated;
     pieces_ += pieces.size();
     if (print_)
-      std::fprintf(stderr, "loop: %2d threads %6zu pieces %9.3f ms in all -> %8.3f ms, longest piece %8.3f ms\n",
-                   threads, pieces.size(), 1e3 * sum, 1e3 * simulated, 1e3 * longest);
+      std::fprintf(stderr,
+                   "loop: %2d threads %6zu pieces %9.3f ms in all -> %8.3f ms, longest piece %8.3f ms; "
+                   "serial before it %8.3f ms\n",
+                   threads, pieces.size(), 1e3 * sum, 1e3 * simulated, 1e3 * longest, 1e3 * serial_since_last(sum));
   }
 
-  void pipeline(int threads, std::span<const double> produce, std::span<const double> consume) override {
-    std::vector<double> produced;
-    list_schedule(threads, produce, &produced);
-    double consumed = 0;
-    for (std::size_t i = 0; i < produce.size(); ++i) {
-      consumed = std::max(consumed, produced[i]) + consume[i];
-      in_loops_ += produce[i] + consume[i];
-    }
+  void pipeline(int threads, std::size_t slots, std::span<const double> produce,
+                std::span<const double> consume) override {
+    const double consumed = pipeline_schedule(threads, slots, produce, consume);
+    for (std::size_t i = 0; i < produce.size(); ++i) in_loops_ += produce[i] + consume[i];
     simulated_ += consumed;
     pieces_ += produce.size();
     if (print_) {
@@ -121,18 +103,28 @@ class ScheduleSimulation final : public detail::ScheduleObserver {
         longest = std::max(longest, produce[i]);
       }
       std::fprintf(stderr,
-                   "pipeline: %2d threads %6zu pieces %9.3f ms made + %8.3f ms consumed in all -> %8.3f ms, "
-                   "longest piece %8.3f ms\n",
-                   threads, produce.size(), 1e3 * made, 1e3 * used, 1e3 * consumed, 1e3 * longest);
+                   "pipeline: %2d threads %4zu slots %6zu pieces %9.3f ms made + %8.3f ms consumed in all -> "
+                   "%8.3f ms, longest piece %8.3f ms; serial before it %8.3f ms\n",
+                   threads, slots, produce.size(), 1e3 * made, 1e3 * used, 1e3 * consumed, 1e3 * longest,
+                   1e3 * serial_since_last(made + used));
     }
   }
 
  private:
+  // Seconds on the calling thread, outside loops, since the last loop
+  // reported (or the section's start), this one's `in_loop` seconds aside.
+  double serial_since_last(double in_loop) {
+    const auto now = std::chrono::steady_clock::now();
+    const double gap = std::chrono::duration<double>(now - last_report_).count() - in_loop;
+    last_report_ = now;
+    return std::max(0.0, gap);
+  }
+
   benchmark::State& state_;
   const int cores_;
   const bool on_;
   const bool print_;
-  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point start_, last_report_;
   double in_loops_ = 0;   // seconds the loops' pieces took, one after another
   double simulated_ = 0;  // seconds they would take on their threads
   std::size_t pieces_ = 0;

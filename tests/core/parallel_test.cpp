@@ -47,15 +47,17 @@ class RecordingObserver final : public detail::ScheduleObserver {
     int threads;
     std::size_t pieces;
     std::size_t consumed;  // a pipeline's consume steps; 0 for a loop
+    std::size_t slots;     // a pipeline's; 0 for a loop
   };
   std::vector<Loop> loops;
   int cores() const override { return 5; }
   void loop(int threads, std::span<const double> pieces) override {
     for (double s : pieces) EXPECT_GE(s, 0.0);
-    loops.push_back({threads, pieces.size(), 0});
+    loops.push_back({threads, pieces.size(), 0, 0});
   }
-  void pipeline(int threads, std::span<const double> produce, std::span<const double> consume) override {
-    loops.push_back({threads, produce.size(), consume.size()});
+  void pipeline(int threads, std::size_t slots, std::span<const double> produce,
+                std::span<const double> consume) override {
+    loops.push_back({threads, produce.size(), consume.size(), slots});
   }
 };
 
@@ -142,6 +144,7 @@ TEST(ScheduleObserver, IsToldAPipelinesProducedAndConsumedPiecesInOrder) {
   EXPECT_EQ(observer.loops[0].threads, 3);
   EXPECT_EQ(observer.loops[0].pieces, 5u);
   EXPECT_EQ(observer.loops[0].consumed, 5u);
+  EXPECT_EQ(observer.loops[0].slots, 2u);
 }
 
 }  // namespace

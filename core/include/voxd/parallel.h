@@ -47,9 +47,11 @@ class ScheduleObserver {
   // The cores of the machine simulated: what a thread count of 0 means.
   virtual int cores() const = 0;
   virtual void loop(int threads, std::span<const double> pieces) = 0;
-  // An ordered pipeline: piece i is produced on any thread, then consumed
-  // in order on one.
-  virtual void pipeline(int threads, std::span<const double> produce, std::span<const double> consume) = 0;
+  // An ordered pipeline: piece i is produced on any thread once piece
+  // i - slots is consumed (it held the same slot), then consumed in order
+  // on one.
+  virtual void pipeline(int threads, std::size_t slots, std::span<const double> produce,
+                        std::span<const double> consume) = 0;
 };
 void set_schedule_observer(ScheduleObserver* observer) noexcept;  // nullptr: threads again
 ScheduleObserver* schedule_observer() noexcept;                   // the one set, or nullptr

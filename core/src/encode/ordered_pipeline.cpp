@@ -57,7 +57,8 @@ void run_ordered_pipeline(std::int64_t count, int threads, std::size_t slot_coun
           consume(i, slot);
       }));
     }
-    if (outermost) observer->pipeline(wanted_threads, produce_seconds, consume_seconds);
+    if (outermost)
+      observer->pipeline(wanted_threads, static_cast<std::size_t>(slots), produce_seconds, consume_seconds);
     return;
   }
 
