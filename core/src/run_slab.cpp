@@ -18,6 +18,13 @@ void RunSlab::reset(const Grid& grid) {
   prepared_.bytes.clear();
 }
 
+void RunSlab::free_on_every_thread(int threads) {
+  voxd::free_on_every_thread(bounds_, threads);
+  voxd::free_on_every_thread(starts_, threads);
+  voxd::free_on_every_thread(prepared_.bytes, threads);
+  *this = RunSlab();
+}
+
 void RunSlab::append_rows(const RunSlab& next) {
   const RunSlab* one[] = {&next};
   append_rows(one, 1);

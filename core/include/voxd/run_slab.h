@@ -59,6 +59,11 @@ class RunSlab {
   // where each one goes is summed in order.
   void append_rows(std::span<const RunSlab* const> next, int threads);
 
+  // Frees the slab's memory, its pages given back on up to `threads`
+  // threads (free_on_every_thread in voxd/uncleared_vector.h); the slab is
+  // then empty, of no grid.
+  void free_on_every_thread(int threads);
+
   std::uint64_t count() const { return filled_; }
   std::size_t run_count() const { return bounds_.size() / 2; }
 

@@ -560,6 +560,9 @@ void read_rle_run_slabs(ByteSource& source, std::int64_t slab_layers, const RunS
     }
     if (framing) std::rethrow_exception(framing);
   }
+  // The slab's runs (a full slab's are 64 MiB and more) are the last thing
+  // freed, and would be by this thread alone.
+  slab.free_on_every_thread(nthreads);
   read_end(window, nz);
 }
 
