@@ -41,14 +41,15 @@ struct UnclearedAllocator : std::allocator<T> {
 template <class T>
 using UnclearedVector = std::vector<T, UnclearedAllocator<T>>;
 
-// `v` as `n` copies of `value`, written in pieces of 4 MiB on up to
+// `v` as `n` copies of `value`, written in pieces of 1 MiB on up to
 // `threads` threads (0: every core), so each page is faulted in by the
 // thread that writes it: for buffers that start as zeros (a radiograph's
-// maps, a preview's normals) and are then written on every thread.
+// maps, a preview's normals) and are then written on every thread. A 2048^2
+// radiograph's map is 16 pieces, enough for 16 threads.
 template <class T>
 void assign_on_every_thread(UnclearedVector<T>& v, std::size_t n, const T& value, int threads = 0) {
   v.resize(n);
-  const auto piece = static_cast<std::int64_t>(std::max<std::size_t>(1, (std::size_t{4} << 20) / sizeof(T)));
+  const auto piece = static_cast<std::int64_t>(std::max<std::size_t>(1, (std::size_t{1} << 20) / sizeof(T)));
   parallel_for(0, static_cast<std::int64_t>(n), piece, threads, [&](std::int64_t a, std::int64_t b) {
     std::fill(v.begin() + a, v.begin() + b, value);
   });

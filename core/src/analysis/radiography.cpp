@@ -189,6 +189,10 @@ ThicknessImage blank_image(const Grid& grid, int axis) {
 
 }  // namespace
 
+void free_on_every_thread(ThicknessImage& image, int threads) {
+  for (UnclearedVector<std::uint32_t>* map : {&image.min, &image.max, &image.total}) free_on_every_thread(*map, threads);
+}
+
 ThicknessImage radiography(const BitVolume& volume, int axis, int threads) {
   ThicknessImage image = blank_image(volume.grid(), axis);
   if (image.min.empty() || volume.grid().voxel_count() == 0) return image;
@@ -219,6 +223,7 @@ void RadiographyAccumulator::check_slab(std::int64_t k0, Kind slab) {
 
 void RadiographyAccumulator::add(std::int64_t k0, const RunSlab& slab, int threads) {
   check_slab(k0, Kind::runs);
+  threads_ = threads;
   const glm::i64vec3 d = slab.grid().dims;
   next_k_ += d.z;
   if (d.z == 0 || image_.min.empty()) return;
@@ -280,6 +285,7 @@ void RadiographyAccumulator::add(std::int64_t k0, const RunSlab& slab, int threa
 
 void RadiographyAccumulator::add(std::int64_t k0, const BitVolume& slab, int threads) {
   check_slab(k0, Kind::bits);
+  threads_ = threads;
   const glm::i64vec3 d = slab.grid().dims;
   next_k_ += d.z;
   if (d.z == 0 || image_.min.empty()) return;
@@ -340,7 +346,7 @@ ThicknessImage RadiographyAccumulator::take() {
           maps.at(p).add_run(top - run_start_[p]);
         }
   }
-  run_start_ = {};
+  free_on_every_thread(run_start_, threads_);
   last_layer_ = {};
   last_runs_ = {};
   return std::move(image_);

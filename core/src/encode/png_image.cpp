@@ -211,6 +211,7 @@ void write_png_grey16(int width, int height, std::span<const std::uint32_t> valu
   all.insert(all.end(), text.begin(), text.end());
   encode_png(width, height, 16, PNG_COLOR_TYPE_GRAY, row_pointers(bytes.data(), height, w * 2), all, out,
          PngCompression::balanced, threads);
+  free_on_every_thread(bytes, threads);
 }
 
 void write_png_grey8(int width, int height, std::span<const std::uint8_t> pixels, const std::vector<PngText>& text,

@@ -30,6 +30,11 @@ struct ThicknessImage {
   UnclearedVector<std::uint32_t> total;  // filled voxels on the ray
 };
 
+// Frees the three maps, their pages given back on up to `threads` threads
+// (free_on_every_thread in voxd/uncleared_vector.h): a gigabyte for a
+// radiograph of 8192^3 would otherwise be unmapped by one thread.
+void free_on_every_thread(ThicknessImage& image, int threads = 0);
+
 // Image size for a projection of `grid` along `axis`: {width, height}.
 struct ImageSize {
   int width = 0;
@@ -60,6 +65,8 @@ class RadiographyAccumulator {
   // std::logic_error.
   void add(std::int64_t k0, const RunSlab& slab, int threads = 0);
   // After the last layer. Throws std::logic_error if layers are missing.
+  // What the accumulator kept besides the maps is freed on the last add()'s
+  // threads.
   ThicknessImage take();
 
  private:
@@ -67,6 +74,7 @@ class RadiographyAccumulator {
   int axis_;
   ThicknessImage image_;
   std::int64_t next_k_ = 0;
+  int threads_ = 0;  // the last add()'s
   UnclearedVector<std::uint32_t> run_start_;  // z: the layer the ray's open run began at
   std::vector<std::uint64_t> last_layer_; // z: the previous layer's bits (rows of row words)
   RunSlab last_runs_;                      // z: the same as runs
