@@ -22,6 +22,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <unordered_map>
 
 #include <glm/common.hpp>
 
@@ -112,6 +113,33 @@ struct RegionSums {
   float extreme = 0.0f;
   Int128 thickness = 0;
 };
+
+// Adds run r of row (j, k), whose sums are rs, to region s.
+void add_run(RegionSums& s, const Run& r, const RunSums& rs, std::int64_t j, std::int64_t k, bool thin) {
+  const auto n = static_cast<std::int64_t>(r.end - r.begin);
+  s.extreme = s.voxels == 0 ? rs.extreme : thin ? std::min(s.extreme, rs.extreme) : std::max(s.extreme, rs.extreme);
+  s.voxels += static_cast<std::uint64_t>(n);
+  s.si += (static_cast<std::int64_t>(r.begin) + r.end - 1) * n / 2;
+  s.sj += j * n;
+  s.sk += k * n;
+  s.lo = glm::min(s.lo, glm::i64vec3(r.begin, j, k));
+  s.hi = glm::max(s.hi, glm::i64vec3(r.end - 1, j, k));
+  s.thickness += rs.thickness;
+}
+
+// Adds what `more` gathered of a region to `s`: as if its runs had been
+// added to `s` one by one.
+void add_sums(RegionSums& s, const RegionSums& more, bool thin) {
+  if (more.voxels == 0) return;
+  s.extreme = s.voxels == 0 ? more.extreme : thin ? std::min(s.extreme, more.extreme) : std::max(s.extreme, more.extreme);
+  s.voxels += more.voxels;
+  s.si += more.si;
+  s.sj += more.sj;
+  s.sk += more.sk;
+  s.lo = glm::min(s.lo, more.lo);
+  s.hi = glm::max(s.hi, more.hi);
+  s.thickness += more.thickness;
+}
 
 // One query's runs in scan order: row r's are [row_start[r], row_start[r + 1]).
 struct QueryRuns {
@@ -290,7 +318,6 @@ std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::
                                         const std::vector<std::size_t>* probes,
                                         std::vector<std::uint32_t>* probe_regions, int threads) {
   const bool thin = kind == ThicknessRegionKind::thin;
-  const std::int64_t rows = d.y * d.z;
   const auto& runs = found_runs.runs;
   const auto& sums = found_runs.sums;
   const UnclearedVector<std::uint64_t>& row_start = found_runs.row_start;
@@ -335,7 +362,8 @@ std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::
     }
   }
   // Every run's root, on every thread: reading the finished forest only.
-  std::vector<std::uint32_t> root_of(static_cast<std::size_t>(total));
+  UnclearedVector<std::uint32_t> root_of;  // written whole, on every thread
+  root_of.resize(static_cast<std::size_t>(total));
   parallel_for(0, static_cast<std::int64_t>(total), std::int64_t{1} << 16, threads, [&](std::int64_t a, std::int64_t b) {
     for (auto run = static_cast<std::uint32_t>(a); run < static_cast<std::uint32_t>(b); ++run) {
       std::uint32_t x = run;
@@ -344,35 +372,73 @@ std::vector<ThicknessRegion> regions_of(const QueryRuns& found_runs, const glm::
     }
   });
 
-  // Each region's sums, gathered at its root (the run it starts with).
-  std::vector<std::uint32_t> region_of(static_cast<std::size_t>(total));
-  std::vector<RegionSums> found;  // by first voxel: the order regions are met in scan order
-  for (std::int64_t row = 0; row < rows; ++row) {
-    const std::int64_t j = row % d.y, k = row / d.y;
-    for (std::uint64_t run = row_start[static_cast<std::size_t>(row)]; run < row_start[static_cast<std::size_t>(row) + 1]; ++run) {
-      const std::uint32_t root = root_of[static_cast<std::size_t>(run)];
-      // The root is the region's first run in scan order (the smaller id
-      // always stays the root), so its region was numbered when met.
-      if (root == run) {
-        region_of[static_cast<std::size_t>(run)] = static_cast<std::uint32_t>(found.size());
-        found.emplace_back();
-      } else {
-        region_of[static_cast<std::size_t>(run)] = region_of[root];
-      }
-      RegionSums& s = found[region_of[static_cast<std::size_t>(run)]];
-      const Run& r = runs[static_cast<std::size_t>(run)];
-      const RunSums& rs = sums[static_cast<std::size_t>(run)];
-      const auto n = static_cast<std::int64_t>(r.end - r.begin);
-      s.extreme = s.voxels == 0 ? rs.extreme : thin ? std::min(s.extreme, rs.extreme) : std::max(s.extreme, rs.extreme);
-      s.voxels += static_cast<std::uint64_t>(n);
-      s.si += (static_cast<std::int64_t>(r.begin) + r.end - 1) * n / 2;
-      s.sj += j * n;
-      s.sk += k * n;
-      s.lo = glm::min(s.lo, glm::i64vec3(r.begin, j, k));
-      s.hi = glm::max(s.hi, glm::i64vec3(r.end - 1, j, k));
-      s.thickness += rs.thickness;
+  // Regions are numbered in scan order, as their roots are met (a root is
+  // its region's first run), and their sums gathered, in runs of layers on
+  // every thread: a run of layers numbers its roots on from the count of
+  // roots before it, adds its runs to their regions' sums, and those of
+  // regions begun in an earlier run of layers to sums of its own, added in
+  // afterwards. Sums are of integers, minima and maxima: the same in any
+  // order, so the regions are the same on any number of threads. (On the
+  // calling thread this was most of what was left of the stage there.)
+  const std::int64_t gather_parts = std::clamp<std::int64_t>(d.z, 1, 4 * (threads > 0 ? threads : default_thread_count()));
+  const auto layer_of_part = [&](std::int64_t p) { return d.z * p / gather_parts; };
+  const auto first_run = [&](std::int64_t p) { return row_start[static_cast<std::size_t>(d.y * layer_of_part(p))]; };
+  std::vector<std::uint64_t> first_region(static_cast<std::size_t>(gather_parts) + 1, 0);
+  parallel_for(0, gather_parts, 1, threads, [&](std::int64_t p0, std::int64_t p1) {
+    for (std::int64_t p = p0; p < p1; ++p) {
+      std::uint64_t roots = 0;
+      for (std::uint64_t run = first_run(p); run < first_run(p + 1); ++run) roots += root_of[run] == run;
+      first_region[static_cast<std::size_t>(p) + 1] = roots;
     }
-  }
+  });
+  for (std::size_t p = 1; p < first_region.size(); ++p) first_region[p] += first_region[p - 1];
+  UnclearedVector<std::uint32_t> region_of;
+  region_of.resize(static_cast<std::size_t>(total));
+  parallel_for(0, gather_parts, 1, threads, [&](std::int64_t p0, std::int64_t p1) {
+    for (std::int64_t p = p0; p < p1; ++p) {
+      auto next = static_cast<std::uint32_t>(first_region[static_cast<std::size_t>(p)]);
+      const std::uint64_t begin = first_run(p);
+      for (std::uint64_t run = begin; run < first_run(p + 1); ++run) {
+        const std::uint32_t root = root_of[run];
+        if (root == run)
+          region_of[run] = next++;
+        else if (root >= begin)  // numbered just now; an earlier run of layers' roots, once it is done
+          region_of[run] = region_of[root];
+      }
+    }
+  });
+  UnclearedVector<RegionSums> found;  // by first voxel: the order regions are met in scan order
+  assign_on_every_thread(found, static_cast<std::size_t>(first_region.back()), RegionSums{}, threads);
+  std::vector<std::unordered_map<std::uint32_t, RegionSums>> begun_before(static_cast<std::size_t>(gather_parts));
+  parallel_for(0, gather_parts, 1, threads, [&](std::int64_t p0, std::int64_t p1) {
+    for (std::int64_t p = p0; p < p1; ++p) {
+      const std::uint64_t begin = first_run(p);
+      auto& earlier = begun_before[static_cast<std::size_t>(p)];
+      std::uint32_t last_earlier = UINT32_MAX;
+      RegionSums* last_sums = nullptr;
+      for (std::int64_t k = layer_of_part(p); k < layer_of_part(p + 1); ++k)
+        for (std::int64_t j = 0; j < d.y; ++j) {
+          const auto row = static_cast<std::size_t>(j + d.y * k);
+          for (std::uint64_t run = row_start[row]; run < row_start[row + 1]; ++run) {
+            const std::uint32_t root = root_of[run];
+            RegionSums* s = nullptr;
+            if (root >= begin) {
+              s = &found[region_of[run]];
+            } else {
+              const std::uint32_t region = region_of[run] = region_of[root];
+              if (region != last_earlier) {
+                last_earlier = region;
+                last_sums = &earlier[region];  // node-based: stays put as the map grows
+              }
+              s = last_sums;
+            }
+            add_run(*s, runs[run], sums[run], j, k, thin);
+          }
+        }
+    }
+  });
+  for (const auto& earlier : begun_before)
+    for (const auto& [region, more] : earlier) add_sums(found[region], more, thin);
 
   // Those of at least min_voxels, most severe first: the thinnest (thickest)
   // extreme, then the larger region, then scan order (found's order).
