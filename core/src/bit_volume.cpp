@@ -57,7 +57,13 @@ void BitVolume::merge_or(const BitVolume& other) {
 
 BitVolume BitVolume::clone() const {
   BitVolume copy(grid_);
-  std::copy(data(), data() + word_count(), copy.data());
+  // On every thread, as the copy's fresh pages are faulted in where they are
+  // written (wall thickness copies the solid twice: 7% of its time on 16
+  // threads, on one).
+  const std::size_t slab = slab_words();
+  parallel_for(0, grid_.dims.z, slabs_per_chunk(slab), 0, [&](std::int64_t k0, std::int64_t k1) {
+    std::copy(this->slab(k0), this->slab(k0) + slab * static_cast<std::size_t>(k1 - k0), copy.slab(k0));
+  });
   return copy;
 }
 
