@@ -5,6 +5,7 @@
 #include <chrono>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -101,7 +102,12 @@ void parallel_for(std::int64_t begin, std::int64_t end, std::int64_t grain, int 
   };
   std::vector<std::thread> pool;
   pool.reserve(static_cast<std::size_t>(n - 1));
-  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
+  try {
+    for (int t = 1; t < n; ++t) pool.emplace_back(worker);
+  } catch (const std::system_error&) {
+    // Fewer threads than asked for (the process's limit): those started and
+    // this one claim every piece all the same, and are joined below.
+  }
   worker();
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);

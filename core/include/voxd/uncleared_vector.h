@@ -64,13 +64,15 @@ void assign_on_every_thread(UnclearedVector<T>& v, std::size_t n, const T& value
 // pages are freed by every thread and the block's free finds none. So
 // are blocks the allocator would otherwise give back all at once later,
 // on whichever thread frees next to them (the heap trimmed at its top).
-void release_pages_on_every_thread(void* data, std::size_t bytes, int threads = 0);
+// Never throws (it is a hint; destructors call it): where threads cannot
+// be started it does what it can on fewer.
+void release_pages_on_every_thread(void* data, std::size_t bytes, int threads = 0) noexcept;
 
 // Frees `v`'s memory (capacity and all), its pages first released on up to
 // `threads` threads as above (1: on the calling thread, as a piece of work
 // shared out by the caller).
 template <class T, class Allocator>
-void free_on_every_thread(std::vector<T, Allocator>& v, int threads = 0) {
+void free_on_every_thread(std::vector<T, Allocator>& v, int threads = 0) noexcept {
   release_pages_on_every_thread(v.data(), v.capacity() * sizeof(T), threads);
   std::vector<T, Allocator>().swap(v);
 }
