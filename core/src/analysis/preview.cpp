@@ -149,8 +149,18 @@ struct PreviewRenderer::State {
       img.shade.assign(pixels, 0.0f);
       img.normal.assign(pixels, glm::vec3(0.0f));
     }
-    depth.assign(pixels, -1);
+    assign_on_every_thread(depth, pixels, std::int32_t{-1}, threads);
   }
+  // What it made on every thread (hundreds of megabytes for a large grid's
+  // preview) given back the same way, not by the thread that frees it.
+  ~State() {
+    free_on_every_thread(raw, threads);
+    free_on_every_thread(depth, threads);
+    free_on_every_thread(chosen, threads);
+    free_on_every_thread(by_layer, threads);
+  }
+  State(const State&) = delete;
+  State& operator=(const State&) = delete;
 
   // What shade() computes a raw normal for, a target: a visible pixel, or
   // (shrunk) each block's 3x3 pixels around its chosen one (target
@@ -233,7 +243,7 @@ struct PreviewRenderer::State {
   glm::vec3 forward, right, up;
   PreviewImage img;
   // Distance of the visible voxel from the camera side, in voxels; -1 = background.
-  std::vector<std::int32_t> depth;
+  UnclearedVector<std::int32_t> depth;
   // The unsmoothed normals, a target's each. Made (tens of megabytes for a
   // large grid's preview) and zeroed on every thread, not the calling one.
   UnclearedVector<glm::vec3> raw;
