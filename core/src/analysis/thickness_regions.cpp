@@ -114,19 +114,6 @@ struct RegionSums {
   Int128 thickness = 0;
 };
 
-// Adds run r of row (j, k), whose sums are rs, to region s.
-void add_run(RegionSums& s, const Run& r, const RunSums& rs, std::int64_t j, std::int64_t k, bool thin) {
-  const auto n = static_cast<std::int64_t>(r.end - r.begin);
-  s.extreme = s.voxels == 0 ? rs.extreme : thin ? std::min(s.extreme, rs.extreme) : std::max(s.extreme, rs.extreme);
-  s.voxels += static_cast<std::uint64_t>(n);
-  s.si += (static_cast<std::int64_t>(r.begin) + r.end - 1) * n / 2;
-  s.sj += j * n;
-  s.sk += k * n;
-  s.lo = glm::min(s.lo, glm::i64vec3(r.begin, j, k));
-  s.hi = glm::max(s.hi, glm::i64vec3(r.end - 1, j, k));
-  s.thickness += rs.thickness;
-}
-
 // Adds what `more` gathered of a region to `s`: as if its runs had been
 // added to `s` one by one.
 void add_sums(RegionSums& s, const RegionSums& more, bool thin) {
@@ -139,6 +126,21 @@ void add_sums(RegionSums& s, const RegionSums& more, bool thin) {
   s.lo = glm::min(s.lo, more.lo);
   s.hi = glm::max(s.hi, more.hi);
   s.thickness += more.thickness;
+}
+
+// Adds run r of row (j, k), whose sums are rs, to region s.
+void add_run(RegionSums& s, const Run& r, const RunSums& rs, std::int64_t j, std::int64_t k, bool thin) {
+  const auto n = static_cast<std::int64_t>(r.end - r.begin);
+  RegionSums run;
+  run.voxels = static_cast<std::uint64_t>(n);
+  run.si = (static_cast<std::int64_t>(r.begin) + r.end - 1) * n / 2;
+  run.sj = j * n;
+  run.sk = k * n;
+  run.lo = glm::i64vec3(r.begin, j, k);
+  run.hi = glm::i64vec3(r.end - 1, j, k);
+  run.extreme = rs.extreme;
+  run.thickness = rs.thickness;
+  add_sums(s, run, thin);
 }
 
 // One query's runs in scan order: row r's are [row_start[r], row_start[r + 1]).
