@@ -1,11 +1,12 @@
 #include "voxd/parallel.h"
 
+#include "worker_pool.h"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <exception>
 #include <mutex>
-#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -86,7 +87,7 @@ void parallel_for(std::int64_t begin, std::int64_t end, std::int64_t grain, int 
   std::atomic<bool> failed{false};
   std::exception_ptr error;
   std::mutex error_mutex;
-  auto worker = [&] {
+  const std::function<void()> worker = [&] {
     while (!failed.load(std::memory_order_relaxed)) {
       const std::int64_t c = next.fetch_add(1, std::memory_order_relaxed);
       if (c >= chunks) return;
@@ -100,16 +101,12 @@ void parallel_for(std::int64_t begin, std::int64_t end, std::int64_t grain, int 
       }
     }
   };
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<std::size_t>(n - 1));
-  try {
-    for (int t = 1; t < n; ++t) pool.emplace_back(worker);
-  } catch (const std::system_error&) {
-    // Fewer threads than asked for (the process's limit): those started and
-    // this one claim every piece all the same, and are joined below.
+  {
+    // n - 1 kept threads and this one claim the pieces; the helpers are
+    // waited for before the loop's state goes.
+    const detail::WorkerHelpers helpers(n - 1, worker);
+    worker();
   }
-  worker();
-  for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
 }
 

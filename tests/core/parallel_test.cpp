@@ -1,5 +1,6 @@
-// parallel_for and the ordered pipeline: every index once, and what a
-// benchmark's schedule observer (bench/schedule_simulation.h) is told.
+// parallel_for and the ordered pipeline: every index once, on threads kept
+// from loop to loop, and what a benchmark's schedule observer
+// (bench/schedule_simulation.h) is told.
 #include "voxd/parallel.h"
 
 #include <gtest/gtest.h>
@@ -14,7 +15,13 @@
 #include <utility>
 #include <vector>
 
+#include <unistd.h>
+
+#include <condition_variable>
+#include <set>
+
 #include "encode/ordered_pipeline.h"
+#include "worker_pool.h"
 
 namespace voxd {
 namespace {
@@ -38,6 +45,83 @@ TEST(ParallelFor, RethrowsABodysErrorOnTheCallingThread) {
                               if (a == 37) throw std::runtime_error("piece 37");
                             }),
                std::runtime_error);
+}
+
+// Every piece of a loop on `threads` threads waits until `threads` pieces
+// have begun (for at most 20 s): the loop's threads run at once, as many
+// as asked for. Returns the kernel's ids of the threads that ran them.
+std::set<pid_t> threads_running_at_once(int threads) {
+  std::mutex mutex;
+  std::condition_variable all_began;
+  int began = 0;
+  std::set<pid_t> ids;
+  parallel_for(0, threads, 1, threads, [&](std::int64_t, std::int64_t) {
+    std::unique_lock lock(mutex);
+    ids.insert(::gettid());
+    if (++began == threads) all_began.notify_all();
+    EXPECT_TRUE(all_began.wait_for(lock, std::chrono::seconds(20), [&] { return began == threads; }))
+        << began << " of " << threads << " pieces began";
+  });
+  return ids;
+}
+
+TEST(ParallelFor, RunsOnAsManyThreadsAsAskedKeptFromLoopToLoop) {
+  const std::set<pid_t> first = threads_running_at_once(6);
+  ASSERT_EQ(first.size(), 6u);
+  EXPECT_TRUE(first.count(::gettid()));  // the caller takes its share
+  const int kept = detail::kept_worker_threads();
+  EXPECT_GE(kept, 5);
+  for (int round = 0; round < 20; ++round) {
+    // The same helpers again (kernel ids are not reused this soon), none started anew.
+    const std::set<pid_t> again = threads_running_at_once(6);
+    ASSERT_EQ(again, first) << "round " << round;
+  }
+  EXPECT_EQ(detail::kept_worker_threads(), kept);
+  // More at once than kept: more are started, and kept.
+  EXPECT_EQ(threads_running_at_once(kept + 3).size(), static_cast<std::size_t>(kept + 3));
+  EXPECT_EQ(detail::kept_worker_threads(), kept + 2);
+}
+
+TEST(ParallelFor, NestedAndConcurrentLoopsCoverEveryIndexOnce) {
+  // Loops within loops, from several threads of the caller's own at once:
+  // the pool hands out and takes back helpers while others run.
+  constexpr int kCallers = 4, kRounds = 50, kOuter = 12, kInner = 40;
+  std::vector<std::atomic<int>> hits(static_cast<std::size_t>(kCallers * kOuter * kInner));
+  std::vector<std::thread> callers;
+  for (int c = 0; c < kCallers; ++c)
+    callers.emplace_back([&, c] {
+      for (int round = 0; round < kRounds; ++round)
+        parallel_for(0, kOuter, 1, 3, [&](std::int64_t a, std::int64_t) {
+          parallel_for(0, kInner, 3, 1 + round % 4, [&](std::int64_t b, std::int64_t e) {
+            for (std::int64_t i = b; i < e; ++i) ++hits[static_cast<std::size_t>((c * kOuter + a) * kInner + i)];
+          });
+        });
+    });
+  for (auto& t : callers) t.join();
+  for (std::size_t i = 0; i < hits.size(); ++i) ASSERT_EQ(hits[i].load(), kRounds) << i;
+}
+
+TEST(WorkerHelpers, TakeBackTheWorkFromThoseNotYetAwake) {
+  // The caller waits at once: helpers that woke in time ran the work once,
+  // the others never do (not even later), and all of them serve the next
+  // loop.
+  constexpr int kRounds = 200;
+  std::vector<std::atomic<int>> ran(kRounds);
+  std::vector<int> seen(kRounds);
+  for (int round = 0; round < kRounds; ++round) {
+    std::atomic<int>& count = ran[static_cast<std::size_t>(round)];
+    const std::function<void()> work = [&count] { ++count; };
+    detail::WorkerHelpers helpers(3, work);
+    EXPECT_EQ(helpers.handed(), 3);
+    helpers.wait();
+    seen[static_cast<std::size_t>(round)] = count.load();
+    EXPECT_LE(count.load(), 3);
+    helpers.wait();  // again: at once
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  for (int round = 0; round < kRounds; ++round)
+    ASSERT_EQ(ran[static_cast<std::size_t>(round)].load(), seen[static_cast<std::size_t>(round)]) << round;
+  EXPECT_EQ(threads_running_at_once(4).size(), 4u);
 }
 
 // Records what it is told, and on which thread each piece ran.

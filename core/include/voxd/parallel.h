@@ -12,9 +12,10 @@ namespace voxd {
 int default_thread_count();
 
 // Calls body(chunk_begin, chunk_end) for consecutive chunks of [begin, end) of
-// at most `grain` indices, on up to `threads` threads (0 = default). The first
-// exception thrown by a body is rethrown on the calling thread after all
-// threads stop claiming chunks.
+// at most `grain` indices, on up to `threads` threads (0 = default): the
+// calling thread and threads kept from loop to loop (core/src/worker_pool.h),
+// which claim the chunks in order. The first exception thrown by a body is
+// rethrown on the calling thread after all threads stop claiming chunks.
 void parallel_for(std::int64_t begin, std::int64_t end, std::int64_t grain, int threads,
                   const std::function<void(std::int64_t, std::int64_t)>& body);
 

@@ -6,24 +6,12 @@
 #include <condition_variable>
 #include <exception>
 #include <mutex>
-#include <system_error>
-#include <thread>
 #include <vector>
 
 #include "voxd/parallel.h"
+#include "worker_pool.h"
 
 namespace voxd::encode {
-namespace {
-
-struct JoinAll {
-  std::vector<std::thread>& threads;
-  ~JoinAll() {
-    for (auto& t : threads) t.join();
-  }
-};
-
-}  // namespace
-
 void run_ordered_pipeline(std::int64_t count, int threads, std::size_t slot_count,
                           const std::function<void(std::int64_t, std::size_t)>& produce,
                           const std::function<void(std::int64_t, std::size_t)>& consume) {
@@ -104,22 +92,17 @@ void run_ordered_pipeline(std::int64_t count, int threads, std::size_t slot_coun
     changed.notify_all();
     return true;
   };
-  const auto worker = [&] {
+  const std::function<void()> worker = [&] {
     for (;;) {
       const std::int64_t i = next_claim.fetch_add(1);
       if (i >= count || !produce_claimed(i)) return;
     }
   };
 
-  std::vector<std::thread> pool;
-  // Joins on any early exit; the loop below catches everything and sets
-  // `failed` first, so waiting workers wake up and return.
-  const JoinAll join_all{pool};
-  try {
-    for (int t = 1; t < wanted_threads; ++t) pool.emplace_back(worker);
-  } catch (const std::system_error&) {
-    // Fewer threads than wanted: the calling thread produces what they do not.
-  }
+  // The helpers produce; they are waited for on any way out of this
+  // function. The loop below catches everything and sets `failed` first,
+  // so helpers waiting for a slot wake up and return.
+  detail::WorkerHelpers helpers(wanted_threads - 1, worker);
 
   try {
     for (;;) {
@@ -154,8 +137,7 @@ void run_ordered_pipeline(std::int64_t count, int threads, std::size_t slot_coun
   } catch (...) {
     fail(std::current_exception());
   }
-  for (auto& t : pool) t.join();  // after this, `error` is no longer shared
-  pool.clear();
+  helpers.wait();  // after this, `error` is no longer shared
   if (error) std::rethrow_exception(error);
 }
 
