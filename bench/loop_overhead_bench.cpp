@@ -1,11 +1,12 @@
 // What a parallel loop costs beyond its pieces (issue #39): the time from
 // calling parallel_for (or the ordered pipeline) to its return when the
-// pieces do next to nothing, on 2 to 16 threads. The schedule simulation
-// (bench/schedule_simulation.h) does not see this cost, and a stage makes
-// from a few loops (mass properties) to a few dozen (wall thickness,
-// thickness regions) a run: where a loop's pieces take a few hundred
-// microseconds in all, starting its threads can cost as much again.
-//   loop_overhead_bench --benchmark_filter='threads:(2|16)$'
+// pieces do next to nothing, on 2 to 16 threads (1: the pieces alone, one
+// after another). The schedule simulation (bench/schedule_simulation.h)
+// does not see this cost, and a stage makes from a few loops (mass
+// properties) to a few dozen (wall thickness, thickness regions) a run:
+// where a loop's pieces take a few hundred microseconds in all, starting
+// its threads can cost as much again.
+//   loop_overhead_bench --benchmark_filter='threads:(1|2|16)/'
 //
 // BM_LoopOfEmptyPieces: one piece a thread, each adding to a counter.
 // BM_LoopOfShortPieces: 16 pieces a thread of about 5 microseconds of
@@ -68,7 +69,7 @@ void BM_OrderedPipeline(benchmark::State& state) {
 }
 
 void threads(benchmark::internal::Benchmark* b) {
-  for (int t : {2, 4, 8, 16}) b->ArgName("threads")->Arg(t);
+  for (int t : {1, 2, 4, 8, 16}) b->ArgName("threads")->Arg(t);
   b->UseRealTime();
 }
 
