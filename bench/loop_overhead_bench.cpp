@@ -9,7 +9,7 @@
 //   loop_overhead_bench --benchmark_filter='threads:(1|2|16)/'
 //
 // BM_LoopOfEmptyPieces: one piece a thread, each adding to a counter.
-// BM_LoopOfShortPieces: 16 pieces a thread of about 5 microseconds of
+// BM_LoopOfShortPieces: 16 pieces a thread of about 4 microseconds of
 // arithmetic each, so the threads must really share them (a real stage's
 // smallest loops). BM_OrderedPipeline: 4 pieces a thread through the
 // ordered pipeline, produced on any thread and consumed in order.
@@ -25,7 +25,7 @@
 
 namespace {
 
-// About 5 microseconds of dependent arithmetic that the compiler cannot drop.
+// About 4 microseconds of dependent arithmetic that the compiler cannot drop.
 std::uint64_t spin(std::uint64_t seed) {
   std::uint64_t x = seed | 1;
   for (int i = 0; i < 4000; ++i) x = x * 6364136223846793005ull + 1442695040888963407ull;

@@ -7,7 +7,8 @@
 # each 2-thread benchmark with its 16-thread twin. Prints the simulated
 # times, the serial time outside loops, and the bound 2 -> 16, which unlike
 # bench/serial_fraction.sh's Amdahl bound counts too few or uneven pieces.
-# Neither sees memory bandwidth or thread start-up.
+# Neither sees memory bandwidth, or the wake-up of the kept threads a loop
+# hands its pieces to (bench/loop_overhead_bench.cpp measures that).
 #   bench/schedule_bound.sh BINARY FILTER
 #   bench/schedule_bound.sh build/bench/analysis_stages_bench 'torus/res:512/threads:(2|16)/'
 # Benchmarks are paired by a "threads:N" in their names (stages_bench's

@@ -25,8 +25,9 @@
 #       threads, its chunks encoded by the writer and where they are made,
 #       a stored 4096^3 RLE read back as runs, the streamed report,
 #       radiograph and preview over a stored 2048^3 RLE's runs, a 4096 x
-#       4096 16-bit PNG written in bands, and the memory's own speed
-#       (read, write, copy, fresh pages faulted in); prints the CPU's
+#       4096 16-bit PNG written in bands, the memory's own speed (read,
+#       write, copy, fresh pages faulted in) and what a loop costs beyond
+#       its pieces (waking the kept threads); prints the CPU's
 #       layout (lscpu: cores, threads a core, memory nodes), medians and
 #       speed-ups from 2 to 16 threads.
 set -euo pipefail
@@ -52,6 +53,9 @@ scaling() {
   # that streams its voxels.
   timeout 60 "$root/bin/memory_bandwidth_bench" --benchmark_filter='threads:(2|16)/' \
     --benchmark_out="$results/memory.json" --benchmark_out_format=json > /dev/null || status=1
+  # What a loop costs beyond its pieces: waking the kept threads.
+  timeout 30 "$root/bin/loop_overhead_bench" --benchmark_filter='threads:(1|2|16)/' --benchmark_min_time=0.2 \
+    --benchmark_out="$results/loops.json" --benchmark_out_format=json > /dev/null || status=1
   timeout 240 "$root/bin/analysis_stages_bench" --benchmark_filter='torus/res:512/threads:(2|16)/' \
     --benchmark_report_aggregates_only=true --benchmark_out="$results/analysis_stages.json" \
     --benchmark_out_format=json > /dev/null || status=1
@@ -105,6 +109,17 @@ if os.path.exists(f"{results}/memory.json"):
     for what in ("Read", "Write", "Copy", "FaultIn"):
         a, b = rates.get((what, "2")), rates.get((what, "16"))
         if a and b: print(f"{'memory ' + what.lower() + ', GB/s (not ms)':34} {a:13.1f} {b:14.1f} {b / a:8.1f}x")
+if os.path.exists(f"{results}/loops.json"):
+    times = {}
+    for b in json.load(open(f"{results}/loops.json"))["benchmarks"]:
+        what, t = re.match(r"BM_(\w+)/threads:(\d+)/", b["name"]).groups()
+        times[(what, t)] = b["real_time"] / 1e3
+    # Each thread's share of the pieces is the same on 2 and 16 threads: on
+    # as many cores, the ideal is the 1-thread time (the pieces alone).
+    for what, label in (("LoopOfEmptyPieces", "empty pieces"), ("LoopOfShortPieces", "16 short pieces a thread"),
+                        ("OrderedPipeline", "ordered pipeline")):
+        one, a, b = times.get((what, "1")), times.get((what, "2")), times.get((what, "16"))
+        if a and b: print(f"{'loop, us: ' + label:34} {a:13.1f} {b:14.1f}  (1 thread: {one or 0:.1f} us)")
 pngs = medians(f"{results}/png.json", lambda n: re.search(r"threads:(\d+)", n).group(1))
 if pngs.get("2") and pngs.get("16"):
     print(f"{'PNG16 4096 x 4096 in bands':34} {pngs['2']:13.0f} {pngs['16']:14.0f} {pngs['2'] / pngs['16']:8.1f}x")
@@ -119,7 +134,7 @@ case "${1:-}" in
     stage=$(mktemp -d); trap 'rm -rf "$stage"' EXIT
     mkdir -p "$stage/bin" "$stage/lib" "$out"
     for exe in tests/slice_cuda_test tests/slice_device_test bench/slice_device_bench bench/analysis_stages_bench \
-      bench/stages_bench bench/volume_format_bench bench/memory_bandwidth_bench \
+      bench/stages_bench bench/volume_format_bench bench/memory_bandwidth_bench bench/loop_overhead_bench \
       tests/coverage_cuda_test tests/coverage_device_test bench/coverage_device_bench \
       tests/sdf_cuda_test tests/sdf_device_test bench/sdf_device_bench; do
       cp "$build/$exe" "$stage/bin/"
