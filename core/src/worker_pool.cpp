@@ -76,6 +76,9 @@ class WorkerPool {
       worker->team = &team;
       w = worker.get();
       std::lock_guard lock(mutex_);
+      // Room on the idle list for every kept thread, so that going idle
+      // (serve, wait) never allocates.
+      idle_.reserve(all_.size() + 1);
       all_.push_back(std::move(worker));
       team.handed_.push_back(w);  // reserved: does not throw
       ++team.running_;
