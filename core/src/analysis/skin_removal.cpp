@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "analysis/row_runs.h"
 #include "voxd/analysis/distance_transform.h"
 #include "voxd/error.h"
 #include "voxd/parallel.h"
@@ -14,19 +15,24 @@ namespace {
 using Depth = std::uint16_t;
 constexpr std::uint32_t kMaxDepth = std::numeric_limits<Depth>::max();
 
-// One axis of the city-block distance: d[i] = min(d[i], d[i-1] + 1) forward
-// and min(d[i], d[i+1] + 1) backward, with empty space beyond both ends.
-void sweep(Depth* d, std::int64_t n) {
-  std::uint32_t prev = 0;
-  for (std::int64_t i = 0; i < n; ++i) {
-    prev = std::min<std::uint32_t>(d[i], prev + 1);
-    d[i] = static_cast<Depth>(prev);
-  }
-  std::uint32_t next = 0;
-  for (std::int64_t i = n - 1; i >= 0; --i) {
-    next = std::min<std::uint32_t>(d[i], next + 1);
-    d[i] = static_cast<Depth>(next);
-  }
+// A row's city-block depths along x, from its runs of filled voxels: voxel
+// i of run [b, e) is min(i - b + 1, e - i) steps from the empty voxel (or
+// the empty space past the grid) at either end, an empty voxel 0. What a
+// sweep forward and back gives, as two ramps a run that the compiler
+// vectorizes: the sweeps were a dependent chain a voxel, most of the skin's
+// time.
+void row_depths(const std::uint64_t* row, std::int64_t words, std::int64_t nx, Depth* line) {
+  std::int64_t at = 0;
+  detail::for_each_row_run(row, words, nx, false, [&](std::int64_t b, std::int64_t e) {
+    std::fill(line + at, line + b, Depth{0});
+    const std::int64_t mid = (b + e + 1) / 2;  // the first voxel nearer the run's end
+    Depth up = 1;
+    for (std::int64_t i = b; i < mid; ++i) line[i] = up++;
+    Depth down = static_cast<Depth>(e - mid);
+    for (std::int64_t i = mid; i < e; ++i) line[i] = down--;
+    at = e;
+  });
+  std::fill(line + at, line + nx, Depth{0});
 }
 
 // Empty space beyond both ends of `width` neighbouring columns of n lines:
@@ -39,7 +45,7 @@ void clamp_ends(Depth* d, std::int64_t n, std::int64_t stride, std::int64_t widt
 
 // The same sweep along y or z (after clamp_ends), for `width` neighbouring columns at once (a
 // row's worth, contiguous): line p of the columns starts at d + p * stride.
-// After the x sweep every depth is at most half a row, so + 1 cannot wrap.
+// Along x every depth is at most half a row, so + 1 cannot wrap.
 void sweep_columns(Depth* d, std::int64_t n, std::int64_t stride, std::int64_t width) {
   for (std::int64_t p = 1; p < n; ++p) {
     Depth* cur = d + p * stride;
@@ -83,17 +89,12 @@ DenseVolume<Depth> peel_depth(const BitVolume& volume, int threads, PeelMetric m
     return d;
   }
   const std::int64_t nx = g.dims.x, ny = g.dims.y, nz = g.dims.z;
-  // Start: filled = "infinity" (capped), empty = 0; then sweep x, y, z.
-  // The grid's first and last voxels along y and z have empty space beyond
-  // them: 0 before the first, as the x sweep starts.
+  // Depths along x from each row's runs, then swept along y and z. The
+  // grid's first and last voxels along y and z have empty space beyond
+  // them: clamp_ends.
   parallel_for(0, nz, 1, threads, [&](std::int64_t k0, std::int64_t k1) {
     for (std::int64_t k = k0; k < k1; ++k) {
-      for (std::int64_t j = 0; j < ny; ++j) {
-        Depth* line = &d.at(0, j, k);
-        const std::uint64_t* row = volume.row(j, k);
-        for (std::int64_t i = 0; i < nx; ++i) line[i] = ((row[i >> 6] >> (i & 63)) & 1u) ? static_cast<Depth>(kMaxDepth) : 0;
-        sweep(line, nx);
-      }
+      for (std::int64_t j = 0; j < ny; ++j) row_depths(volume.row(j, k), volume.row_words(), nx, &d.at(0, j, k));
       clamp_ends(&d.at(0, 0, k), ny, nx, nx);
       sweep_columns(&d.at(0, 0, k), ny, nx, nx);
     }
