@@ -129,6 +129,29 @@ TEST(SkinRemoval, PeelDepthEqualsLayerByLayerErosionOnRandomVolumes) {
   }
 }
 
+// The summary's voxels a layer and deepest layer, against a plain count of
+// the erosion's layers: random volumes whose z layers are not a multiple of
+// 16 voxels, with empty stretches and deep ones, on 1 and 3 threads.
+TEST(SkinRemoval, VoxelsPerLayerCountTheErosionsLayers) {
+  std::mt19937 rng(23);
+  for (int trial = 0; trial < 30; ++trial) {
+    const glm::i64vec3 dims(static_cast<std::int64_t>(rng() % 70 + 1), static_cast<std::int64_t>(rng() % 20 + 1),
+                            static_cast<std::int64_t>(rng() % 20 + 1));
+    const BitVolume v = test::random_volume(dims, (trial % 3 == 0 ? 0.2 : 0.7) + 0.29 * (rng() % 100) / 100.0, rng);
+    std::vector<std::uint64_t> want;
+    for (const std::uint16_t layer : erode_layers(v)) {
+      if (layer == 0) continue;
+      if (layer > want.size()) want.resize(layer, 0);
+      ++want[layer - 1u];
+    }
+    for (const int threads : {1, 3}) {
+      const PeelSummary s = summarize_peeling(peel_depth(v, threads), threads);
+      EXPECT_EQ(s.voxels_per_layer, want) << "trial " << trial << " threads " << threads;
+      EXPECT_EQ(s.max_depth, want.size()) << "trial " << trial;
+    }
+  }
+}
+
 TEST(SkinRemoval, BoxLayersAreNestedShellsAndTheCoreIsTheHotSpot) {
   // An 11 x 9 x 7 block of voxels: 4 layers, the last a 5 x 3 x 1 core.
   const Grid g = unit_grid({15, 13, 11});
