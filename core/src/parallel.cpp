@@ -1,7 +1,5 @@
 #include "voxd/parallel.h"
 
-#include "worker_pool.h"
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -9,6 +7,8 @@
 #include <mutex>
 #include <thread>
 #include <vector>
+
+#include "worker_pool.h"
 
 namespace voxd {
 

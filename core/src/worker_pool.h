@@ -4,8 +4,10 @@
 // about 25 microseconds on the development VM, on the calling thread, so a
 // loop on 16 threads paid some 400 microseconds before its first piece ran
 // on the last thread: as much as a whole loop of the small stages (parts
-// and voids, thickness regions), which run a few dozen loops a job.
-// Waking a kept thread costs a few microseconds.
+// and voids, thickness regions), which run a few dozen loops a job. A
+// kept thread is woken instead, and a caller that has claimed every piece
+// before a helper woke does not wait for it
+// (bench/loop_overhead_bench.cpp).
 //
 // Not a work-stealing scheduler (such as oneTBB): a helper runs exactly the
 // work it was handed, which claims pieces in index order, and nothing else
