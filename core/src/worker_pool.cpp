@@ -20,10 +20,22 @@ struct PoolWorker {
 class WorkerPool {
  public:
   // Never destroyed: its threads wait on it until the process ends, and a
-  // static's destructor would pull it from under them.
+  // static's destructor would pull it from under them. A child of fork()
+  // (a host embedding the engine may fork) has none of its threads, and
+  // may have been forked while one held its mutex: it takes a new pool of
+  // its own, and keeps the parent's copy as it was.
   static WorkerPool& instance() {
-    static WorkerPool* const pool = new WorkerPool;
-    return *pool;
+    static const bool made = [] {
+      current_ = new WorkerPool;
+      pthread_atfork(nullptr, nullptr, [] {
+        WorkerPool* const fresh = new WorkerPool;
+        fresh->forked_from_ = current_;
+        current_ = fresh;
+      });
+      return true;
+    }();
+    (void)made;
+    return *current_;
   }
 
   void hand_out(WorkerHelpers& team, int count) {
@@ -116,9 +128,11 @@ class WorkerPool {
     }
   }
 
+  static inline WorkerPool* current_ = nullptr;
   std::mutex mutex_;
   std::vector<std::unique_ptr<PoolWorker>> all_;  // a thread started for each
   std::vector<PoolWorker*> idle_;
+  WorkerPool* forked_from_ = nullptr;  // in a child of fork(), the parent's pool (kept reachable, never used)
 };
 
 WorkerHelpers::WorkerHelpers(int count, const std::function<void()>& work) : work_(&work) {

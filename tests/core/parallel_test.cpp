@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <condition_variable>
@@ -80,6 +81,31 @@ TEST(ParallelFor, RunsOnAsManyThreadsAsAskedKeptFromLoopToLoop) {
   // More at once than kept: more are started, and kept.
   EXPECT_EQ(threads_running_at_once(kept + 3).size(), static_cast<std::size_t>(kept + 3));
   EXPECT_EQ(detail::kept_worker_threads(), kept + 2);
+}
+
+TEST(ParallelFor, AChildOfForkStartsThreadsOfItsOwn) {
+  // The parent keeps helpers; a forked child has none of them (a host
+  // embedding the engine may fork), so its loops must start their own.
+  ASSERT_EQ(threads_running_at_once(4).size(), 4u);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    // No gtest assertions here: the child only answers with its exit status.
+    std::mutex mutex;
+    std::condition_variable all_began;
+    int began = 0;
+    std::atomic<bool> at_once{true};
+    parallel_for(0, 4, 1, 4, [&](std::int64_t, std::int64_t) {
+      std::unique_lock lock(mutex);
+      if (++began == 4) all_began.notify_all();
+      if (!all_began.wait_for(lock, std::chrono::seconds(5), [&] { return began == 4; })) at_once = false;
+    });
+    ::_exit(at_once ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the child's loop did not run on 4 threads at once";
+  EXPECT_EQ(threads_running_at_once(4).size(), 4u);  // the parent's helpers serve on
 }
 
 TEST(ParallelFor, NestedAndConcurrentLoopsCoverEveryIndexOnce) {
