@@ -49,20 +49,28 @@ TEST(ParallelFor, RethrowsABodysErrorOnTheCallingThread) {
 }
 
 // Every piece of a loop on `threads` threads waits until `threads` pieces
-// have begun (for at most 20 s): the loop's threads run at once, as many
-// as asked for. Returns the kernel's ids of the threads that ran them.
-std::set<pid_t> threads_running_at_once(int threads) {
+// have begun (for at most `timeout`): whether they all did, so the loop's
+// threads ran at once, as many as asked for. `ids` receives the kernel's
+// ids of the threads that ran them. No gtest assertions: a forked child
+// calls it too.
+bool began_at_once(int threads, std::chrono::seconds timeout, std::set<pid_t>& ids) {
   std::mutex mutex;
   std::condition_variable all_began;
   int began = 0;
-  std::set<pid_t> ids;
+  bool at_once = true;
   parallel_for(0, threads, 1, threads, [&](std::int64_t, std::int64_t) {
     std::unique_lock lock(mutex);
     ids.insert(::gettid());
     if (++began == threads) all_began.notify_all();
-    EXPECT_TRUE(all_began.wait_for(lock, std::chrono::seconds(20), [&] { return began == threads; }))
-        << began << " of " << threads << " pieces began";
+    if (!all_began.wait_for(lock, timeout, [&] { return began == threads; })) at_once = false;
   });
+  return at_once;
+}
+
+// The same within 20 s, as a test's expectation; returns the threads' ids.
+std::set<pid_t> threads_running_at_once(int threads) {
+  std::set<pid_t> ids;
+  EXPECT_TRUE(began_at_once(threads, std::chrono::seconds(20), ids)) << "not all " << threads << " pieces began";
   return ids;
 }
 
@@ -90,16 +98,9 @@ TEST(ParallelFor, AChildOfForkStartsThreadsOfItsOwn) {
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
-    // No gtest assertions here: the child only answers with its exit status.
-    std::mutex mutex;
-    std::condition_variable all_began;
-    int began = 0;
-    std::atomic<bool> at_once{true};
-    parallel_for(0, 4, 1, 4, [&](std::int64_t, std::int64_t) {
-      std::unique_lock lock(mutex);
-      if (++began == 4) all_began.notify_all();
-      if (!all_began.wait_for(lock, std::chrono::seconds(5), [&] { return began == 4; })) at_once = false;
-    });
+    // The child only answers with its exit status.
+    std::set<pid_t> ids;
+    const bool at_once = began_at_once(4, std::chrono::seconds(5), ids);
     ::_exit(at_once ? 0 : 1);
   }
   int status = 0;
